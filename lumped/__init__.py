@@ -1,0 +1,1 @@
+"""Analytic beam references and automatic reduction of FEM modes to lumped models."""

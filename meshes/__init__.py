@@ -1,0 +1,1 @@
+"""Parametric gmsh geometries of the probes (plain cantilever, duo-bimorph, piezotube)."""

@@ -1,0 +1,13 @@
+"""Command-line commands: thin layers over the library, one module per capability.
+
+Each module imports the Typer apps of :mod:`probedyn.commands._apps` and decorates commands
+on them; :mod:`probedyn.cli` imports the modules listed in ``COMMAND_MODULES``.
+"""
+
+COMMAND_MODULES = [
+    "probedyn.commands.report",
+    "probedyn.commands.modal",
+    "probedyn.commands.friction",
+    "probedyn.commands.push",
+    "probedyn.commands.diagnose",
+]

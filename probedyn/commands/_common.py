@@ -1,0 +1,71 @@
+"""Helpers shared by command modules: JSON vs. human output, output folders."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any, Callable
+
+import typer
+
+from probedyn.jsonio import dumps, write_json
+
+JSON_OPT = typer.Option(False, "--json", help="Print machine-readable JSON on stdout.")
+OUT_OPT = typer.Option(None, "--out", help="Output folder for files (JSON, plots, VTU).")
+SET_OPT = typer.Option(None, "--set", help="Override a parameter: NAME=VALUE (SI units). Repeatable.")
+
+
+def emit(result: Any, as_json: bool, human: Callable[[Any], str]) -> None:
+    """Print ``result`` as JSON (``--json``) or through ``human`` as text for people."""
+    if as_json:
+        sys.stdout.write(dumps(result) + "\n")
+    else:
+        sys.stdout.write(human(result).rstrip() + "\n")
+
+
+def save(out: Path | None, name: str, result: Any) -> Path | None:
+    """Write ``result`` as ``out/name`` atomically when an output folder was given."""
+    if out is None:
+        return None
+    return write_json(Path(out) / name, result)
+
+
+def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]] | None = None) -> str:
+    """A plain-text table. ``columns`` = [(key, header, format spec)]; default: all keys."""
+    if not rows:
+        return "(empty)"
+    if columns is None:
+        columns = [(k, k, "") for k in rows[0]]
+    cells = [[h for _, h, _ in columns]]
+    for r in rows:
+        line = []
+        for key, _, spec in columns:
+            v = r.get(key)
+            if v is None:
+                line.append("-")
+            elif spec and isinstance(v, (int, float)):
+                line.append(format(v, spec))
+            else:
+                line.append(str(v))
+        cells.append(line)
+    widths = [max(len(row[i]) for row in cells) for i in range(len(columns))]
+    out = []
+    for j, row in enumerate(cells):
+        out.append("  ".join(c.rjust(w) for c, w in zip(row, widths)))
+        if j == 0:
+            out.append("  ".join("-" * w for w in widths))
+    return "\n".join(out)
+
+
+def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> str:
+    """The same table as Markdown (for reports)."""
+    head = "| " + " | ".join(h for _, h, _ in columns) + " |"
+    sep = "|" + "|".join("---:" for _ in columns) + "|"
+    body = []
+    for r in rows:
+        vals = []
+        for key, _, spec in columns:
+            v = r.get(key)
+            vals.append("–" if v is None else (format(v, spec) if spec and isinstance(v, (int, float)) else str(v)))
+        body.append("| " + " | ".join(vals) + " |")
+    return "\n".join([head, sep, *body])

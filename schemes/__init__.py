@@ -1,0 +1,1 @@
+"""Simulations driven by reduced probe models: friction, contact, pushing, placing; parameter sweeps."""
