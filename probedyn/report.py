@@ -16,8 +16,11 @@ from probedyn.jsonio import write_text
 
 SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.commands.modal:report_section"),
-    ("Nano-friction, FFM scans and tip-sample contact", "probedyn.commands.friction:report_section"),
-    ("Nano-pushing and stick-slip dynamics", "probedyn.commands.push:report_section"),
+    ("The smart probes: duo-bimorph and piezotube", "probedyn.commands.smart:report_section"),
+    ("Nano-friction and FFM line scans", "probedyn.commands.friction:report_section"),
+    ("Tip-sample contact and adhesion-friction coupling", "probedyn.commands.contact:report_section"),
+    ("Nano-pushing", "probedyn.commands.push:report_section"),
+    ("Two-mass stick-slip dynamics", "probedyn.commands.stickslip:report_section"),
     ("Measured data: diagnosis", "probedyn.commands.diagnose:report_section"),
 ]
 

@@ -7,7 +7,10 @@ on them; :mod:`probedyn.cli` imports the modules listed in ``COMMAND_MODULES``.
 COMMAND_MODULES = [
     "probedyn.commands.report",
     "probedyn.commands.modal",
+    "probedyn.commands.smart",
     "probedyn.commands.friction",
+    "probedyn.commands.contact",
+    "probedyn.commands.stickslip",
     "probedyn.commands.push",
     "probedyn.commands.diagnose",
 ]

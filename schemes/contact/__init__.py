@@ -1,0 +1,1 @@
+"""Contact mechanics registry (one module per model)."""

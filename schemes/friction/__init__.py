@@ -1,0 +1,1 @@
+"""Friction model registry (one module per model)."""
