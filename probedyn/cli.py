@@ -14,7 +14,7 @@ from probedyn.commands._apps import app
 from probedyn.errors import ProbedynError
 
 for _name in COMMAND_MODULES:
-    importlib.import_module(_name)
+    importlib.import_module(_name)  # each module attaches its commands to the Typer apps
 
 
 def main(argv: list[str] | None = None) -> int:
