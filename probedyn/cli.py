@@ -14,7 +14,13 @@ from probedyn.commands._apps import app
 from probedyn.errors import ProbedynError
 
 for _name in COMMAND_MODULES:
-    importlib.import_module(_name)  # each module attaches its commands to the Typer apps
+    # Each module attaches its commands to the Typer apps. A module that does not exist (yet)
+    # is skipped here; tests/test_cli_basics.py asserts that every listed module is present.
+    try:
+        importlib.import_module(_name)
+    except ModuleNotFoundError as _exc:
+        if _exc.name != _name:
+            raise
 
 
 def main(argv: list[str] | None = None) -> int:
