@@ -1,0 +1,323 @@
+"""3D anisotropic linear elasticity with quadratic tetrahedra: forms and fast assembly.
+
+Formulation (small strains, no body load): find u in V (P2 vector fields vanishing on the
+clamped boundary) such that for all v in V
+
+    a(u, v) = int_Omega eps(v) : C(x) : eps(u) dx,        m(u, v) = int_Omega rho(x) u . v dx,
+
+with ``eps`` in Voigt form ``[e11, e22, e33, 2e23, 2e13, 2e12]`` and ``C(x)`` the material's
+6x6 stiffness rotated into global axes at every quadrature point
+(``C_glob = Q(R(x)) C_loc Q(R(x))^T``, :func:`probedyn.fem.materials.rotate_voigt`).
+
+Discretisation: Lagrange P2 on straight 4-node tets (scikit-fem ``ElementTetP2``). The vector
+DOF numbering is **interleaved**: global DOF ``3*s + c`` is component ``c`` (0=x, 1=y, 2=z)
+of scalar P2 node ``s`` of the scalar basis (``basis.doflocs[:, s]`` is its position), so
+``M = kron(M_scalar, I3)`` for a per-element density.
+
+Quadrature: gradients of P2 functions are linear, so ``eps : C : eps`` is quadratic for a
+piecewise-constant C and the 4-point degree-2 rule integrates it exactly; the mass needs
+degree 4.  A spatially varying orientation is sampled at the same points.
+
+Two assembly paths are provided and tested against each other:
+
+* :func:`aniso_elasticity` / :func:`mass_form`: scikit-fem ``BilinearForm``s (reference,
+  readable, slow for large meshes because scikit-fem evaluates the form for each of the
+  30 x 30 local basis pairs);
+* :func:`assemble_stiffness` / :func:`assemble_mass`: element matrices by batched matrix
+  products ``K_e = sum_q w_q B_q^T C_q B_q`` over element chunks and one COO -> CSR
+  conversion (the path the model uses; see benchmarks/modal.py for timings).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from probedyn.errors import MaterialError
+
+STIFFNESS_INTORDER = 2
+MASS_INTORDER = 4
+
+
+# ---------------------------------------------------------------------------------------
+# scikit-fem forms (reference implementation)
+# ---------------------------------------------------------------------------------------
+
+def _voigt_strain(grad):
+    """Voigt engineering strain from a displacement gradient field ``grad[i][j] = du_i/dx_j``."""
+    return [
+        grad[0][0], grad[1][1], grad[2][2],
+        grad[1][2] + grad[2][1], grad[0][2] + grad[2][0], grad[0][1] + grad[1][0],
+    ]
+
+
+def _make_forms():
+    from skfem import BilinearForm
+
+    @BilinearForm
+    def aniso_elasticity(u, v, w):
+        """eps(v) : C : eps(u) with ``w.C`` of shape (6, 6, nel, nq) (global axes)."""
+        eu, ev = _voigt_strain(u.grad), _voigt_strain(v.grad)
+        out = 0.0
+        for I in range(6):
+            s = 0.0
+            for J in range(6):
+                s = s + w.C[I, J] * eu[J]
+            out = out + ev[I] * s
+        return out
+
+    @BilinearForm
+    def mass_form(u, v, w):
+        """rho u . v with ``w.rho`` of shape (nel, nq)."""
+        return w.rho * (u[0] * v[0] + u[1] * v[1] + u[2] * v[2])
+
+    return aniso_elasticity, mass_form
+
+
+aniso_elasticity, mass_form = _make_forms()
+
+
+# ---------------------------------------------------------------------------------------
+# material fields
+# ---------------------------------------------------------------------------------------
+
+def element_regions(mesh, regions: Sequence[str]) -> np.ndarray:
+    """Index into ``regions`` for every element; '*' means "all elements not yet assigned".
+
+    Raises :class:`MaterialError` for an unknown region name or elements without material.
+    """
+    nel = mesh.t.shape[1]
+    reg = np.full(nel, -1, dtype=np.int64)
+    subs = mesh.subdomains or {}
+    for i, name in enumerate(regions):
+        if name == "*":
+            continue
+        if name not in subs:
+            raise MaterialError(f"region '{name}' is not a mesh subdomain (known: {', '.join(subs) or 'none'})")
+        reg[subs[name]] = i
+    if "*" in regions:
+        reg[reg < 0] = list(regions).index("*")
+    if np.any(reg < 0):
+        missing = [n for n in subs if np.any(reg[subs[n]] < 0)]
+        raise MaterialError(
+            f"{np.count_nonzero(reg < 0)} elements have no material (regions without material: "
+            f"{', '.join(missing) or 'elements outside all subdomains'})"
+        )
+    return reg
+
+
+def stiffness_field(
+    elem_region: np.ndarray,
+    materials: Sequence,
+    orientations: Sequence,
+    x_qp: np.ndarray,
+    elements: np.ndarray | None = None,
+) -> np.ndarray:
+    """Global-axes stiffness at quadrature points, shape (nel, nq, 6, 6).
+
+    ``x_qp``: quadrature point coordinates (3, nel, nq) of the chosen ``elements``;
+    ``orientations[i]``: None, a 3x3 rotation or a callable ``R(x) -> (..., 3, 3)``.
+    """
+    from probedyn.fem.materials import rotate_voigt
+
+    reg = elem_region if elements is None else elem_region[elements]
+    nel, nq = x_qp.shape[1], x_qp.shape[2]
+    C = np.empty((nel, nq, 6, 6))
+    for i, (mat, R) in enumerate(zip(materials, orientations)):
+        sel = np.nonzero(reg == i)[0]
+        if sel.size == 0:
+            continue
+        if R is None:
+            C[sel] = mat.C
+        elif callable(R):
+            Rq = np.asarray(R(x_qp[:, sel, :]), dtype=float)
+            if Rq.shape != (sel.size, nq, 3, 3):
+                raise MaterialError(f"orientation callable returned shape {Rq.shape}, expected {(sel.size, nq, 3, 3)}")
+            C[sel] = rotate_voigt(mat.C, Rq)
+        else:
+            C[sel] = rotate_voigt(mat.C, _check_rotation(np.asarray(R, dtype=float)))
+    return C
+
+
+def _check_rotation(R: np.ndarray) -> np.ndarray:
+    if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+        raise MaterialError("orientation must be a proper rotation matrix (R R^T = I, det R = +1)")
+    return R
+
+
+# ---------------------------------------------------------------------------------------
+# fast assembly
+# ---------------------------------------------------------------------------------------
+
+def scalar_basis(mesh, intorder: int):
+    """Scalar P2 basis on ``mesh`` (its DOF numbering defines the vector numbering)."""
+    from skfem import Basis, ElementTetP2
+
+    return Basis(mesh, ElementTetP2(), intorder=intorder)
+
+
+def _chunks(n: int, size: int):
+    for a in range(0, n, size):
+        yield np.arange(a, min(a + size, n))
+
+
+def assemble_stiffness(
+    mesh,
+    elem_region: np.ndarray,
+    materials: Sequence,
+    orientations: Sequence,
+    chunk: int = 8192,
+) -> sp.csr_matrix:
+    """Global stiffness (3N x 3N, interleaved DOFs) by batched element matrices.
+
+    Per element chunk: scalar P2 gradients ``g`` (nel, nq, 10, 3) -> strain-displacement
+    matrices ``B`` (nel, nq, 6, 30) -> ``K_e = sum_q w_q B^T (C_q B)`` -> COO triplets.
+    """
+    from skfem import ElementTetP2
+    from skfem.quadrature import get_quadrature
+
+    elem = ElementTetP2()
+    X, W = get_quadrature(elem.refdom, STIFFNESS_INTORDER)
+    nq = W.size
+    mapping = mesh._mapping()
+    # reference gradients of the 10 scalar functions: (10, 3, nq)
+    dref = np.stack([elem.lbasis(X, i)[1] for i in range(10)])
+    basis0 = scalar_basis(mesh, 1)  # for element_dofs only (cheap: 1-point rule)
+    edofs = basis0.element_dofs  # (10, nel)
+    nel = mesh.t.shape[1]
+    N = basis0.N
+    ldof = np.arange(30)
+    a_idx, c_idx = ldof // 3, ldof % 3
+    rows_all, cols_all, data_all = [], [], []
+    for sel in _chunks(nel, chunk):
+        invDF = mapping.invDF(X, tind=sel)  # (3, 3, nel, nq): d(ref)/d(x)
+        detDF = np.abs(mapping.detDF(X, tind=sel))  # (nel, nq)
+        # physical gradients g[e, q, a, j] = sum_k dref[a, k, q] invDF[k, j, e, q]
+        g = np.einsum("akq,kjeq->eqaj", dref, invDF, optimize=True)
+        B = np.zeros((sel.size, nq, 6, 30))
+        gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]  # (e, q, 10)
+        B[:, :, 0, 0::3] = gx
+        B[:, :, 1, 1::3] = gy
+        B[:, :, 2, 2::3] = gz
+        B[:, :, 3, 1::3] = gz
+        B[:, :, 3, 2::3] = gy
+        B[:, :, 4, 0::3] = gz
+        B[:, :, 4, 2::3] = gx
+        B[:, :, 5, 0::3] = gy
+        B[:, :, 5, 1::3] = gx
+        x_qp = mapping.F(X, tind=sel)  # (3, nel, nq)
+        C = stiffness_field(elem_region, materials, orientations, x_qp, elements=sel)
+        wq = detDF * W[None, :]  # (e, q)
+        CB = np.matmul(C, B) * wq[:, :, None, None]
+        Ke = np.einsum("eqIa,eqIb->eab", B, CB, optimize=True)
+        gd = (3 * edofs[a_idx][:, sel] + c_idx[:, None]).T  # (e, 30)
+        rows_all.append(np.repeat(gd, 30, axis=1).ravel().astype(np.int32))
+        cols_all.append(np.tile(gd, (1, 30)).ravel().astype(np.int32))
+        data_all.append(Ke.ravel())
+    n = 3 * N
+    K = sp.coo_matrix(
+        (np.concatenate(data_all), (np.concatenate(rows_all), np.concatenate(cols_all))), shape=(n, n)
+    ).tocsr()
+    K.sum_duplicates()
+    return K
+
+
+def assemble_scalar_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
+    """Scalar P2 mass ``int rho N_a N_b`` (N x N) with a per-element density."""
+    basis = scalar_basis(mesh, MASS_INTORDER)
+    nel = mesh.t.shape[1]
+    vals = np.stack([basis.basis[a][0].value for a in range(10)], axis=-1)  # (nel, nq, 10)
+    wq = basis.dx * elem_density[:, None]
+    Me = np.einsum("eqa,eqb,eq->eab", vals, vals, wq, optimize=True)
+    ed = basis.element_dofs.T  # (nel, 10)
+    rows = np.repeat(ed, 10, axis=1).ravel()
+    cols = np.tile(ed, (1, 10)).ravel()
+    Ms = sp.coo_matrix((Me.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr()
+    Ms.sum_duplicates()
+    del nel
+    return Ms
+
+
+def assemble_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
+    """Vector mass ``kron(M_scalar, I3)`` in the interleaved numbering."""
+    return sp.kron(assemble_scalar_mass(mesh, elem_density), sp.identity(3), format="csr")
+
+
+def assemble_stiffness_skfem(mesh, elem_region, materials, orientations) -> sp.csr_matrix:
+    """Reference assembly with scikit-fem's :data:`aniso_elasticity` form, permuted to the
+    interleaved numbering (for tests; slow)."""
+    from skfem import Basis, ElementTetP2, ElementVector
+
+    vb = Basis(mesh, ElementVector(ElementTetP2()), intorder=STIFFNESS_INTORDER)
+    x_qp = vb.global_coordinates().value
+    C = stiffness_field(elem_region, materials, orientations, x_qp)
+    K = aniso_elasticity.assemble(vb, C=np.moveaxis(C, (2, 3), (0, 1)))
+    perm = vector_dof_permutation(mesh, vb)
+    return K[perm][:, perm].tocsr()
+
+
+def vector_dof_permutation(mesh, vector_basis) -> np.ndarray:
+    """``perm`` with ``perm[3*s + c]`` = scikit-fem vector DOF of component c at scalar node s."""
+    sb = scalar_basis(mesh, 1)
+    perm = np.empty(3 * sb.N, dtype=np.int64)
+    ve = vector_basis.element_dofs  # (30, nel) local i -> (scalar i//3, comp i%3)
+    se = sb.element_dofs
+    for i in range(30):
+        perm[3 * se[i // 3] + i % 3] = ve[i]
+    return perm
+
+
+def interpolation_operator(basis, x: np.ndarray) -> sp.csr_matrix:
+    """(3 m, 3N) sparse matrix evaluating the displacement at points ``x`` (3, m);
+    row ``3 j + c`` gives component c at point j."""
+    P = basis.probes(np.asarray(x, dtype=float).reshape(3, -1)).tocoo()  # (m, N)
+    rows = np.concatenate([3 * P.row + c for c in range(3)])
+    cols = np.concatenate([3 * P.col + c for c in range(3)])
+    data = np.concatenate([P.data] * 3)
+    return sp.csr_matrix((data, (rows, cols)), shape=(3 * P.shape[0], 3 * P.shape[1]))
+
+
+def face_average_operator(mesh, facets: np.ndarray) -> tuple[sp.csr_matrix, float]:
+    """(3, 3N) operator giving the area-averaged displacement over ``facets``, and the area.
+
+    Its transpose applied to a force F gives the consistent nodal loads of the uniform
+    traction F / area, so the pair (F, averaged displacement) is work-conjugate.
+    """
+    from skfem import ElementTetP2, FacetBasis, LinearForm
+
+    fb = FacetBasis(mesh, ElementTetP2(), facets=np.asarray(facets), intorder=2)
+
+    @LinearForm
+    def one(v, w):
+        return v
+
+    a = one.assemble(fb)
+    area = float(a.sum())
+    if area <= 0:
+        raise MaterialError("face_average_operator: empty face")
+    nz = np.nonzero(a)[0]
+    rows = np.concatenate([np.full(nz.size, c) for c in range(3)])
+    cols = np.concatenate([3 * nz + c for c in range(3)])
+    data = np.concatenate([a[nz] / area] * 3)
+    return sp.csr_matrix((data, (rows, cols)), shape=(3, 3 * a.size)), area
+
+
+def lumped_weights(mesh, elem_density: np.ndarray) -> np.ndarray:
+    """Positive nodal masses per scalar node (HRZ lumping: diagonal of the consistent mass
+    scaled to the element mass), used to weight the mode classification."""
+    Ms = assemble_scalar_mass(mesh, elem_density)
+    d = Ms.diagonal()
+    return d * (Ms.sum() / d.sum())
+
+
+def region_mass_fields(mesh, elem_region: np.ndarray, densities: Sequence[float]) -> np.ndarray:
+    return np.asarray(densities, dtype=float)[elem_region]
+
+
+__all__: Sequence[str] = [
+    "aniso_elasticity", "mass_form", "assemble_stiffness", "assemble_mass", "assemble_scalar_mass",
+    "assemble_stiffness_skfem", "interpolation_operator", "face_average_operator", "element_regions",
+    "stiffness_field", "scalar_basis", "lumped_weights",
+]

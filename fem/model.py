@@ -1,0 +1,391 @@
+"""An elastic FE model of a probe: mesh + per-region materials + clamps + point masses + springs.
+
+Attachments ("where" a mass, spring or force acts) are named:
+
+* a name in ``bundle.points`` (or a coordinate triple): the displacement is **interpolated**
+  at that point (P2 shape functions).  Beware that a concentrated force or spring on a single
+  point of a 3D continuum is singular (the point displacement diverges logarithmically under
+  mesh refinement), so prefer
+* a name in ``mesh.boundaries`` (e.g. ``"free_end"``): the **area-averaged** displacement of
+  that face.  A mass attached this way is a point mass moving with the face's mean
+  displacement (no rotary inertia); a force is applied as the uniform traction F/area; the
+  pair is work-conjugate, so ``static_stiffness`` of a face is ``F / <u>``.
+
+Matrices (:meth:`ElasticModel.assemble`): ``K = K_el + sum_springs k A^T D A`` and
+``M = M_el + sum_masses m A^T A`` with ``A`` the (3, ndofs) attachment operator
+(``A = A_a - A_b`` for a spring between two attachments; ``D = I`` for an isotropic spring,
+``D = d d^T`` along a unit direction d).  Clamped DOFs (all three components of every P2 node
+on a clamped boundary) are eliminated before solving.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence, Union
+
+import numpy as np
+import scipy.sparse as sp
+
+from probedyn.errors import GeometryError, MaterialError, ParameterError, SolverError
+from probedyn.fem import elasticity as el
+from probedyn.fem.materials import Material, get_material
+from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
+
+Where = Union[str, Sequence[float], np.ndarray]
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A rigid mass ``mass`` [kg] attached at ``point`` (a named point, a boundary name for a
+    face-averaged attachment, or coordinates [m])."""
+
+    point: Where
+    mass: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.mass) and self.mass >= 0):
+            raise ParameterError(f"point mass must be non-negative, got {self.mass} kg")
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A linear spring of ``stiffness`` [N/m] from ``point_a`` to ``point_b`` (None: to the
+    ground).  ``direction`` None: isotropic (3 x 3 identity); else a unit vector along which the
+    spring acts (only the relative displacement along it is resisted)."""
+
+    point_a: Where
+    point_b: Where | None
+    stiffness: float
+    direction: Sequence[float] | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.stiffness) and self.stiffness >= 0):
+            raise ParameterError(f"spring stiffness must be non-negative, got {self.stiffness} N/m")
+        if self.direction is not None and not np.linalg.norm(self.direction) > 0:
+            raise ParameterError("spring direction must be a non-zero vector")
+
+
+RegionSpec = Union[Material, str, tuple]
+
+
+class ElasticModel:
+    """Linear elastic P2 model on a :class:`~probedyn.meshes.cache.MeshBundle`.
+
+    ``regions``: {subdomain name or '*': Material | material name | (Material, orientation)}
+    with orientation None, a 3x3 rotation (columns = material axes in global coordinates) or
+    a callable ``R(x)`` (x of shape (3, ...) -> (..., 3, 3)); '*' covers all elements not in a
+    named region.  ``clamp``: boundary names whose P2 nodes are fixed (all components).
+    ``tip``: the attachment whose displacement defines the effective mass (default "tip").
+    ``beam_axis``: 0/1/2, the axis used by the mode classification.
+    """
+
+    def __init__(
+        self,
+        bundle,
+        regions: Mapping[str, RegionSpec],
+        clamp: Sequence[str] = (),
+        point_masses: Sequence[PointMass] = (),
+        springs: Sequence[Spring] = (),
+        tip: Where = "tip",
+        beam_axis: int = 0,
+        name: str = "",
+    ) -> None:
+        self.bundle = bundle
+        self.mesh = bundle.mesh
+        self.name = name
+        self.region_names: list[str] = []
+        self.materials: list[Material] = []
+        self.orientations: list[Any] = []
+        if not regions:
+            raise MaterialError("model needs at least one region with a material")
+        for rname, spec in regions.items():
+            mat, R = spec if isinstance(spec, tuple) else (spec, None)
+            self.region_names.append(rname)
+            self.materials.append(get_material(mat))
+            self.orientations.append(R)
+        self.elem_region = el.element_regions(self.mesh, self.region_names)
+        bnd = self.mesh.boundaries or {}
+        for c in clamp:
+            if c not in bnd:
+                raise GeometryError(f"clamp '{c}' is not a boundary of the mesh (known: {', '.join(bnd) or 'none'})")
+        self.clamp = list(clamp)
+        self.point_masses = list(point_masses)
+        self.springs = list(springs)
+        self.tip = tip
+        self.beam_axis = int(beam_axis)
+        self._basis = None
+        self._K = self._M = None
+        self._Kel = self._Mel = None
+        self.timings: dict[str, float] = {}
+        self._anchor_cache: dict[Any, sp.csr_matrix] = {}
+
+    # ---- discretisation -----------------------------------------------------------------
+    @property
+    def basis(self):
+        """Scalar P2 basis (defines node numbering and positions ``basis.doflocs``)."""
+        if self._basis is None:
+            self._basis = el.scalar_basis(self.mesh, 1)
+        return self._basis
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.basis.N)
+
+    @property
+    def ndofs_total(self) -> int:
+        return 3 * self.n_nodes
+
+    @property
+    def elem_density(self) -> np.ndarray:
+        return np.array([m.density for m in self.materials])[self.elem_region]
+
+    @property
+    def clamped_dofs(self) -> np.ndarray:
+        if not self.clamp:
+            return np.zeros(0, dtype=np.int64)
+        facets = np.concatenate([self.mesh.boundaries[c] for c in self.clamp])
+        nodes = self.basis.get_dofs(facets=facets).all()
+        return np.sort((3 * nodes[:, None] + np.arange(3)[None, :]).ravel())
+
+    @property
+    def free_dofs(self) -> np.ndarray:
+        mask = np.ones(self.ndofs_total, dtype=bool)
+        mask[self.clamped_dofs] = False
+        return np.nonzero(mask)[0]
+
+    @property
+    def dofs(self) -> int:
+        """Number of unknowns after eliminating clamped DOFs."""
+        return int(self.free_dofs.size)
+
+    def attachment(self, where: Where) -> sp.csr_matrix:
+        """(3, ndofs) operator giving the displacement at ``where`` (see module docstring)."""
+        key = where if isinstance(where, str) else tuple(np.asarray(where, dtype=float).ravel())
+        if key in self._anchor_cache:
+            return self._anchor_cache[key]
+        if isinstance(where, str):
+            if where in self.bundle.points:
+                A = el.interpolation_operator(self.basis, np.asarray(self.bundle.points[where], dtype=float))
+            elif where in (self.mesh.boundaries or {}):
+                A, _ = el.face_average_operator(self.mesh, self.mesh.boundaries[where])
+            else:
+                known = sorted(set(self.bundle.points) | set(self.mesh.boundaries or {}))
+                raise GeometryError(f"unknown point or boundary '{where}' (known: {', '.join(known)})")
+        else:
+            x = np.asarray(where, dtype=float).reshape(3)
+            A = el.interpolation_operator(self.basis, x)
+            if A.nnz == 0 or abs(A.sum() - 3.0) > 1e-6:
+                raise GeometryError(f"point {x.tolist()} lies outside the mesh")
+        self._anchor_cache[key] = A
+        return A
+
+    def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
+        if self._K is None:
+            t0 = time.perf_counter()
+            K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations)
+            t1 = time.perf_counter()
+            M = el.assemble_mass(self.mesh, self.elem_density)
+            t2 = time.perf_counter()
+            self._Kel, self._Mel = K, M
+            for pm in self.point_masses:
+                if pm.mass > 0:
+                    A = self.attachment(pm.point)
+                    M = M + pm.mass * (A.T @ A)
+            for s in self.springs:
+                A = self.attachment(s.point_a)
+                if s.point_b is not None:
+                    A = A - self.attachment(s.point_b)
+                if s.direction is None:
+                    D = sp.identity(3)
+                else:
+                    d = np.asarray(s.direction, dtype=float)
+                    d = d / np.linalg.norm(d)
+                    D = sp.csr_matrix(np.outer(d, d))
+                K = K + s.stiffness * (A.T @ D @ A)
+            self._K, self._M = K.tocsr(), M.tocsr()
+            self.timings.update(assemble_K_s=t1 - t0, assemble_M_s=t2 - t1,
+                                assemble_s=time.perf_counter() - t0)
+        return self._K, self._M
+
+    def total_mass(self) -> float:
+        K, M = self.assemble()
+        r = np.zeros(self.ndofs_total)
+        r[0::3] = 1.0
+        return float(r @ (M @ r))
+
+    def region_masses(self) -> dict[str, float]:
+        vol = self.mesh.volume() if hasattr(self.mesh, "volume") else None
+        out = {}
+        for i, n in enumerate(self.region_names):
+            sel = self.elem_region == i
+            out[n] = float((vol[sel] * self.materials[i].density).sum()) if vol is not None else float("nan")
+        return out
+
+    # ---- solutions ----------------------------------------------------------------------
+    def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto") -> ModalResult:
+        """The lowest ``n_modes`` modes by shift-invert (see :mod:`probedyn.fem.eigen`)."""
+        from probedyn.fem.eigen import shift_invert_eigsh
+
+        if int(n_modes) != n_modes or n_modes < 1:
+            raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
+        K, M = self.assemble()
+        free = self.free_dofs
+        Kf = K[free][:, free].tocsr()
+        Mf = M[free][:, free].tocsr()
+        if not self.clamp and not self.springs:
+            pass  # free-floating: rigid modes at ~0 Hz are returned as such
+        res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
+        t0 = time.perf_counter()
+        Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
+        Phi[free] = res.vectors
+        modes = self._postprocess(res.eigenvalues, Phi, M, free)
+        post_s = time.perf_counter() - t0
+        timings = dict(self.timings)
+        timings.update(factor_s=res.factor_s, solve_s=res.factor_s + res.solve_s, arpack_s=res.solve_s,
+                       postprocess_s=post_s, n_opinv=res.n_opinv)
+        return ModalResult(modes, self.dofs, self, timings, self.ndofs_total, res.backend,
+                           self.total_mass(), self.tip if isinstance(self.tip, str) else "tip")
+
+    def _postprocess(self, lam: np.ndarray, Phi: np.ndarray, M: sp.csr_matrix, free: np.ndarray) -> list[Mode]:
+        k = Phi.shape[1]
+        # classification
+        weights = el.lumped_weights(self.mesh, self.elem_density)
+        U = Phi.reshape(self.n_nodes, 3, k)
+        fams, shares = classify_shapes(self.basis.doflocs, weights, U, axis=self.beam_axis)
+        # tip displacement
+        try:
+            Atip = self.attachment(self.tip)
+            tipd = (Atip @ Phi).T  # (k, 3)
+        except GeometryError:
+            tipd = np.full((k, 3), np.nan)
+        # participation: rigid translation of the free DOFs (clamp moved as a base)
+        MPhi = M @ Phi
+        gam, frac = {}, {}
+        for c, dname in enumerate(DIRS):
+            r = np.zeros(self.ndofs_total)
+            r[c::3] = 1.0
+            r_f = np.zeros_like(r)
+            r_f[free] = r[free]
+            g = r_f @ MPhi
+            mt = r_f @ (M @ r_f)
+            gam[dname] = g
+            frac[dname] = g**2 / mt if mt > 0 else np.full(k, np.nan)
+        # kinetic energy per region (element-wise rho |phi|^2) and in point masses
+        ke = self._region_kinetic(Phi)
+        modes = []
+        for i in range(k):
+            omega = float(np.sqrt(max(lam[i], 0.0)))
+            meff, keff = {}, {}
+            for c, dname in enumerate(DIRS):
+                u = tipd[i, c]
+                big = np.max(np.abs(tipd[i])) if np.all(np.isfinite(tipd[i])) else 0.0
+                if not np.isfinite(u) or abs(u) <= 1e-6 * max(big, 1e-300) or u == 0:
+                    meff[dname] = float("inf")
+                    keff[dname] = float("inf")
+                else:
+                    meff[dname] = float(1.0 / u**2)
+                    keff[dname] = float(omega**2 / u**2)
+            modes.append(Mode(
+                index=i + 1, frequency_hz=omega / (2 * np.pi), omega=omega, family=fams[i],
+                shape=Phi[:, i], tip_displacement=tipd[i].copy(),
+                effective_mass_tip=meff, effective_stiffness_tip=keff,
+                participation={d: float(gam[d][i]) for d in DIRS},
+                effective_mass_fraction={d: float(frac[d][i]) for d in DIRS},
+                kinetic_energy_share=ke[i], family_shares=shares[i],
+            ))
+        return modes
+
+    def _region_kinetic(self, Phi: np.ndarray) -> list[dict[str, float]]:
+        """Share of phi^T M phi in every region and in the point masses."""
+        k = Phi.shape[1]
+        out = [dict() for _ in range(k)]
+        totals = np.einsum("ik,ik->k", Phi, self.assemble()[1] @ Phi)
+        for r, name in enumerate(self.region_names):
+            dens = np.where(self.elem_region == r, self.elem_density, 0.0)
+            Mr = el.assemble_mass(self.mesh, dens)
+            e = np.einsum("ik,ik->k", Phi, Mr @ Phi)
+            for i in range(k):
+                out[i][name] = float(e[i] / totals[i]) if totals[i] > 0 else float("nan")
+        if self.point_masses:
+            e = np.zeros(k)
+            for pm in self.point_masses:
+                u = self.attachment(pm.point) @ Phi
+                e += pm.mass * (u**2).sum(axis=0)
+            for i in range(k):
+                out[i]["point_masses"] = float(e[i] / totals[i]) if totals[i] > 0 else float("nan")
+        return out
+
+    def static_displacement(self, force_at: Mapping[str, Sequence[float]], solver: str = "auto") -> np.ndarray:
+        """Full displacement vector [m] for static forces [N] at attachments
+        (``{"free_end": (0, 0, 1e-6)}``: uniform traction over that face)."""
+        from probedyn.fem.eigen import factorize
+
+        if not self.clamp and not self.springs:
+            raise SolverError("static solve needs a clamp or a grounded spring (the model floats freely)")
+        K, _ = self.assemble()
+        f = np.zeros(self.ndofs_total)
+        for where, F in force_at.items():
+            F = np.asarray(F, dtype=float).reshape(3)
+            f += self.attachment(where).T @ F
+        free = self.free_dofs
+        fac = factorize(K[free][:, free], spd=True, solver=solver)
+        try:
+            u = np.zeros(self.ndofs_total)
+            u[free] = fac.solve(f[free])
+        finally:
+            fac.release()
+        if not np.all(np.isfinite(u)):
+            raise SolverError("static solve produced non-finite displacements (singular stiffness)")
+        return u
+
+    def displacement_at(self, u: np.ndarray, where: Where) -> np.ndarray:
+        return np.asarray(self.attachment(where) @ u).ravel()
+
+    def static_stiffness(self, point: Where = "tip", direction: Sequence[float] = (0, 0, 1), solver: str = "auto") -> float:
+        """``k = F / (d . u)`` for a unit force F d at ``point`` along unit ``direction`` d
+        [N/m]; with a boundary name the force is the uniform traction and u the face-averaged
+        displacement (work-conjugate, finite under refinement)."""
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        key = point if isinstance(point, str) else "point"
+        u = self.static_displacement({point if isinstance(point, str) else key: d}, solver=solver) \
+            if isinstance(point, str) else self._static_at_coords(point, d, solver)
+        ud = float(d @ self.displacement_at(u, point))
+        if not ud > 0:
+            raise SolverError(f"static stiffness at '{key}': non-positive compliance {ud:g} m/N")
+        return 1.0 / ud
+
+    def _static_at_coords(self, x, d, solver):
+        from probedyn.fem.eigen import factorize
+
+        K, _ = self.assemble()
+        f = self.attachment(x).T @ d
+        free = self.free_dofs
+        fac = factorize(K[free][:, free], spd=True, solver=solver)
+        u = np.zeros(self.ndofs_total)
+        u[free] = fac.solve(f[free])
+        fac.release()
+        return u
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "regions": {n: {"material": m.name, "density": m.density, "oriented": R is not None}
+                        for n, m, R in zip(self.region_names, self.materials, self.orientations)},
+            "clamp": self.clamp,
+            "point_masses": [{"point": p.point if isinstance(p.point, str) else list(map(float, p.point)),
+                              "mass": p.mass} for p in self.point_masses],
+            "springs": [{"a": s.point_a if isinstance(s.point_a, str) else list(map(float, s.point_a)),
+                         "b": s.point_b if (s.point_b is None or isinstance(s.point_b, str)) else list(map(float, s.point_b)),
+                         "stiffness": s.stiffness,
+                         "direction": None if s.direction is None else list(map(float, s.direction))}
+                        for s in self.springs],
+            "vertices": int(self.mesh.p.shape[1]),
+            "elements": int(self.mesh.t.shape[1]),
+            "element": "P2 tetrahedra (ElementTetP2, straight-sided)",
+        }
+
+
+__all__ = ["ElasticModel", "PointMass", "Spring"]

@@ -1,0 +1,213 @@
+"""Shared gmsh helpers: a guarded in-process session, extraction of the mesh with its physical
+groups into a scikit-fem :class:`~skfem.MeshTet`, and export through meshio.
+
+Every geometry builder follows the same pattern::
+
+    with gmsh_session("cantilever"):
+        occ = gmsh.model.occ
+        ...                                   # OpenCASCADE solids
+        occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [vol], name="body")
+        gmsh.model.addPhysicalGroup(2, [face], name="clamp")
+        set_mesh_size(h)
+        gmsh.model.mesh.generate(3)
+        raw = extract_tet_mesh()              # -> RawMesh (numpy only)
+    mesh = raw.to_skfem()
+
+The physical-group names become ``mesh.subdomains`` (3D groups) and ``mesh.boundaries``
+(2D groups).  Meshes are first order (straight-sided 4-node tetrahedra); quadratic fields are
+built on them by scikit-fem (``ElementTetP2``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from probedyn.errors import GeometryError
+
+_LOCK = threading.RLock()
+
+
+@contextlib.contextmanager
+def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterator[object]:
+    """Initialise gmsh (no GUI, no signal handlers, quiet), yield the module, always finalise.
+
+    A re-entrant lock serialises sessions within one process (gmsh has global state).
+    If gmsh was already initialised by the caller, the session reuses it with a fresh model
+    and does not finalise it.
+    """
+    import gmsh
+
+    with _LOCK:
+        owner = not gmsh.isInitialized()
+        if owner:
+            gmsh.initialize(interruptible=False)
+        try:
+            gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+            gmsh.option.setNumber("General.Verbosity", 2 if verbose else 0)
+            gmsh.model.add(model_name)
+            yield gmsh
+        except Exception as exc:  # gmsh raises bare Exceptions with its log message
+            if isinstance(exc, GeometryError):
+                raise
+            raise GeometryError(f"gmsh failed for '{model_name}': {str(exc).splitlines()[0] if str(exc) else exc!r}") from exc
+        finally:
+            with contextlib.suppress(Exception):
+                gmsh.model.remove()
+            if owner:
+                gmsh.finalize()
+
+
+def set_mesh_size(h_max: float, h_min: float | None = None) -> None:
+    """Uniform characteristic length ``h_max`` [m] (``h_min`` defaults to h_max / 10)."""
+    import gmsh
+
+    gmsh.option.setNumber("Mesh.MeshSizeMax", float(h_max))
+    gmsh.option.setNumber("Mesh.MeshSizeMin", float(h_min if h_min is not None else h_max / 10))
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
+    gmsh.option.setNumber("Mesh.ElementOrder", 1)
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+
+
+def entities_in_box(dim: int, xmin, xmax, tol: float) -> list[int]:
+    """Tags of entities of dimension ``dim`` inside the box [xmin - tol, xmax + tol]."""
+    import gmsh
+
+    ents = gmsh.model.getEntitiesInBoundingBox(
+        xmin[0] - tol, xmin[1] - tol, xmin[2] - tol, xmax[0] + tol, xmax[1] + tol, xmax[2] + tol, dim
+    )
+    return [tag for _, tag in ents]
+
+
+@dataclass
+class RawMesh:
+    """A first-order tetrahedral mesh as plain arrays.
+
+    ``points`` (n, 3); ``tets`` (m, 4) 0-based; ``subdomains`` {name: element indices};
+    ``boundary_tris`` {name: (k, 3) vertex indices of the boundary triangles}.
+    """
+
+    points: np.ndarray
+    tets: np.ndarray
+    subdomains: dict[str, np.ndarray] = field(default_factory=dict)
+    boundary_tris: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def to_skfem(self):
+        """A :class:`skfem.MeshTet` with ``subdomains`` and ``boundaries`` (facet indices)."""
+        from skfem import MeshTet
+
+        p = np.ascontiguousarray(self.points.T, dtype=float)
+        t = np.ascontiguousarray(self.tets.T, dtype=np.int64)
+        mesh = MeshTet(p, t)
+        # fix orientation-independent facet lookup: encode sorted vertex triples
+        fac = np.sort(mesh.facets, axis=0).astype(np.int64)
+        n = np.int64(mesh.p.shape[1])
+        keys = (fac[0] * n + fac[1]) * n + fac[2]
+        order = np.argsort(keys)
+        sk = keys[order]
+        boundaries: dict[str, np.ndarray] = {}
+        for name, tris in self.boundary_tris.items():
+            tr = np.sort(np.asarray(tris, dtype=np.int64), axis=1)
+            q = (tr[:, 0] * n + tr[:, 1]) * n + tr[:, 2]
+            pos = np.searchsorted(sk, q)
+            pos = np.clip(pos, 0, len(sk) - 1)
+            ok = sk[pos] == q
+            if not ok.all():
+                raise GeometryError(f"boundary group '{name}': {np.count_nonzero(~ok)} triangles are not mesh facets")
+            boundaries[name] = np.sort(order[pos])
+        subdomains = {k: np.sort(np.asarray(v, dtype=np.int64)) for k, v in self.subdomains.items()}
+        return MeshTet(p, t, _boundaries=boundaries or None, _subdomains=subdomains or None)
+
+
+def extract_tet_mesh() -> RawMesh:
+    """Read the current gmsh model's linear tetrahedra and its physical groups.
+
+    Unused nodes (e.g. geometry-only points) are dropped and the numbering compacted.
+    """
+    import gmsh
+
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    coords = coords.reshape(-1, 3)
+    tag_to_idx = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
+    tag_to_idx[node_tags.astype(np.int64)] = np.arange(node_tags.size)
+
+    # all tets, keeping their element tags for the physical groups
+    etypes, etags, enodes = gmsh.model.mesh.getElements(3)
+    tet_tags, tet_nodes = [], []
+    for et, tg, nd in zip(etypes, etags, enodes):
+        if et != 4:
+            raise GeometryError(f"expected linear tetrahedra (gmsh type 4), got element type {et}")
+        tet_tags.append(tg)
+        tet_nodes.append(nd.reshape(-1, 4))
+    if not tet_tags:
+        raise GeometryError("gmsh produced no tetrahedra (is the geometry a closed solid?)")
+    tet_tags = np.concatenate(tet_tags).astype(np.int64)
+    tets = tag_to_idx[np.concatenate(tet_nodes).astype(np.int64)]
+
+    # compact node numbering to the nodes used by tets
+    used = np.unique(tets)
+    remap = np.full(node_tags.size, -1, dtype=np.int64)
+    remap[used] = np.arange(used.size)
+    points = coords[used]
+    tets = remap[tets]
+
+    etag_to_idx = {}
+    order = np.argsort(tet_tags)
+    subdomains: dict[str, np.ndarray] = {}
+    boundary_tris: dict[str, np.ndarray] = {}
+    for dim, ptag in gmsh.model.getPhysicalGroups():
+        name = gmsh.model.getPhysicalName(dim, ptag) or f"group{dim}_{ptag}"
+        ents = gmsh.model.getEntitiesForPhysicalGroup(dim, ptag)
+        if dim == 3:
+            idx = []
+            for e in ents:
+                _, tg, _ = gmsh.model.mesh.getElements(3, int(e))
+                if tg:
+                    t = np.concatenate(tg).astype(np.int64)
+                    idx.append(order[np.searchsorted(tet_tags[order], t)])
+            subdomains[name] = np.concatenate(idx) if idx else np.zeros(0, dtype=np.int64)
+        elif dim == 2:
+            tris = []
+            for e in ents:
+                ets, _, nds = gmsh.model.mesh.getElements(2, int(e))
+                for et, nd in zip(ets, nds):
+                    if et != 2:
+                        raise GeometryError(f"expected linear triangles on surface {e}, got type {et}")
+                    tris.append(remap[tag_to_idx[nd.reshape(-1, 3).astype(np.int64)]])
+            boundary_tris[name] = np.concatenate(tris) if tris else np.zeros((0, 3), dtype=np.int64)
+    del etag_to_idx
+    return RawMesh(points, tets, subdomains, boundary_tris)
+
+
+def export_meshio(mesh, path: str | Path, file_format: str | None = None) -> Path:
+    """Write a scikit-fem tet mesh with a ``region`` cell field (index into sorted subdomain
+    names) through meshio, in any format meshio knows (by suffix: .vtu, .msh, .xdmf, ...)."""
+    import meshio
+
+    from probedyn.jsonio import atomic_path
+
+    path = Path(path)
+    region = np.full(mesh.t.shape[1], -1, dtype=np.int32)
+    for i, name in enumerate(sorted(mesh.subdomains or {})):
+        region[mesh.subdomains[name]] = i
+    m = meshio.Mesh(mesh.p.T, [("tetra", mesh.t.T)], cell_data={"region": [region]})
+    with atomic_path(path) as tmp:
+        meshio.write(tmp, m, file_format=file_format or _meshio_format(path))
+    return path
+
+
+def _meshio_format(path: Path) -> str:
+    import meshio
+
+    ext = path.suffix.lower()
+    fmts = meshio.extension_to_filetypes.get(ext)
+    if not fmts:
+        raise GeometryError(f"{path}: unknown mesh file suffix '{ext}'")
+    return fmts[0]

@@ -1,0 +1,155 @@
+"""Parametric rectangular AFM cantilever (source section 2.3) with an optional tip.
+
+Geometry (SI units, metres):
+
+* beam: the box ``0 <= x <= length``, ``|y| <= width/2``, ``|z| <= thickness/2``; x runs from the
+  clamp (x = 0) to the free end, y across the width, z through the thickness (the contract's
+  beam-axis convention: flapwise = z bending, lateral = y bending);
+* optional tip on the underside at the free end, pointing to -z: a square ``pyramid`` or a
+  ``cone`` of height ``tip_height`` and half-angle ``tip_half_angle`` (base half-size
+  ``tip_height * tan(half_angle)``), its base centred at ``(length - base, 0, -thickness/2)`` so
+  the base ends flush with the free end.
+
+Physical groups: volumes ``body`` and (with a tip) ``tip``; surfaces ``clamp`` (x = 0),
+``free_end`` (x = length), ``top`` (z = +t/2), ``bottom`` (z = -t/2, outside the tip base).
+Named points: ``tip`` (the apex, or without a tip the centre of the lower free-end edge
+``(length, 0, -thickness/2)`` where a tip would sit), ``free_end_centre`` ``(length, 0, 0)``,
+``clamp_centre`` ``(0, 0, 0)``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from probedyn.errors import GeometryError
+from probedyn.meshes._gmsh import RawMesh, entities_in_box, extract_tet_mesh, gmsh_session, set_mesh_size
+from probedyn.meshes.cache import MeshBundle, MeshOptions, cached_mesh
+
+TIP_SHAPES = ("none", "pyramid", "cone")
+UM = 1e6  # gmsh model units per metre
+
+
+def validate_geometry(length: float, width: float, thickness: float, tip_shape: str = "none",
+                      tip_height: float = 0.0, tip_half_angle: float = 0.0) -> float:
+    """Check the sizes; return the tip base half-size [m] (0 without a tip).
+
+    Sizes must be positive; the base of the tip must fit on the underside of the beam.
+    (Plausibility ranges, e.g. 300 typed for 300e-6, are checked by the probe's Params.)
+    """
+    for name, v in (("length", length), ("width", width), ("thickness", thickness)):
+        if not (np.isfinite(v) and v > 0):
+            raise GeometryError(f"cantilever {name} must be positive, got {v:g} m")
+    if tip_shape not in TIP_SHAPES:
+        raise GeometryError(f"tip_shape must be one of {', '.join(TIP_SHAPES)}, got {tip_shape!r}")
+    if tip_shape == "none":
+        return 0.0
+    if not (tip_height > 0):
+        raise GeometryError(f"tip_height must be positive for a {tip_shape} tip, got {tip_height:g} m")
+    if not (0 < tip_half_angle < math.pi / 2):
+        raise GeometryError(f"tip_half_angle must lie in (0, pi/2) rad, got {tip_half_angle:g}")
+    base = tip_height * math.tan(tip_half_angle)
+    if 2 * base > width * (1 - 1e-9) or 2 * base > length:
+        raise GeometryError(
+            f"tip base {2 * base:.3g} m (= 2 tip_height tan(half_angle)) does not fit on the "
+            f"cantilever underside of width {width:.3g} m"
+        )
+    return base
+
+
+def _build(params: dict[str, Any]) -> MeshBundle:
+    L0, w0, t0 = float(params["length"]), float(params["width"]), float(params["thickness"])
+    shape = params.get("tip_shape", "none")
+    th0, ta = float(params.get("tip_height", 0.0)), float(params.get("tip_half_angle", 0.0))
+    base0 = validate_geometry(L0, w0, t0, shape, th0, ta)
+    opts = MeshOptions(**params["mesh"])
+    h0 = opts.size_for(min(w0, t0))
+    # OpenCASCADE works with an absolute tolerance of 1e-7 model units: build in micrometres
+    # and scale the nodes back to metres.
+    L, w, t, th, base, h = (v * UM for v in (L0, w0, t0, th0, base0, h0))
+    n_est = (L / h) * (w / h) * (t / h) * 6
+    if n_est > 5e7:
+        raise GeometryError(f"element size {h:.3g} m would give ~{n_est:.2g} tetrahedra; choose a larger element_size")
+    tol = 1e-4 * min(L, w, t)
+
+    with gmsh_session("cantilever") as gmsh:
+        occ = gmsh.model.occ
+        box = occ.addBox(0, -w / 2, -t / 2, L, w, t)
+        tip_vol = None
+        if shape != "none":
+            xc, zb = L - base, -t / 2
+            if shape == "cone":
+                tip_vol = occ.addCone(xc, 0, zb, 0, 0, -th, base, 0)
+            else:
+                pts = [occ.addPoint(xc + sx * base, sy * base, zb) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+                apex = occ.addPoint(xc, 0, zb - th)
+                base_lines = [occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)]
+                side = [occ.addLine(p, apex) for p in pts]
+                faces = [occ.addPlaneSurface([occ.addCurveLoop(base_lines)])]
+                for i in range(4):
+                    loop = occ.addCurveLoop([base_lines[i], side[(i + 1) % 4], -side[i]])
+                    faces.append(occ.addPlaneSurface([loop]))
+                tip_vol = occ.addVolume([occ.addSurfaceLoop(faces)])
+            occ.fragment([(3, box)], [(3, tip_vol)])
+        occ.synchronize()
+
+        vols = [tag for _, tag in gmsh.model.getEntities(3)]
+        body, tips = [], []
+        for v in vols:
+            bb = gmsh.model.getBoundingBox(3, v)
+            (tips if bb[2] < -t / 2 - tol else body).append(v)
+        gmsh.model.addPhysicalGroup(3, body, name="body")
+        if tips:
+            gmsh.model.addPhysicalGroup(3, tips, name="tip")
+        clamp = entities_in_box(2, (0, -w / 2, -t / 2), (0, w / 2, t / 2), tol)
+        free = entities_in_box(2, (L, -w / 2, -t / 2), (L, w / 2, t / 2), tol)
+        top = entities_in_box(2, (0, -w / 2, t / 2), (L, w / 2, t / 2), tol)
+        bottom = entities_in_box(2, (0, -w / 2, -t / 2), (L, w / 2, -t / 2), tol)
+        if tips:  # the tip base is an interior interface, not a free surface
+            tip_faces = {tag for _, tag in gmsh.model.getBoundary([(3, v) for v in tips], oriented=False)}
+            bottom = [f for f in bottom if f not in tip_faces]
+        if not clamp or not free:
+            raise GeometryError("cantilever: clamp or free-end face not found after meshing")
+        gmsh.model.addPhysicalGroup(2, clamp, name="clamp")
+        gmsh.model.addPhysicalGroup(2, free, name="free_end")
+        gmsh.model.addPhysicalGroup(2, top, name="top")
+        gmsh.model.addPhysicalGroup(2, bottom, name="bottom")
+        set_mesh_size(h, h / 10 if tips else h)
+        gmsh.option.setNumber("Mesh.Optimize", 1 if opts.optimize else 0)
+        gmsh.model.mesh.generate(3)
+        raw: RawMesh = extract_tet_mesh()
+
+    raw.points = raw.points / UM
+    mesh = raw.to_skfem()
+    points = {
+        "tip": np.array([L0 - base0, 0.0, -t0 / 2 - th0]) if shape != "none" else np.array([L0, 0.0, -t0 / 2]),
+        "free_end_centre": np.array([L0, 0.0, 0.0]),
+        "clamp_centre": np.array([0.0, 0.0, 0.0]),
+    }
+    return MeshBundle(mesh, points, meta={"element_size_used": h0})
+
+
+def cantilever_mesh(
+    length: float = 300e-6,
+    width: float = 30e-6,
+    thickness: float = 10e-6,
+    tip_shape: str = "none",
+    tip_height: float = 0.0,
+    tip_half_angle: float = 0.0,
+    options: MeshOptions | None = None,
+    use_cache: bool = True,
+) -> MeshBundle:
+    """Mesh of the cantilever (cached by a hash of all arguments); see the module docstring
+    for the geometry, groups and named points."""
+    opts = options or MeshOptions()
+    validate_geometry(length, width, thickness, tip_shape, tip_height, tip_half_angle)
+    params = {
+        "length": float(length), "width": float(width), "thickness": float(thickness),
+        "tip_shape": tip_shape,
+        "tip_height": float(tip_height) if tip_shape != "none" else 0.0,
+        "tip_half_angle": float(tip_half_angle) if tip_shape != "none" else 0.0,
+        "mesh": opts.as_dict(),
+    }
+    return cached_mesh("cantilever", params, _build, use_cache=use_cache)
