@@ -1,2 +1,108 @@
 """Registry of probes: each ties a parametric geometry (meshes/) to materials, point masses and
-springs (fem/) and to its analytic references (lumped/)."""
+springs (fem/) and to its analytic references (lumped/).
+
+A probe is a subclass of :class:`Probe` registered with :func:`register_probe`; every module
+in this package is imported on first use of the registry, so a new probe only needs a module
+here that decorates its class.  A probe can also be given as a TOML file::
+
+    probe = "cantilever"
+    length = 450e-6
+    tip_mass = 1e-11
+
+:func:`get_probe` returns the probe and the TOML keys (other than ``probe``) as overrides.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from probedyn.errors import DataFormatError, ParameterError
+from probedyn.params import ParamSet, load_toml
+
+_REGISTRY: dict[str, type["Probe"]] = {}
+_DISCOVERED = False
+
+
+class Probe:
+    """Base class.  Subclasses set ``name``, ``description`` and ``params`` (a
+    :class:`~probedyn.params.ParamSet` of geometry, material and mesh parameters in SI units)
+    and implement :meth:`build` (and usually :meth:`references`)."""
+
+    name: str = ""
+    description: str = ""
+    params: ParamSet = ParamSet([])
+
+    def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+        """Defaults + validated overrides; subclasses add cross-parameter checks."""
+        return self.params.resolve(overrides)
+
+    def build(self, values: dict[str, Any]):
+        """The :class:`~probedyn.fem.model.ElasticModel` for resolved ``values``."""
+        raise NotImplementedError
+
+    def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
+        """Analytic comparison rows for a :class:`~probedyn.fem.modes.ModalResult`:
+        ``{"mode", "family", "formula", "fem_hz", "value_hz", "rel_diff"}``."""
+        return []
+
+    def tip_point(self, values: dict[str, Any]) -> np.ndarray:
+        """Coordinates [m] of the probe tip (where effective masses are evaluated)."""
+        raise NotImplementedError
+
+    def modes(self, overrides: dict[str, Any] | None = None, n_modes: int = 8):
+        """Convenience: resolve, build and solve."""
+        values = self.resolve(overrides)
+        return self.build(values).modes(n_modes)
+
+
+def register_probe(cls: type[Probe]) -> type[Probe]:
+    """Class decorator adding a probe to the registry under ``cls.name``."""
+    if not cls.name:
+        raise ValueError(f"probe class {cls.__name__} has no name")
+    _REGISTRY[cls.name] = cls
+    return cls
+
+
+def _discover() -> None:
+    global _DISCOVERED
+    if _DISCOVERED:
+        return
+    _DISCOVERED = True
+    for info in pkgutil.iter_modules(__path__):
+        if not info.name.startswith("_"):
+            importlib.import_module(f"{__name__}.{info.name}")
+
+
+def list_probes() -> list[str]:
+    _discover()
+    return sorted(_REGISTRY)
+
+
+def get_probe(name_or_path: str | Path) -> tuple[Probe, dict[str, Any]]:
+    """A probe by registry name, or from a TOML file (``probe = "<name>"`` plus parameter
+    keys).  Returns ``(probe, overrides)``; unknown names and malformed files raise."""
+    _discover()
+    s = str(name_or_path)
+    overrides: dict[str, Any] = {}
+    if s.endswith(".toml") or (Path(s).suffix and Path(s).exists()):
+        data = load_toml(s)
+        if "probe" not in data:
+            raise DataFormatError(f"{s}: missing key 'probe' (e.g. probe = \"cantilever\")")
+        name = str(data.pop("probe"))
+        for k, v in data.items():
+            if isinstance(v, dict):
+                raise DataFormatError(f"{s}: tables are not supported, put '{k}' keys at top level")
+            overrides[k] = v
+    else:
+        name = s
+    if name not in _REGISTRY:
+        raise ParameterError(f"unknown probe '{name}' (known: {', '.join(sorted(_REGISTRY))})")
+    probe = _REGISTRY[name]()
+    if overrides:
+        probe.params.resolve(overrides)  # validate now: names the bad key
+    return probe, overrides
