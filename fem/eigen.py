@@ -143,9 +143,12 @@ def shift_invert_eigsh(
     t0 = time.perf_counter()
     rng = np.random.default_rng(12345)
     v0 = rng.standard_normal(n)
+    # Ask ARPACK for a few more pairs than needed: a larger Krylov space captures multiple
+    # eigenvalues (rigid-body modes, the degenerate bending pairs of a tube) reliably.
+    k_int = min(n - 2, n_modes + max(3, n_modes // 2))
     try:
-        w, V = spla.eigsh(K, k=n_modes, M=M, sigma=sigma, OPinv=op, which="LM", tol=tol, v0=v0,
-                          ncv=min(n - 1, max(2 * n_modes + 1, 20)))
+        w, V = spla.eigsh(K, k=k_int, M=M, sigma=sigma, OPinv=op, which="LM", tol=tol, v0=v0,
+                          ncv=min(n - 1, max(2 * k_int + 1, 20)))
     except spla.ArpackNoConvergence as exc:
         raise SolverError(f"eigen-solver did not converge ({len(exc.eigenvalues)} of {n_modes} modes)") from None
     except (spla.ArpackError, ValueError, RuntimeError) as exc:
@@ -154,7 +157,7 @@ def shift_invert_eigsh(
         fac.release()
     solve_s = time.perf_counter() - t0
     order = np.argsort(w)
-    w, V = w[order], V[:, order]
+    w, V = w[order][:n_modes], V[:, order][:, :n_modes]
     if not np.all(np.isfinite(w)):
         raise SolverError("eigen-solver returned non-finite eigenvalues")
     scale = float(np.max(np.abs(w))) if w.size else 1.0

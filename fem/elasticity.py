@@ -228,7 +228,7 @@ def assemble_scalar_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
     """Scalar P2 mass ``int rho N_a N_b`` (N x N) with a per-element density."""
     basis = scalar_basis(mesh, MASS_INTORDER)
     nel = mesh.t.shape[1]
-    vals = np.stack([basis.basis[a][0].value for a in range(10)], axis=-1)  # (nel, nq, 10)
+    vals = np.stack([np.asarray(basis.basis[a][0]) for a in range(10)], axis=-1)  # (nel, nq, 10)
     wq = basis.dx * elem_density[:, None]
     Me = np.einsum("eqa,eqb,eq->eab", vals, vals, wq, optimize=True)
     ed = basis.element_dofs.T  # (nel, 10)

@@ -216,12 +216,11 @@ class ElasticModel:
         return float(r @ (M @ r))
 
     def region_masses(self) -> dict[str, float]:
-        vol = self.mesh.volume() if hasattr(self.mesh, "volume") else None
-        out = {}
-        for i, n in enumerate(self.region_names):
-            sel = self.elem_region == i
-            out[n] = float((vol[sel] * self.materials[i].density).sum()) if vol is not None else float("nan")
-        return out
+        from probedyn.meshes._gmsh import element_volumes
+
+        vol = element_volumes(self.mesh)
+        return {n: float((vol[self.elem_region == i] * self.materials[i].density).sum())
+                for i, n in enumerate(self.region_names)}
 
     # ---- solutions ----------------------------------------------------------------------
     def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto") -> ModalResult:
@@ -281,7 +280,7 @@ class ElasticModel:
             for c, dname in enumerate(DIRS):
                 u = tipd[i, c]
                 big = np.max(np.abs(tipd[i])) if np.all(np.isfinite(tipd[i])) else 0.0
-                if not np.isfinite(u) or abs(u) <= 1e-6 * max(big, 1e-300) or u == 0:
+                if not np.isfinite(u) or abs(u) <= 1e-3 * max(big, 1e-300) or u == 0:
                     meff[dname] = float("inf")
                     keff[dname] = float("inf")
                 else:

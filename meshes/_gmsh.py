@@ -211,3 +211,10 @@ def _meshio_format(path: Path) -> str:
     if not fmts:
         raise GeometryError(f"{path}: unknown mesh file suffix '{ext}'")
     return fmts[0]
+
+
+def element_volumes(mesh) -> np.ndarray:
+    """Volumes [m^3] of the straight tetrahedra of a scikit-fem MeshTet."""
+    p = mesh.p[:, mesh.t]  # (3, 4, nel)
+    a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
+    return np.abs(np.einsum("ie,ie->e", a, np.cross(b, c, axis=0))) / 6.0

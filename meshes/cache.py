@@ -81,6 +81,12 @@ class MeshBundle:
     def n_elements(self) -> int:
         return int(self.mesh.t.shape[1])
 
+    def element_volumes(self) -> np.ndarray:
+        """Volumes [m^3] of the tetrahedra."""
+        from probedyn.meshes._gmsh import element_volumes
+
+        return element_volumes(self.mesh)
+
     def export(self, path: str | Path) -> Path:
         """Write the mesh (with a ``region`` cell field) through meshio; format by suffix."""
         from probedyn.meshes._gmsh import export_meshio
