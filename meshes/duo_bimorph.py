@@ -19,10 +19,11 @@ Geometry (SI metres, probedyn axes: x from the clamp to the free end, y across, 
 
 Physical groups: volumes ``upper_layer``, ``lower_layer``, ``body`` (= both layers), ``holder``,
 ``holder_piezolayer``, ``tip``; surfaces ``clamp`` (x = 0), ``free_end`` (the part of x = length
-not covered by the holder), the five electrodes. Named points: ``tip`` (cone apex; without a
-meshed tip the point where the lumped tip spring is attached, ``holder_end``), ``holder``
+not covered by the holder), ``holder_end`` (the holder end face x = length + holder_length, or
+the whole body end face without a meshed holder), the five electrodes. Named points: ``tip`` (cone apex; without a
+meshed tip the centre of the face where the lumped tip spring is attached, ``holder_end_centre``), ``holder``
 (centroid of holder + piezolayer, or the body end centre without a meshed holder),
-``holder_end`` (centre of the holder end face, or the body end centre), ``free_end_centre``,
+``holder_end_centre`` (centre of the holder end face, or the body end centre), ``free_end_centre``,
 ``clamp_centre``.
 """
 
@@ -102,7 +103,7 @@ def named_points(q: dict[str, Any]) -> dict[str, np.ndarray]:
         holder_end = end.copy()
         x_tip = L - q["tip_radius"]
     tip = np.array([x_tip, 0.0, -h / 2 - q["tip_height"]]) if q["tip"] == "meshed" else holder_end.copy()
-    return {"tip": tip, "holder": holder, "holder_end": holder_end, "free_end_centre": end,
+    return {"tip": tip, "holder": holder, "holder_end_centre": holder_end, "free_end_centre": end,
             "clamp_centre": np.zeros(3)}
 
 
@@ -177,6 +178,11 @@ def _build(params: dict[str, Any]) -> MeshBundle:
         gmsh.model.addPhysicalGroup(2, clamp, name="clamp")
         if end_faces:
             gmsh.model.addPhysicalGroup(2, end_faces, name="free_end")
+        if q["holder"] == "meshed":
+            hend = faces(L + Lh, L + Lh, -wh / 2, wh / 2, -h / 2, -h / 2 + th + tp)
+        else:
+            hend = faces(L, L, -w / 2, w / 2, -h / 2, h / 2)
+        gmsh.model.addPhysicalGroup(2, hend, name="holder_end")
         for name, fs in elec.items():
             gmsh.model.addPhysicalGroup(2, fs, name=name)
         set_mesh_size(s, s / 10)

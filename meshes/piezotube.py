@@ -6,9 +6,11 @@ calls the tube axis z, its lateral x is probedyn z and its y is probedyn y):
 * **tube** (volume ``tube``, also ``body``): outer circle of radius ``Re`` centred on the x axis,
   bore of radius ``Ri`` centred at ``(delta_y, delta_z)`` (eccentricity, Fig 3.19),
   ``0 <= x <= length``;
-* optional **holder** (``holder = "meshed"``): a collar with the tube's cross-section for
-  ``length <= x <= length + holder_length`` (volume ``holder``) and its stiffness-tuning
-  piezolayer, a ring ``Re <= r <= Re + piezolayer_thickness`` around it (``holder_piezolayer``).
+* optional **holder** (``holder = "meshed"``): a thick collar ``length <= x <= length +
+  holder_length`` made of the tube's cross-section and a ring ``Re <= r <= Re + holder_wall``
+  (volume ``holder``; the thick wall keeps the collar from ovalising under a heavy holder
+  mass) and its stiffness-tuning piezolayer, a ring of thickness ``piezolayer_thickness``
+  around it (``holder_piezolayer``).
   (The cantilever tip on the holder is lumped: Table 3.2 gives no tip geometry.)
 
 Electrodes (tagged surfaces on ``0 <= x <= length``): 12 equal 30-degree sectors
@@ -26,8 +28,8 @@ invariant under a 90-degree rotation and the lateral y/z pair is exactly degener
 eccentric bore only moves nodes, so the split of the pair measures the eccentricity and not
 mesh noise.
 
-Named points: ``tip`` and ``holder_end`` = centre of the last end face, ``tube_end`` and
-``clamp_centre`` (axis points; they lie in the bore, so attach masses and springs to the
+Named points: ``tip`` and ``holder_end_centre`` = centre of the last end face,
+``tube_end_centre`` and ``clamp_centre`` (axis points; they lie in the bore, so attach masses and springs to the
 boundary groups, which are face-averaged).
 """
 
@@ -50,14 +52,14 @@ QUARTERS = {"electrode_yp": (11, 0, 1), "electrode_zp": (2, 3, 4), "electrode_ym
 
 DEFAULTS: dict[str, Any] = {
     "Re": 0.5e-3, "Ri": 0.45e-3, "length": 5e-3, "delta_y": 0.0, "delta_z": 0.0,
-    "holder": "meshed", "holder_length": 0.5e-3, "piezolayer_thickness": 25e-6,
+    "holder": "meshed", "holder_length": 0.5e-3, "holder_wall": 0.25e-3, "piezolayer_thickness": 25e-6,
 }
 
 
 def validate(p: dict[str, Any]) -> dict[str, Any]:
     """Complete with defaults and check that the tube can exist (one-line GeometryError)."""
     q = {**DEFAULTS, **p}
-    for k in ("Re", "Ri", "length", "holder_length", "piezolayer_thickness"):
+    for k in ("Re", "Ri", "length", "holder_length", "holder_wall", "piezolayer_thickness"):
         v = float(q[k])
         if k == "holder_length" and v <= 0:
             raise GeometryError(f"piezotube holder_length L_h must be positive, got {v:g} m")
@@ -92,10 +94,12 @@ def mesh_counts(q: dict[str, Any], opts: MeshOptions) -> dict[str, int]:
     n_len = max(2, math.ceil(q["length"] / size - 1e-9))
     n_hold = max(1, math.ceil(q["holder_length"] / size - 1e-9))
     n_layer = max(1, math.ceil(q["piezolayer_thickness"] / (wall / n_wall) - 1e-9))
-    n_hex = N_SECT * n_sector * n_wall * (n_len + n_hold) + N_SECT * n_sector * n_layer * n_hold
+    n_hw = max(1, math.ceil(q["holder_wall"] / (2 * wall / n_wall) - 1e-9))
+    n_hex = N_SECT * n_sector * (n_wall * (n_len + n_hold) + (n_layer + n_hw) * n_hold)
     if 6 * n_hex > 3e6:
         raise GeometryError(f"element size {size:.3g} m would give ~{6 * n_hex:.2g} tetrahedra; choose a larger element_size")
-    return {"n_wall": n_wall, "n_sector": n_sector, "n_length": n_len, "n_holder": n_hold, "n_layer": n_layer}
+    return {"n_wall": n_wall, "n_sector": n_sector, "n_length": n_len, "n_holder": n_hold, "n_layer": n_layer,
+            "n_holder_wall": n_hw}
 
 
 def sector_edges_deg() -> np.ndarray:
@@ -109,7 +113,7 @@ def _build(params: dict[str, Any]) -> MeshBundle:
     nc = mesh_counts(q, opts)
     Re, Ri, L = q["Re"] * MM, q["Ri"] * MM, q["length"] * MM
     dy, dz = q["delta_y"] * MM, q["delta_z"] * MM
-    Lh, tp = q["holder_length"] * MM, q["piezolayer_thickness"] * MM
+    Lh, tp, hw = q["holder_length"] * MM, q["piezolayer_thickness"] * MM, q["holder_wall"] * MM
     meshed_holder = q["holder"] == "meshed"
     tol = 1e-4 * min(Re - Ri, tp)
     phis = np.radians(sector_edges_deg())
@@ -142,7 +146,8 @@ def _build(params: dict[str, Any]) -> MeshBundle:
         extrude(section(0.0, Ri, (dy, dz), Re), L)
         if meshed_holder:
             extrude(section(L, Ri, (dy, dz), Re), Lh)
-            extrude(section(L, Re, (0.0, 0.0), Re + tp), Lh)
+            extrude(section(L, Re, (0.0, 0.0), Re + hw), Lh)
+            extrude(section(L, Re + hw, (0.0, 0.0), Re + hw + tp), Lh)
         occ.fragment(vols[:1], vols[1:])
         occ.removeAllDuplicates()
         occ.synchronize()
@@ -161,7 +166,8 @@ def _build(params: dict[str, Any]) -> MeshBundle:
             elif kind == "Line":
                 r0 = math.hypot(y0, z0)
                 r1 = math.hypot(y1, z1)
-                n = nc["n_layer"] if min(r0, r1) > Re - tol else nc["n_wall"]
+                rmin = min(r0, r1)
+                n = nc["n_layer"] if rmin > Re + hw - tol else (nc["n_holder_wall"] if rmin > Re - tol else nc["n_wall"])
             else:
                 n = nc["n_sector"]
             mesh.setTransfiniteCurve(c, n + 1)
@@ -178,14 +184,14 @@ def _build(params: dict[str, Any]) -> MeshBundle:
                 tube.append(v)
             else:
                 com = gmsh.model.occ.getCenterOfMass(3, v)
-                (layer if math.hypot(com[1], com[2]) > Re else holder).append(v)
+                (layer if math.hypot(com[1], com[2]) > Re + hw else holder).append(v)
         gmsh.model.addPhysicalGroup(3, tube, name="tube")
         gmsh.model.addPhysicalGroup(3, tube, name="body")
         if holder:
             gmsh.model.addPhysicalGroup(3, holder, name="holder")
             gmsh.model.addPhysicalGroup(3, layer, name="holder_piezolayer")
 
-        B = Re + tp + 1
+        B = Re + hw + tp + 1
         clamp = entities_in_box(2, (0, -B, -B), (0, B, B), tol)
         tube_end = entities_in_box(2, (L, -Re - tol, -Re - tol), (L, Re + tol, Re + tol), tol)
         x_end = L + Lh if meshed_holder else L
@@ -225,8 +231,8 @@ def _build(params: dict[str, Any]) -> MeshBundle:
     raw.points = raw.points / MM
     mesh = raw.to_skfem()
     xe = q["length"] + (q["holder_length"] if meshed_holder else 0.0)
-    points = {"tip": np.array([xe, 0.0, 0.0]), "holder_end": np.array([xe, 0.0, 0.0]),
-              "tube_end": np.array([q["length"], 0.0, 0.0]), "clamp_centre": np.zeros(3)}
+    points = {"tip": np.array([xe, 0.0, 0.0]), "holder_end_centre": np.array([xe, 0.0, 0.0]),
+              "tube_end_centre": np.array([q["length"], 0.0, 0.0]), "clamp_centre": np.zeros(3)}
     return MeshBundle(mesh, points, meta={"divisions": nc})
 
 
@@ -237,6 +243,7 @@ def piezotube_mesh(params: dict[str, Any] | None = None, options: MeshOptions | 
     = circumferential/axial size (default 4 x wall / n_wall)."""
     q = validate(dict(params or {}))
     if q["holder"] == "point":
-        q["holder_length"], q["piezolayer_thickness"] = DEFAULTS["holder_length"], DEFAULTS["piezolayer_thickness"]
+        for k in ("holder_length", "holder_wall", "piezolayer_thickness"):
+            q[k] = DEFAULTS[k]
     q["mesh"] = (options or MeshOptions(elements_through_thickness=1)).as_dict()
     return cached_mesh("piezotube", q, _build, use_cache=use_cache)
