@@ -1,0 +1,76 @@
+"""Adhesion–friction coupling (section 2.2.4): the contact -> friction link, the stick-slip
+measures, and the claim of the source checked with FFM scans."""
+
+import math
+
+import numpy as np
+import pytest
+
+from probedyn.errors import ParameterError
+from probedyn.schemes.coupling import CouplingSetup, contact_at, scan_metrics
+
+
+def test_no_adhesion_gives_hertz_and_unit_scale():
+    c = contact_at(0.0, CouplingSetup())
+    assert c["W"] == 0 and c["pull_off"] == 0
+    assert c["radius"] == pytest.approx(c["radius_hertz"], rel=1e-12)
+    assert c["scale"] == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("law", ["area", "load"])
+def test_friction_scale_grows_with_adhesion(law):
+    s = CouplingSetup(law=law, lams=(0.0, 0.1, 0.3, 1.0, 3.0))
+    rows = [contact_at(l, s) for l in s.lams]
+    assert np.all(np.diff([r["W"] for r in rows]) > 0)
+    assert np.all(np.diff([-r["pull_off"] for r in rows]) > 0)
+    assert np.all(np.diff([r["scale"] for r in rows]) > 0)
+
+
+def test_area_law_matches_jkr_contact_radius_at_large_lambda():
+    # lam = 300: MD is JKR to O(1/lam^2); JKR radius under load L:
+    # a^3 = R/K (L + 3 pi W R + sqrt(6 pi W R L + (3 pi W R)^2))
+    from probedyn.schemes.contact import MaugisDugdale
+
+    s = CouplingSetup()
+    c = contact_at(300.0, s)
+    sc = MaugisDugdale(lam=300.0, **s.contact).scales
+    q = 3 * math.pi * sc.W * sc.R
+    a3 = sc.R / sc.K * (s.load + q + math.sqrt(2 * q * s.load + q * q))
+    assert c["radius"] == pytest.approx(a3 ** (1 / 3), rel=1e-3)
+
+
+def test_load_law_is_derjaguin_two_term():
+    s = CouplingSetup(law="load")
+    c = contact_at(1.0, s)
+    assert c["scale"] == pytest.approx(1.0 - c["pull_off"] / s.load, rel=1e-14)
+
+
+def test_scan_metrics_on_an_exact_sawtooth():
+    # ramp 0 -> Fs over x1, then a sawtooth Fc -> Fs with period p (instant slips)
+    Fs, Fc, x1, p = 13e-9, 12e-9, 65e-9, 5e-9
+    x = np.linspace(0, x1 + 8.5 * p, 200001)
+    dx = x[1] - x[0]
+    F = np.where(x < x1, Fs * x / x1, Fc + (Fs - Fc) * (((x - x1) / p) % 1.0))
+    F[x >= x1] = np.where(((x[x >= x1] - x1) / p) % 1.0 < 1e-12, Fc, F[x >= x1])
+    m = scan_metrics(x, F)
+    assert m["first_stick_m"] == pytest.approx(x1, abs=2 * dx)
+    assert m["period_m"] == pytest.approx(p, abs=2 * dx)
+    assert m["peak_n"] == pytest.approx(Fs, rel=1e-3)
+    assert m["valley_n"] == pytest.approx(Fc, rel=1e-3)
+    # mean over whole periods of a linear sawtooth is (Fs + Fc)/2; 8.5 periods -> the half
+    # period at the end biases it by at most (Fs - Fc) / (2 * 8.5)
+    assert abs(m["mean_friction_n"] - 0.5 * (Fs + Fc)) < (Fs - Fc) / 17
+    assert m["n_slips"] == 9
+
+
+def test_scan_metrics_smooth_sliding_has_no_slips():
+    x = np.linspace(0, 1e-7, 1000)
+    F = 1e-9 * (1 - np.exp(-x / 1e-8))
+    m = scan_metrics(x, F)
+    assert m["n_slips"] == 0 and math.isnan(m["period_m"])
+
+
+@pytest.mark.parametrize("kw", [dict(load=-1e-9), dict(speed=0.0), dict(law="magic"), dict(lams=(0.1, -1.0))])
+def test_bad_setup_raises(kw):
+    with pytest.raises(ParameterError):
+        CouplingSetup(**kw).validate()
