@@ -44,6 +44,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numba
 import numpy as np
 
 from probedyn.errors import ParameterError, SolverError
@@ -336,132 +337,131 @@ def well_table(eq: Equilibria) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.n
 # Compiled kernels
 # --------------------------------------------------------------------------------------
 
-_KERNELS: dict[str, Any] = {}
+# Module-level numba kernels (cached on disk; compiled on first call in each process).
+
+
+@numba.njit(cache=True, nogil=True, fastmath=False)
+def deriv(y1, p1, y2, p2, t, u0, v, psi, c):
+    mu1, mu2, ka1, ka2, z1, z2 = c[0], c[1], c[2], c[3], c[4], c[5]
+    f1 = (-z1 * p1 - z2 * (p1 - p2) - ka1 * y1 - ka2 * (y1 - y2)) / mu1
+    f2 = (-z2 * (p2 - p1) - ka2 * (y2 - y1) + u0 * math.sin(y2 + v * t + psi)) / mu2
+    return p1, f1, p2, f2
+
+@numba.njit(cache=True, nogil=True)
+def rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c):
+    a1, b1, c1, d1 = deriv(y1, p1, y2, p2, t, u0, v, psi, c)
+    h = 0.5 * dt
+    a2, b2, c2, d2 = deriv(y1 + h * a1, p1 + h * b1, y2 + h * c1, p2 + h * d1, t + h, u0, v, psi, c)
+    a3, b3, c3, d3 = deriv(y1 + h * a2, p1 + h * b2, y2 + h * c2, p2 + h * d2, t + h, u0, v, psi, c)
+    a4, b4, c4, d4 = deriv(y1 + dt * a3, p1 + dt * b3, y2 + dt * c3, p2 + dt * d3, t + dt, u0, v, psi, c)
+    s = dt / 6.0
+    return (
+        y1 + s * (a1 + 2 * a2 + 2 * a3 + a4),
+        p1 + s * (b1 + 2 * b2 + 2 * b3 + b4),
+        y2 + s * (c1 + 2 * c2 + 2 * c3 + c4),
+        p2 + s * (d1 + 2 * d2 + 2 * d3 + d4),
+    )
+
+@numba.njit(cache=True, nogil=True)
+def basins(x0, u0, psi, c, dt, tmax, nodes, left, right, barrier, tol, margin, out_label, out_x, out_t):
+    """Integrate each initial state (v = 0) until the energy certificate traps it in a
+    well AND it is within tol of that well's node; label = well index (-1: not settled)."""
+    n = x0.shape[0]
+    nw = nodes.shape[0]
+    nmax = int(tmax / dt) + 1
+    for i in range(n):
+        y1, p1, y2, p2 = x0[i, 0], x0[i, 1], x0[i, 2], x0[i, 3]
+        lab = -1
+        t = 0.0
+        for step in range(nmax):
+            # which well holds y2 (wells are sorted intervals)
+            w = 0
+            while w < nw - 1 and y2 > right[w]:
+                w += 1
+            E = (
+                0.5 * c[0] * p1 * p1 + 0.5 * c[1] * p2 * p2 + 0.5 * c[2] * y1 * y1
+                + 0.5 * c[3] * (y1 - y2) * (y1 - y2) + u0 * math.cos(y2 + psi)
+            )
+            if E < barrier[w] - margin and abs(y2 - nodes[w]) < tol and abs(p2) < tol:
+                lab = w
+                break
+            y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, 0.0, psi, c)
+            t += dt
+        out_label[i] = lab
+        out_x[i, 0], out_x[i, 1], out_x[i, 2], out_x[i, 3] = y1, p1, y2, p2
+        out_t[i] = t
+
+@numba.njit(cache=True, nogil=True)
+def attractor(x0, u0, v, psi, c, dt, n_trans, n_rec, n_sub, out_strobe, out_stats):
+    """Integrate with the base moving (v > 0): n_trans steps of transient, then n_rec
+    steps recorded.  n_sub steps make one forcing period 2 pi / v.  Per trajectory:
+    strobe samples of (y2, y2') once per period, and statistics over the record:
+    [min y2, max y2, mean y2, min y2', max y2', mean u0 sin(y2+vt+psi), dissipated energy,
+     mean y1]."""
+    n = x0.shape[0]
+    n_strobe = out_strobe.shape[1]
+    for i in range(n):
+        y1, p1, y2, p2 = x0[i, 0], x0[i, 1], x0[i, 2], x0[i, 3]
+        t = 0.0
+        for s in range(n_trans):
+            y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
+            t = (s + 1) * dt
+        mn, mx, sm = y2, y2, 0.0
+        vmn, vmx = p2, p2
+        fs = 0.0
+        diss = 0.0
+        sy1 = 0.0
+        k = 0
+        for s in range(n_rec):
+            if s % n_sub == 0 and k < n_strobe:
+                out_strobe[i, k, 0] = y2
+                out_strobe[i, k, 1] = p2
+                k += 1
+            # trapezoid-free rectangle sums (the record spans whole periods, so the
+            # rectangle rule is spectrally accurate for the periodic integrands)
+            sm += y2
+            sy1 += y1
+            fs += u0 * math.sin(y2 + v * t + psi)
+            diss += c[4] * p1 * p1 + c[5] * (p1 - p2) * (p1 - p2)
+            y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
+            t = (n_trans + s + 1) * dt
+            if y2 < mn:
+                mn = y2
+            if y2 > mx:
+                mx = y2
+            if p2 < vmn:
+                vmn = p2
+            if p2 > vmx:
+                vmx = p2
+        out_stats[i, 0] = mn
+        out_stats[i, 1] = mx
+        out_stats[i, 2] = sm / n_rec
+        out_stats[i, 3] = vmn
+        out_stats[i, 4] = vmx
+        out_stats[i, 5] = fs / n_rec
+        out_stats[i, 6] = diss * dt
+        out_stats[i, 7] = sy1 / n_rec
+
+@numba.njit(cache=True, nogil=True)
+def trajectory(x0, u0, v, psi, c, dt, nsteps, every, out):
+    y1, p1, y2, p2 = x0[0], x0[1], x0[2], x0[3]
+    t = 0.0
+    k = 0
+    for s in range(nsteps + 1):
+        if s % every == 0 and k < out.shape[0]:
+            out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4] = t, y1, p1, y2, p2
+            k += 1
+        if s == nsteps:
+            break
+        y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
+        t = (s + 1) * dt
+
+
+
+_KERNELS: dict[str, Any] = {"basins": basins, "attractor": attractor, "trajectory": trajectory}
 
 
 def _kernels() -> dict[str, Any]:
-    """Compile (once per process, cached on disk) the numba kernels."""
-    if _KERNELS:
-        return _KERNELS
-    import numba
-
-    @numba.njit(cache=True, nogil=True, fastmath=False)
-    def deriv(y1, p1, y2, p2, t, u0, v, psi, c):
-        mu1, mu2, ka1, ka2, z1, z2 = c[0], c[1], c[2], c[3], c[4], c[5]
-        f1 = (-z1 * p1 - z2 * (p1 - p2) - ka1 * y1 - ka2 * (y1 - y2)) / mu1
-        f2 = (-z2 * (p2 - p1) - ka2 * (y2 - y1) + u0 * math.sin(y2 + v * t + psi)) / mu2
-        return p1, f1, p2, f2
-
-    @numba.njit(cache=True, nogil=True)
-    def rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c):
-        a1, b1, c1, d1 = deriv(y1, p1, y2, p2, t, u0, v, psi, c)
-        h = 0.5 * dt
-        a2, b2, c2, d2 = deriv(y1 + h * a1, p1 + h * b1, y2 + h * c1, p2 + h * d1, t + h, u0, v, psi, c)
-        a3, b3, c3, d3 = deriv(y1 + h * a2, p1 + h * b2, y2 + h * c2, p2 + h * d2, t + h, u0, v, psi, c)
-        a4, b4, c4, d4 = deriv(y1 + dt * a3, p1 + dt * b3, y2 + dt * c3, p2 + dt * d3, t + dt, u0, v, psi, c)
-        s = dt / 6.0
-        return (
-            y1 + s * (a1 + 2 * a2 + 2 * a3 + a4),
-            p1 + s * (b1 + 2 * b2 + 2 * b3 + b4),
-            y2 + s * (c1 + 2 * c2 + 2 * c3 + c4),
-            p2 + s * (d1 + 2 * d2 + 2 * d3 + d4),
-        )
-
-    @numba.njit(cache=True, nogil=True)
-    def basins(x0, u0, psi, c, dt, tmax, nodes, left, right, barrier, tol, margin, out_label, out_x, out_t):
-        """Integrate each initial state (v = 0) until the energy certificate traps it in a
-        well AND it is within tol of that well's node; label = well index (-1: not settled)."""
-        n = x0.shape[0]
-        nw = nodes.shape[0]
-        nmax = int(tmax / dt) + 1
-        for i in range(n):
-            y1, p1, y2, p2 = x0[i, 0], x0[i, 1], x0[i, 2], x0[i, 3]
-            lab = -1
-            t = 0.0
-            for step in range(nmax):
-                # which well holds y2 (wells are sorted intervals)
-                w = 0
-                while w < nw - 1 and y2 > right[w]:
-                    w += 1
-                E = (
-                    0.5 * c[0] * p1 * p1 + 0.5 * c[1] * p2 * p2 + 0.5 * c[2] * y1 * y1
-                    + 0.5 * c[3] * (y1 - y2) * (y1 - y2) + u0 * math.cos(y2 + psi)
-                )
-                if E < barrier[w] - margin and abs(y2 - nodes[w]) < tol and abs(p2) < tol:
-                    lab = w
-                    break
-                y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, 0.0, psi, c)
-                t += dt
-            out_label[i] = lab
-            out_x[i, 0], out_x[i, 1], out_x[i, 2], out_x[i, 3] = y1, p1, y2, p2
-            out_t[i] = t
-
-    @numba.njit(cache=True, nogil=True)
-    def attractor(x0, u0, v, psi, c, dt, n_trans, n_rec, n_sub, out_strobe, out_stats):
-        """Integrate with the base moving (v > 0): n_trans steps of transient, then n_rec
-        steps recorded.  n_sub steps make one forcing period 2 pi / v.  Per trajectory:
-        strobe samples of (y2, y2') once per period, and statistics over the record:
-        [min y2, max y2, mean y2, min y2', max y2', mean u0 sin(y2+vt+psi), dissipated energy,
-         mean y1]."""
-        n = x0.shape[0]
-        n_strobe = out_strobe.shape[1]
-        for i in range(n):
-            y1, p1, y2, p2 = x0[i, 0], x0[i, 1], x0[i, 2], x0[i, 3]
-            t = 0.0
-            for s in range(n_trans):
-                y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
-                t = (s + 1) * dt
-            mn, mx, sm = y2, y2, 0.0
-            vmn, vmx = p2, p2
-            fs = 0.0
-            diss = 0.0
-            sy1 = 0.0
-            k = 0
-            for s in range(n_rec):
-                if s % n_sub == 0 and k < n_strobe:
-                    out_strobe[i, k, 0] = y2
-                    out_strobe[i, k, 1] = p2
-                    k += 1
-                # trapezoid-free rectangle sums (the record spans whole periods, so the
-                # rectangle rule is spectrally accurate for the periodic integrands)
-                sm += y2
-                sy1 += y1
-                fs += u0 * math.sin(y2 + v * t + psi)
-                diss += c[4] * p1 * p1 + c[5] * (p1 - p2) * (p1 - p2)
-                y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
-                t = (n_trans + s + 1) * dt
-                if y2 < mn:
-                    mn = y2
-                if y2 > mx:
-                    mx = y2
-                if p2 < vmn:
-                    vmn = p2
-                if p2 > vmx:
-                    vmx = p2
-            out_stats[i, 0] = mn
-            out_stats[i, 1] = mx
-            out_stats[i, 2] = sm / n_rec
-            out_stats[i, 3] = vmn
-            out_stats[i, 4] = vmx
-            out_stats[i, 5] = fs / n_rec
-            out_stats[i, 6] = diss * dt
-            out_stats[i, 7] = sy1 / n_rec
-
-    @numba.njit(cache=True, nogil=True)
-    def trajectory(x0, u0, v, psi, c, dt, nsteps, every, out):
-        y1, p1, y2, p2 = x0[0], x0[1], x0[2], x0[3]
-        t = 0.0
-        k = 0
-        for s in range(nsteps + 1):
-            if s % every == 0 and k < out.shape[0]:
-                out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4] = t, y1, p1, y2, p2
-                k += 1
-            if s == nsteps:
-                break
-            y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
-            t = (s + 1) * dt
-
-    _KERNELS.update(basins=basins, attractor=attractor, trajectory=trajectory)
     return _KERNELS
 
 

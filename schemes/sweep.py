@@ -1,0 +1,531 @@
+"""Parameter sweeps of any scheme on Dask, with results as an xarray Dataset in NetCDF.
+
+The contract with a scheme is small:
+
+* a **cell function** ``func(**params) -> dict[str, array]`` — a pure function of named
+  parameters.  With ``vectorized=True`` (default) every grid parameter arrives as a 1D array
+  holding one entry per cell of a chunk, fixed parameters as given, and each returned value
+  has the cells along its first axis (further axes become extra dimensions ``NAME_dim1``...).
+  With ``vectorized=False`` the function is called once per cell with scalars and returns
+  scalars or arrays.  Each cell must be computed independently of the others in the call
+  (that is what makes results independent of chunking and of the number of workers).
+* a **grid**: ``{name: 1D array of coordinate values}``; cells are the Cartesian product, in
+  C order of the dict.  Build ranges with :func:`axis` (validated) or :func:`parse_axis`.
+* the **result**: an ``xarray.Dataset`` with the grid names as dimensions/coordinates.
+
+Execution: the flattened grid is cut into chunks (a fixed number of cells each, independent
+of the number of workers); every chunk is one Dask task.  By default a
+``dask.distributed.LocalCluster`` with ``workers`` single-threaded workers is started
+(``processes=False`` runs them as threads in this process, fine for numba ``nogil`` kernels);
+``scheduler="tcp://HOST:PORT"`` uses an existing cluster instead (reachability is checked with
+a short connect timeout first).  As each chunk finishes, the client writes it atomically to
+``OUT.nc.parts/chunk-NNNNN.nc``; a rerun of the same sweep (same function, grid, fixed
+parameters, chunk size, seed — recorded in ``manifest.json``) skips the chunks already there.
+At the end the chunks are merged, ``OUT.nc`` is written atomically (h5netcdf engine) and the
+parts folder is removed.
+
+Randomised schemes receive a ``seed`` array (one uint64 per cell) derived from the sweep seed
+and the cell's flat index only (splitmix64), so results never depend on chunk order or
+worker count.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import re
+import shutil
+import socket
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from probedyn.errors import ParameterError, ProbedynError, SolverError
+from probedyn.jsonio import atomic_path, write_json
+
+__all__ = [
+    "GridError",
+    "SchedulerError",
+    "SweepResult",
+    "axis",
+    "parse_axis",
+    "validate_grid",
+    "cell_seeds",
+    "run_sweep",
+    "default_chunk_size",
+]
+
+
+class GridError(ParameterError):
+    """A sweep grid that has no cells, inverted or non-finite ranges, or clashing names."""
+
+
+class SchedulerError(ProbedynError, ConnectionError):
+    """A Dask scheduler address that is malformed or cannot be reached."""
+
+
+# --------------------------------------------------------------------------------------
+# Grids
+# --------------------------------------------------------------------------------------
+
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_RESERVED = {"seed", "cell"}
+
+
+def axis(name: str, lo: float, hi: float, n: int, log: bool = False) -> np.ndarray:
+    """``n`` points from ``lo`` to ``hi`` (linear or logarithmic), validated.
+
+    Raises :class:`GridError` for n < 1, non-finite ends, inverted ranges (lo > hi), a
+    degenerate range with n > 1, and non-positive ends of a logarithmic axis.
+    """
+    try:
+        n_int = int(n)
+    except (TypeError, ValueError):
+        raise GridError(f"grid axis '{name}': number of points must be an integer, got {n!r}") from None
+    if n_int != n or n_int < 1:
+        raise GridError(f"grid axis '{name}': number of points must be a positive integer, got {n!r} (zero points)")
+    for v, what in ((lo, "start"), (hi, "end")):
+        if not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+            raise GridError(f"grid axis '{name}': {what} {v!r} is not a finite number")
+    if lo > hi:
+        raise GridError(f"grid axis '{name}': inverted range {lo:g} > {hi:g} (give start <= end)")
+    if lo == hi and n_int > 1:
+        raise GridError(f"grid axis '{name}': empty range {lo:g}..{hi:g} cannot hold {n_int} distinct points")
+    if log:
+        if lo <= 0:
+            raise GridError(f"grid axis '{name}': a logarithmic range needs positive ends, got {lo:g}")
+        return np.geomspace(lo, hi, n_int)
+    return np.linspace(lo, hi, n_int)
+
+
+def parse_axis(spec: str) -> tuple[str, np.ndarray]:
+    """Parse ``NAME=LO:HI:N`` (linear), ``NAME=LO:HI:N:log`` or ``NAME=V1,V2,...``."""
+    if "=" not in spec:
+        raise GridError(f"grid spec {spec!r}: expected NAME=LO:HI:N or NAME=V1,V2,...")
+    name, rhs = (s.strip() for s in spec.split("=", 1))
+    try:
+        if ":" in rhs:
+            parts = rhs.split(":")
+            if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+                raise ValueError
+            return name, axis(name, float(parts[0]), float(parts[1]), int(parts[2]), log=len(parts) == 4)
+        vals = np.array([float(x) for x in rhs.split(",") if x.strip()])
+    except ValueError:
+        raise GridError(f"grid spec {spec!r}: expected NAME=LO:HI:N[:log] or NAME=V1,V2,...") from None
+    return name, vals
+
+
+def validate_grid(grid: Mapping[str, Any], fixed: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+    """Check a grid: names are identifiers, coordinates 1D, non-empty, finite, unique."""
+    if not isinstance(grid, Mapping) or len(grid) == 0:
+        raise GridError("the sweep grid is empty: give at least one axis")
+    out: dict[str, np.ndarray] = {}
+    for name, values in grid.items():
+        if not isinstance(name, str) or not _NAME_RE.match(name):
+            raise GridError(f"grid axis name {name!r} is not a valid identifier")
+        if name in _RESERVED:
+            raise GridError(f"grid axis name '{name}' is reserved")
+        if fixed and name in fixed:
+            raise GridError(f"'{name}' is both a grid axis and a fixed parameter")
+        arr = np.asarray(values)
+        if arr.ndim != 1:
+            raise GridError(f"grid axis '{name}' must be one-dimensional, got shape {arr.shape}")
+        if arr.size == 0:
+            raise GridError(f"grid axis '{name}' has zero points")
+        if arr.dtype.kind in "fc" and not np.all(np.isfinite(arr)):
+            raise GridError(f"grid axis '{name}' contains NaN or infinite values")
+        if arr.dtype.kind not in "biufcUS":
+            raise GridError(f"grid axis '{name}' must hold numbers or strings, got dtype {arr.dtype}")
+        if np.unique(arr).size != arr.size:
+            raise GridError(f"grid axis '{name}' has repeated values")
+        out[name] = arr
+    return out
+
+
+def _splitmix64(x: np.ndarray) -> np.ndarray:
+    x = x.astype(np.uint64)
+    with np.errstate(over="ignore"):
+        x = x + np.uint64(0x9E3779B97F4A7C15)
+        z = x
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        return z ^ (z >> np.uint64(31))
+
+
+def cell_seeds(seed: int, flat_index: np.ndarray) -> np.ndarray:
+    """Per-cell seeds: a function of (sweep seed, flat cell index) only."""
+    base = _splitmix64(np.array([int(seed) & 0xFFFFFFFFFFFFFFFF], dtype=np.uint64))[0]
+    with np.errstate(over="ignore"):
+        return _splitmix64(np.asarray(flat_index, dtype=np.uint64) ^ base)
+
+
+def default_chunk_size(n_cells: int, target_chunks: int = 16) -> int:
+    """Cells per chunk: about ``target_chunks`` chunks, independent of the worker count."""
+    return max(1, math.ceil(n_cells / target_chunks))
+
+
+# --------------------------------------------------------------------------------------
+# The task
+# --------------------------------------------------------------------------------------
+
+
+def _run_chunk(func: Callable, params: dict[str, np.ndarray], fixed: dict[str, Any],
+               seeds: np.ndarray | None, vectorized: bool) -> dict[str, np.ndarray]:
+    """Evaluate ``func`` on one chunk (runs on a worker)."""
+    n = next(iter(params.values())).size
+    if vectorized:
+        kw = dict(params)
+        kw.update(fixed)
+        if seeds is not None:
+            kw["seed"] = seeds
+        res = func(**kw)
+        if not isinstance(res, Mapping):
+            raise SolverError(f"sweep function {_qualname(func)} must return a dict, got {type(res).__name__}")
+        out = {}
+        for k, v in res.items():
+            a = np.asarray(v)
+            if a.ndim == 0 and n == 1:
+                a = a.reshape(1)
+            if a.ndim == 0 or a.shape[0] != n:
+                raise SolverError(
+                    f"sweep function {_qualname(func)}: output '{k}' has shape {a.shape}, expected {n} cells first"
+                )
+            out[str(k)] = a
+        return out
+    rows: list[Mapping[str, Any]] = []
+    for i in range(n):
+        kw = {name: arr[i].item() if hasattr(arr[i], "item") else arr[i] for name, arr in params.items()}
+        kw.update(fixed)
+        if seeds is not None:
+            kw["seed"] = int(seeds[i])
+        r = func(**kw)
+        if not isinstance(r, Mapping):
+            raise SolverError(f"sweep function {_qualname(func)} must return a dict, got {type(r).__name__}")
+        rows.append(r)
+    keys = list(rows[0])
+    for r in rows[1:]:
+        if list(r) != keys:
+            raise SolverError(f"sweep function {_qualname(func)} returned different keys for different cells")
+    return {k: np.stack([np.asarray(r[k]) for r in rows]) for k in keys}
+
+
+def _qualname(func: Callable) -> str:
+    return f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
+
+
+# --------------------------------------------------------------------------------------
+# Persistence of chunks
+# --------------------------------------------------------------------------------------
+
+
+def _chunk_path(parts: Path, i: int) -> Path:
+    return parts / f"chunk-{i:05d}.nc"
+
+
+def _chunk_dataset(res: dict[str, np.ndarray], start: int, stop: int):
+    import xarray as xr
+
+    data = {}
+    for k, a in res.items():
+        dims = ("cell",) + tuple(f"{k}_dim{j}" for j in range(1, a.ndim))
+        data[k] = (dims, a)
+    return xr.Dataset(data, coords={"cell": np.arange(start, stop)})
+
+
+def _write_nc(ds, path: Path) -> None:
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
+
+
+def _read_nc(path: Path):
+    import xarray as xr
+
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        return ds.load()
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, (str, bool, int, float)) or v is None:
+        return v
+    if isinstance(v, (np.integer, np.floating, np.bool_)):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, Mapping):
+        return {str(k): _jsonable(x) for k, x in v.items()}
+    return repr(v)
+
+
+def _signature(func, grid, fixed, chunk_size, seed, vectorized) -> str:
+    h = hashlib.sha256()
+    h.update(_qualname(func).encode())
+    for name, arr in grid.items():
+        h.update(name.encode())
+        h.update(str(arr.dtype).encode())
+        h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(json.dumps(_jsonable(dict(fixed)), sort_keys=True).encode())
+    h.update(f"{chunk_size}|{seed}|{vectorized}".encode())
+    return h.hexdigest()
+
+
+# --------------------------------------------------------------------------------------
+# Scheduler
+# --------------------------------------------------------------------------------------
+
+_ADDR_RE = re.compile(r"^(?:(tcp|tls)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})/?$")
+
+
+def check_scheduler_address(address: str, timeout: float = 3.0) -> str:
+    """Validate ``tcp://HOST:PORT`` (or ``HOST:PORT``) and check that something listens there."""
+    if not isinstance(address, str) or not address.strip():
+        raise SchedulerError("empty Dask scheduler address (expected tcp://HOST:PORT)")
+    address = address.strip()
+    m = _ADDR_RE.match(address)
+    if not m:
+        raise SchedulerError(f"malformed Dask scheduler address {address!r} (expected tcp://HOST:PORT)")
+    proto, host, port = m.group(1) or "tcp", m.group(2).strip("[]"), int(m.group(3))
+    if not 0 < port < 65536:
+        raise SchedulerError(f"Dask scheduler address {address!r}: port {port} out of range")
+    try:
+        with socket.create_connection((host, port), timeout=timeout):
+            pass
+    except socket.gaierror as exc:
+        raise SchedulerError(f"cannot reach Dask scheduler at {address}: unknown host ({exc.strerror})") from None
+    except (OSError, TimeoutError) as exc:
+        reason = getattr(exc, "strerror", None) or type(exc).__name__
+        raise SchedulerError(
+            f"cannot reach Dask scheduler at {address}: {reason} within {timeout:g} s "
+            "(is `dask scheduler` running there and the port open?)"
+        ) from None
+    return f"{proto}://{m.group(2)}:{port}"
+
+
+def _connect(scheduler: str | None, workers: int, processes: bool, threads_per_worker: int,
+             connect_timeout: float):
+    """Return (client, cluster-or-None)."""
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        addr = check_scheduler_address(scheduler, timeout=connect_timeout)
+        try:
+            client = Client(addr, timeout=connect_timeout, set_as_default=False)
+        except (OSError, TimeoutError) as exc:
+            raise SchedulerError(f"cannot connect to Dask scheduler at {addr}: {exc}") from None
+        return client, None
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=threads_per_worker,
+        processes=processes,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+    )
+    return Client(cluster, set_as_default=False), cluster
+
+
+# --------------------------------------------------------------------------------------
+# Driver
+# --------------------------------------------------------------------------------------
+
+
+@dataclass
+class SweepResult:
+    dataset: Any  # xarray.Dataset
+    path: Path | None
+    chunks_total: int
+    chunks_run: list[int] = field(default_factory=list)
+    chunks_skipped: list[int] = field(default_factory=list)
+    elapsed: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "path": str(self.path) if self.path else None,
+            "chunks_total": self.chunks_total,
+            "chunks_run": len(self.chunks_run),
+            "chunks_skipped": len(self.chunks_skipped),
+            "elapsed_s": self.elapsed,
+            "variables": list(self.dataset.data_vars),
+            "dims": dict(self.dataset.sizes),
+        }
+
+
+def run_sweep(
+    func: Callable[..., Mapping[str, Any]],
+    grid: Mapping[str, Any],
+    *,
+    fixed: Mapping[str, Any] | None = None,
+    out: str | Path | None = None,
+    vectorized: bool = True,
+    chunk_size: int | None = None,
+    workers: int = 2,
+    scheduler: str | None = None,
+    processes: bool = True,
+    threads_per_worker: int = 1,
+    progress: bool = True,
+    seed: int | None = None,
+    restart: bool = False,
+    connect_timeout: float = 3.0,
+    attrs: Mapping[str, Any] | None = None,
+) -> SweepResult:
+    """Run ``func`` over the Cartesian ``grid`` on Dask; see the module docstring.
+
+    ``out``: NetCDF file (written atomically); its finished chunks persist in ``out.parts/``
+    so an interrupted run resumes.  ``restart=True`` discards them.  Errors: :class:`GridError`
+    for bad grids, :class:`SchedulerError` for a bad/unreachable scheduler, the scheme's own
+    :class:`~probedyn.errors.ProbedynError` if it raises one, else :class:`SolverError`.
+    """
+    import xarray as xr
+
+    t0 = time.perf_counter()
+    fixed = dict(fixed or {})
+    g = validate_grid(grid, fixed)
+    if "seed" in fixed:
+        raise GridError("'seed' is reserved: pass the sweep seed as seed=")
+    if not isinstance(workers, (int, np.integer)) or workers < 1:
+        raise ParameterError(f"workers must be a positive integer, got {workers!r}")
+    if not (isinstance(connect_timeout, (int, float)) and connect_timeout > 0):
+        raise ParameterError(f"connect_timeout must be positive, got {connect_timeout!r}")
+    names = list(g)
+    shape = tuple(a.size for a in g.values())
+    n_cells = int(np.prod(shape))
+    if chunk_size is None:
+        chunk_size = default_chunk_size(n_cells)
+    if not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+        raise ParameterError(f"chunk_size must be a positive integer, got {chunk_size!r}")
+    n_chunks = math.ceil(n_cells / chunk_size)
+    sig = _signature(func, g, fixed, chunk_size, seed, vectorized)
+
+    parts: Path | None = None
+    done: set[int] = set()
+    if out is not None:
+        out = Path(out)
+        if out.suffix != ".nc":
+            raise ParameterError(f"sweep output {out} must end in .nc")
+        parts = out.with_name(out.name + ".parts")
+        manifest = parts / "manifest.json"
+        if parts.exists() and restart:
+            shutil.rmtree(parts)
+        if parts.exists():
+            try:
+                old = json.loads(manifest.read_text())
+            except (OSError, ValueError):
+                old = None
+            if old is None or old.get("signature") != sig:
+                raise ParameterError(
+                    f"{parts} holds chunks of a different sweep (function, grid, fixed parameters or chunk "
+                    "size differ); remove it or rerun with restart"
+                )
+            done = {i for i in range(n_chunks) if _chunk_path(parts, i).exists()}
+        else:
+            parts.mkdir(parents=True)
+            write_json(manifest, {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
+                                  "chunk_size": chunk_size, "shape": list(shape), "names": names})
+
+    # Flat cell index -> per-axis index (C order)
+    def chunk_params(i: int) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        start, stop = i * chunk_size, min(n_cells, (i + 1) * chunk_size)
+        flat = np.arange(start, stop)
+        idx = np.unravel_index(flat, shape)
+        return {nm: g[nm][ix] for nm, ix in zip(names, idx)}, flat
+
+    results: dict[int, dict[str, np.ndarray]] = {}
+    todo = [i for i in range(n_chunks) if i not in done]
+    if todo:
+        client, cluster = _connect(scheduler, int(workers), processes, threads_per_worker, connect_timeout)
+        try:
+            from dask.distributed import as_completed
+
+            from tqdm.auto import tqdm
+
+            run_id = uuid.uuid4().hex[:8]
+            futures = {}
+            for i in todo:
+                params, flat = chunk_params(i)
+                seeds = cell_seeds(seed, flat) if seed is not None else None
+                fut = client.submit(_run_chunk, func, params, fixed, seeds, vectorized,
+                                    key=f"probedyn-sweep-{sig[:10]}-{run_id}-{i}")
+                futures[fut.key] = (i, fut)
+            bar = tqdm(total=n_chunks, initial=len(done), disable=not progress, unit="chunk",
+                       desc=f"sweep {out.name if out else ''}".strip())
+            try:
+                for fut in as_completed([f for _, f in futures.values()], loop=client.loop):
+                    i = futures[fut.key][0]
+                    if fut.status == "error":
+                        exc = fut.exception()
+                        for _, f in futures.values():
+                            f.cancel()
+                        start = i * chunk_size
+                        if isinstance(exc, ProbedynError):
+                            raise exc
+                        raise SolverError(
+                            f"sweep chunk {i} (cells {start}..{min(n_cells, start + chunk_size) - 1}) failed: "
+                            f"{type(exc).__name__}: {exc}"
+                        ) from exc
+                    res = fut.result()
+                    if parts is not None:
+                        start = i * chunk_size
+                        _write_nc(_chunk_dataset(res, start, min(n_cells, start + chunk_size)), _chunk_path(parts, i))
+                    else:
+                        results[i] = res
+                    bar.update(1)
+            finally:
+                bar.close()
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+
+    # Merge
+    if parts is not None:
+        pieces = [_read_nc(_chunk_path(parts, i)) for i in range(n_chunks)]
+        merged = {k: np.concatenate([p[k].values for p in pieces]) for k in pieces[0].data_vars}
+    else:
+        merged = {k: np.concatenate([results[i][k] for i in range(n_chunks)]) for k in results[0]}
+    data = {}
+    for k, a in merged.items():
+        extra = a.shape[1:]
+        data[k] = (tuple(names) + tuple(f"{k}_dim{j}" for j in range(1, a.ndim)), a.reshape(shape + extra))
+    ds = xr.Dataset(data, coords={nm: g[nm] for nm in names})
+    ds.attrs.update(
+        {
+            "probedyn_function": _qualname(func),
+            "probedyn_signature": sig,
+            "chunk_size": int(chunk_size),
+            "n_chunks": int(n_chunks),
+            "fixed_parameters": json.dumps(_jsonable(fixed), sort_keys=True),
+        }
+    )
+    if seed is not None:
+        ds.attrs["seed"] = int(seed)
+    for k, v in (attrs or {}).items():
+        if isinstance(v, (list, tuple)):
+            v = np.asarray(v)
+        if isinstance(v, np.ndarray) and v.ndim == 1 and v.size > 0 and v.dtype.kind in "iuf":
+            ds.attrs[k] = v
+        else:
+            ds.attrs[k] = v if isinstance(v, (str, int, float)) else json.dumps(_jsonable(v))
+    if out is not None:
+        _write_nc(ds, out)
+        shutil.rmtree(parts, ignore_errors=True)
+    return SweepResult(ds, out, n_chunks, chunks_run=todo, chunks_skipped=sorted(done),
+                       elapsed=time.perf_counter() - t0)
+
+
+def open_sweep(path: str | Path):
+    """Read a sweep result written by :func:`run_sweep` (loaded into memory)."""
+    path = Path(path)
+    if not path.exists():
+        raise ParameterError(f"{path}: no such sweep file")
+    try:
+        return _read_nc(path)
+    except Exception as exc:  # malformed / not NetCDF
+        from probedyn.errors import DataFormatError
+
+        raise DataFormatError(f"{path}: not a readable NetCDF sweep file ({type(exc).__name__}: {exc})") from None
