@@ -8,6 +8,10 @@ pypardiso the fallback is scipy's SuperLU (``splu``), which is two orders of mag
 for 3D problems (benchmarks/modal.py measures both).
 
 Only the upper triangle is passed to PARDISO for symmetric types, as MKL requires.
+
+Threads: on few shared cores, OpenBLAS's spinning threads (ARPACK's dense steps use it)
+compete with MKL's; ``OPENBLAS_NUM_THREADS=1`` set before numpy is imported made the ARPACK
+loop 3-5x faster at 23k DOFs on the 2-core test machine (benchmarks/modal.py sets it).
 """
 
 from __future__ import annotations
@@ -69,12 +73,22 @@ def factorize(A: sp.spmatrix, spd: bool = True, solver: str = "auto") -> Factori
     return Factorization(lu.solve, "superlu", time.perf_counter() - t0)
 
 
-def _pardiso(A: sp.csr_matrix, mtype: int) -> Factorization:
+_POOL: dict[int, list] = {}
+
+
+def _pardiso_instance(mtype: int):
+    """A PyPardisoSolver from a small pool (creating one costs ~0.7 s: pypardiso searches the
+    file system for the MKL library); returned to the pool by ``Factorization.release``."""
     import pypardiso
 
+    pool = _POOL.setdefault(mtype, [])
+    return pool.pop() if pool else pypardiso.PyPardisoSolver(mtype=mtype)
+
+
+def _pardiso(A: sp.csr_matrix, mtype: int) -> Factorization:
     U = sp.triu(A, format="csr")
     U.sort_indices()
-    ps = pypardiso.PyPardisoSolver(mtype=mtype)
+    ps = _pardiso_instance(mtype)
     ps.set_iparm(1, 1)  # user-supplied iparm
     ps.set_iparm(2, 3)  # parallel (OpenMP) nested-dissection ordering
     ps.factorize(U)
@@ -92,6 +106,8 @@ def _pardiso(A: sp.csr_matrix, mtype: int) -> Factorization:
 
     def release() -> None:
         ps.free_memory(everything=True)
+        ps.factorized_A = sp.csr_matrix((0, 0))
+        _POOL.setdefault(mtype, []).append(ps)
 
     return Factorization(solve, f"pardiso(mtype={mtype})", 0.0, release)
 
