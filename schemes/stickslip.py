@@ -723,15 +723,31 @@ def linear_response_amplitude(u0: float, v: float, model: TwoMassModel = DEFAULT
 # stick and a lab-velocity modulation (w_max - w_min)/v below SLIDING_MODULATION.
 STICK_FRACTION = 0.5
 SLIDING_MODULATION = 0.2
-REGIMES = {0: "no stick-slip", 1: "stick-slip", 2: "coexisting stick-slip regimes", 3: "steady sliding"}
+REGIMES = {
+    0: "no stick-slip",
+    1: "stick-slip",
+    2: "coexisting regimes",
+    3: "steady sliding",
+    4: "irregular stick-slip",
+}
 
 
-def _distinct(strobes: np.ndarray, centres: np.ndarray, tol: float) -> int:
-    """Number of distinct attractors among trajectories: two trajectories share an attractor
-    when their strobe sets (one point per forcing period) coincide within tol as sets."""
+def strobe_period(sb: np.ndarray, tol: float, p_max: int | None = None) -> int:
+    """Smallest p (in forcing periods) with sb[k + p] == sb[k] (within tol) over the whole
+    record; 0 if none up to p_max (default: half the record), i.e. not (yet) periodic."""
+    n = sb.shape[0]
+    p_max = p_max or n // 2
+    for p in range(1, p_max + 1):
+        if np.all(np.abs(sb[p:] - sb[:-p]) < tol):
+            return p
+    return 0
+
+
+def _distinct(strobes: list[np.ndarray], tol: float) -> int:
+    """Number of distinct periodic attractors: two trajectories share one when their strobe
+    sets (one point per forcing period) coincide within tol as sets."""
     reps: list[np.ndarray] = []
-    for sb in strobes:
-        pts = sb[np.isfinite(sb[:, 0])]
+    for pts in strobes:
         found = False
         for r in reps:
             d = np.abs(pts[:, None, :] - r[None, :, :]).max(axis=2)
@@ -744,49 +760,65 @@ def _distinct(strobes: np.ndarray, centres: np.ndarray, tol: float) -> int:
 
 
 def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 128,
-                t_transient: float = 300.0, record_periods: int = 4, **model_params) -> dict[str, np.ndarray]:
-    """Sweep-engine entry point: classify the steady dynamics at each (u0[i], v[i]).
+                t_transient: float = 300.0, transient_periods: int = 8, record_periods: int = 8,
+                **model_params) -> dict[str, np.ndarray]:
+    """Sweep-engine entry point: classify the steady dynamics at each (u0[i], v[i]) (Fig 4.13).
 
     ``n_ic`` trajectories start at rest at x3(0) evenly spread over [-u0-pi, u0+pi] (the
-    range of the quasi-static equilibria); their periodic attractors are compared by their
-    stroboscopic samples.  Regime codes: see :data:`REGIMES`.  Also returns the number of
-    distinct attractors, the min/max lab velocity ratios over all attractors and the mean
-    friction of the attractor reached from x3(0) = 0.
+    range of the quasi-static equilibria).  After a transient of max(t_transient,
+    transient_periods T) each is recorded for ``record_periods`` forcing periods
+    T = 2 pi / v.  A trajectory is periodic with period p if its stroboscopic samples
+    repeat after p periods (p <= record_periods/2).  Classification (codes in REGIMES):
+
+    * 2 "coexisting regimes": >= 2 distinct periodic attractors;
+    * 4 "irregular stick-slip": a trajectory is not periodic (chaotic, quasi-periodic or a
+      transient longer than the window) and no second periodic attractor was found;
+    * otherwise one attractor: 1 "stick-slip" if the sample's lab speed x4 + v drops below
+      STICK_FRACTION v, else 3 "steady sliding" if the lab-speed modulation is below
+      SLIDING_MODULATION v, else 0 "no stick-slip" (smooth, corrugated motion).
+
+    Also returns the number of distinct periodic attractors, the period of the attractor
+    reached from x3(0) = 0 (0 = irregular), the extreme lab-speed ratios and its mean friction.
     """
     model = TwoMassModel.from_params(model_params) if model_params else DEFAULT_MODEL
     u0 = np.atleast_1d(np.asarray(u0, dtype=float))
     v = np.atleast_1d(np.asarray(v, dtype=float))
-    u0, v = np.broadcast_arrays(u0, v)
+    u0, v = (q.ravel() for q in np.broadcast_arrays(u0, v))
     n = u0.size
     frac = np.linspace(-1.0, 1.0, n_ic) if n_ic > 1 else np.zeros(1)
-    x3_0 = (u0.ravel()[:, None] + math.pi) * frac[None, :]
-    st = attractor_stats(
-        np.repeat(u0.ravel()[:, None], n_ic, axis=1), np.repeat(v.ravel()[:, None], n_ic, axis=1), x3_0, 0.0,
-        psi=psi, model=model,
-        settings=AttractorSettings(steps_per_period=steps_per_period, t_transient=t_transient, record_periods=record_periods),
-    )
+    x3_0 = (u0[:, None] + math.pi) * frac[None, :]
+    settings = AttractorSettings(steps_per_period=steps_per_period, t_transient=t_transient,
+                                 min_transient_periods=transient_periods, record_periods=record_periods)
+    st = attractor_stats(np.repeat(u0[:, None], n_ic, axis=1), np.repeat(v[:, None], n_ic, axis=1), x3_0, 0.0,
+                         psi=psi, model=model, settings=settings)
     regime = np.empty(n, dtype=np.int32)
     n_att = np.empty(n, dtype=np.int32)
-    wmin = st["w_min"].min(axis=1) / v.ravel()
-    wmax = st["w_max"].max(axis=1) / v.ravel()
+    period = np.empty(n, dtype=np.int32)
     mid = n_ic // 2
     for i in range(n):
-        sb = np.stack([st["strobe_x3"][i], st["strobe_x4"][i]], axis=-1)
-        tol = 1e-3 * (1.0 + u0.ravel()[i])
-        n_att[i] = _distinct(sb, st["x3_mean"][i], tol)
-        stick = st["w_min"][i] < STICK_FRACTION * v.ravel()[i]
+        # tolerance: 1e-3 of the excursion scale (1 + u0); the RK4 error of the sample motion
+        # at <= 0.02 per step is orders of magnitude smaller.
+        tol = 1e-3 * (1.0 + u0[i])
+        sbs = [np.stack([st["strobe_x3"][i, j], st["strobe_x4"][i, j]], axis=-1) for j in range(n_ic)]
+        per = [strobe_period(sb, tol) for sb in sbs]
+        periodic = [sb for sb, p in zip(sbs, per) if p > 0]
+        n_att[i] = _distinct(periodic, tol)
+        period[i] = per[mid]
         if n_att[i] > 1:
             regime[i] = 2
-        elif stick.any():
+        elif len(periodic) < n_ic:
+            regime[i] = 4
+        elif np.any(st["w_min"][i] < STICK_FRACTION * v[i]):
             regime[i] = 1
         else:
-            mod = (st["w_max"][i] - st["w_min"][i]).max() / v.ravel()[i]
+            mod = (st["w_max"][i] - st["w_min"][i]).max() / v[i]
             regime[i] = 3 if mod < SLIDING_MODULATION else 0
     return {
         "regime": regime,
         "n_attractors": n_att,
-        "w_min_ratio": wmin,
-        "w_max_ratio": wmax,
+        "period": period,
+        "w_min_ratio": st["w_min"].min(axis=1) / v,
+        "w_max_ratio": st["w_max"].max(axis=1) / v,
         "friction_mean": st["friction_mean"][:, mid],
     }
 
