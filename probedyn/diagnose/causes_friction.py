@@ -1,0 +1,1 @@
+"""Friction causes (filled below)."""
