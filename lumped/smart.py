@@ -274,7 +274,7 @@ def compare_lumped_fem(model, lumped: SmartLumpedModel, result, attach: str,
 
 
 def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence[str], n_modes: int = 4,
-                       body_regions: Sequence[str] = ()) -> list[dict[str, Any]]:
+                       body_regions: Sequence[str] = (), groups: dict[str, Sequence[str]] | None = None) -> list[dict[str, Any]]:
     """FEM modes of the assembled probe for holder spring ``k`` in ``stiffnesses`` (applied in
     ``directions``; the other components keep their value). Per mode: frequency, direction,
     kinetic-energy share of the tip, of holder + tip (holder regions, point masses, tip), of
@@ -292,7 +292,7 @@ def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence
                 ks[AX[d]] = float(k)
             model.lumped_tip = LumpedTip(lt0.mass, tuple(ks), lt0.attach)
             res = model.modes(n_modes)
-            dirs = fem_mode_groups(model, res, lt0.attach, {"x": ("x",), "y": ("y",), "z": ("z",)})
+            dirs = fem_mode_groups(model, res, lt0.attach, groups or {"x": ("x",), "y": ("y",), "z": ("z",)})
             for m, d in zip(res.modes, dirs):
                 ke = m.kinetic_energy_share
                 body = sum(ke.get(r, 0.0) for r in body_regions)
@@ -423,3 +423,138 @@ def piezotube_references(probe, values: dict[str, Any], result) -> list[dict[str
 def _nu(probe, values) -> float:
     S = probe.pzt(values).S
     return float(np.clip(-S[0, 1] / S[0, 0], 0.0, 0.49))
+
+
+# ---------------------------------------------------------------------------------------------
+# Studies (used by `probedyn smart-*`, `probedyn localisation`, `probedyn eccentricity`, report)
+# ---------------------------------------------------------------------------------------------
+
+PROBE_SETUP = {
+    "duo-bimorph": {"directions": ["y", "z"], "groups": {"y": ("y",), "z": ("z",)}, "body": ("upper_layer", "lower_layer"),
+                    "sweep_dirs": ("y", "z")},
+    "piezotube": {"directions": ["x", "y", "z"], "groups": {"lateral": ("y", "z"), "axial": ("x",)}, "body": ("tube",),
+                  "sweep_dirs": ("x", "y", "z")},
+}
+
+
+def _probe(name: str, overrides: dict[str, Any] | None):
+    from probedyn.probes import get_probe
+
+    p, file_ov = get_probe(name)
+    if p.name not in PROBE_SETUP:
+        raise ParameterError(f"'{p.name}' is not a smart probe (duo-bimorph or piezotube)")
+    return p, p.resolve({**file_ov, **(overrides or {})})
+
+
+def _body_rho_A(p, v) -> float:
+    if p.name == "duo-bimorph":
+        return v["density"] * v["width"] * v["thickness"]
+    return v["density"] * math.pi * (v["Re"] ** 2 - v["Ri"] ** 2)
+
+
+def study_lumped(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 10) -> dict[str, Any]:
+    """Lumped model from FEM body modes vs FEM of the assembled probe (tip lumped)."""
+    p, v = _probe(name, {**(overrides or {}), "tip": "lumped"})
+    setup = PROBE_SETUP[p.name]
+    model = p.build(v)
+    attach = model.lumped_tip.attach
+    lm = reduce_from_fem(model, setup["directions"], attach, mu=v["mu"], rho_A=_body_rho_A(p, v),
+                         body_regions=setup["body"], n_body=8)
+    res = model.modes(n_modes)
+    rows = compare_lumped_fem(model, lm, res, attach, setup["groups"])
+    return {"probe": p.name, "values": v, "lumped": lm.to_dict(), "rows": rows, "fem": res}
+
+
+def study_localisation(name: str, stiffnesses: Sequence[float], overrides: dict[str, Any] | None = None,
+                       n_modes: int = 4) -> dict[str, Any]:
+    """Section 3.4.1: FEM over holder stiffness (the holder springs in the lateral/vertical
+    directions of the probe are set to k; the tip stays lumped)."""
+    p, v = _probe(name, {**(overrides or {}), "tip": "lumped"})
+    setup = PROBE_SETUP[p.name]
+    model = p.build(v)
+    rows = localisation_sweep(model, stiffnesses, setup["sweep_dirs"], n_modes, setup["body"], setup["groups"])
+    return {"probe": p.name, "values": v, "rows": rows}
+
+
+def study_materials(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 4) -> dict[str, Any]:
+    """First modes with transversely isotropic PZT-5H and with the isotropic E = 1/s11 option."""
+    out = {}
+    for mat in ("pzt-5h", "pzt-5h-iso"):
+        p, v = _probe(name, {**(overrides or {}), "material": mat})
+        res = p.build(v).modes(n_modes)
+        out[mat] = res
+    rows = []
+    for a, b in zip(out["pzt-5h"].modes, out["pzt-5h-iso"].modes):
+        rows.append({"mode": a.index, "family": a.family, "aniso_hz": a.frequency_hz, "iso_hz": b.frequency_hz,
+                     "family_iso": b.family, "rel_diff": (b.frequency_hz - a.frequency_hz) / a.frequency_hz})
+    return {"probe": name, "rows": rows}
+
+
+def observed_order(f: Sequence[float], ratio: float) -> tuple[float, float]:
+    """Observed convergence order p and Richardson-extrapolated value from three values on
+    meshes refined by a constant ``ratio`` (h_k / h_(k+1)): ``p = ln((f1-f2)/(f2-f3)) / ln r``."""
+    f1, f2, f3 = (float(x) for x in f[-3:])
+    d1, d2 = f1 - f2, f2 - f3
+    if d1 == 0 or d2 == 0 or d1 * d2 < 0:
+        return float("nan"), f3
+    p_ = math.log(abs(d1 / d2)) / math.log(ratio)
+    return p_, f3 - d2 / (ratio**p_ - 1)
+
+
+def study_convergence(name: str, sizes: Sequence[float], overrides: dict[str, Any] | None = None,
+                      n_modes: int = 4) -> dict[str, Any]:
+    """First ``n_modes`` frequencies on meshes with element sizes ``sizes`` (constant ratio),
+    observed order and extrapolated values per mode."""
+    import time
+
+    levels = []
+    for s in sizes:
+        p, v = _probe(name, {**(overrides or {}), "element_size": s})
+        t0 = time.perf_counter()
+        model = p.build(v)
+        res = model.modes(n_modes)
+        levels.append({"element_size": s, "dofs": res.dofs, "seconds": time.perf_counter() - t0,
+                       "frequencies_hz": [m.frequency_hz for m in res.modes],
+                       "families": [m.family for m in res.modes]})
+    ratio = sizes[0] / sizes[1]
+    modes = []
+    if len(levels) >= 3:
+        for i in range(n_modes):
+            f = [lv["frequencies_hz"][i] for lv in levels]
+            p_, fx = observed_order(f, ratio)
+            modes.append({"mode": i + 1, "family": levels[-1]["families"][i], "f_finest_hz": f[-1],
+                          "f_extrapolated_hz": fx, "observed_order": p_,
+                          "rel_change_last": (f[-1] - f[-2]) / f[-1]})
+    return {"probe": name, "levels": levels, "ratio": ratio, "modes": modes}
+
+
+def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Piezotube with its bore offset by ``delta`` along ``angle_deg`` (from +y towards +z; the
+    source's delta_x = delta_y case is 45 degrees, |offset| = sqrt(2) delta there... here
+    ``delta`` is the magnitude of the offset). For each delta: the lateral pair (f_low,
+    f_high), its split, the direction of the lower mode (holder end face motion), the
+    Euler-Bernoulli prediction of both from the exact eccentric section, and the lateral
+    stiffness coupling ``K_yz / sqrt(K_yy K_zz)`` of the 2x2 lumped lateral model in the
+    electrode axes (the FEM counterpart of the off-diagonal terms of Gamma, eqs 3.38-3.44)."""
+    from probedyn.lumped.smart_analytic import EccentricSection
+
+    rows = []
+    a = math.radians(angle_deg)
+    for d in deltas:
+        dy, dz = d * math.cos(a), d * math.sin(a)
+        p, v = _probe("piezotube", {**(overrides or {}), "delta_y": dy, "delta_z": dz, "tip": "none"})
+        model = p.build(v)
+        res = model.modes(2)
+        uh = holder_displacements(model, res, "holder_end")[:, 1:]
+        f = np.array([m.frequency_hz for m in res.modes])
+        ang = math.degrees(math.atan2(uh[0, 1], uh[0, 0])) % 180.0
+        Ui = np.linalg.inv(uh.T)  # rows: directions y, z; columns: modes
+        K2 = Ui.T @ np.diag((2 * np.pi * f) ** 2) @ Ui
+        sec = EccentricSection(v["Re"], v["Ri"], dy, dz)
+        split = f[1] / f[0] - 1
+        rows.append({"delta": d, "delta_y": dy, "delta_z": dz, "f_low_hz": f[0], "f_high_hz": f[1],
+                     "split": split, "split_predicted": sec.frequency_split(),
+                     "angle_low_deg": ang if d > 0 else None, "angle_predicted_deg": sec.lower_mode_angle_deg() if d > 0 else None,
+                     "coupling_yz": float(K2[0, 1] / math.sqrt(K2[0, 0] * K2[1, 1])),
+                     "families": [m.family for m in res.modes]})
+    return {"angle_deg": angle_deg, "rows": rows}

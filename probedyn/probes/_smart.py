@@ -62,6 +62,12 @@ class SmartModel(ElasticModel):
                                "attach": self.lumped_tip.attach}
         return d
 
+    def vertex_displacement(self, shape: np.ndarray) -> np.ndarray:
+        """(n_vertices, 3) displacement of a full DOF vector at the mesh vertices (the P2
+        vertex nodes; interleaved numbering ``3 * node + component``)."""
+        U = np.asarray(shape)[: self.ndofs_total].reshape(self.n_nodes, 3)
+        return U[np.asarray(self.basis.nodal_dofs[0])]
+
     def augmented(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray, sp.csr_matrix]:
         """(K_aug, M_aug) restricted to the free mesh DOFs + 3 tip DOFs, the free DOF index
         array and the attachment operator A (3, ndofs_total)."""
