@@ -93,7 +93,7 @@ def run_basins(u0: float, psi: float, grid: int, out: Path, workers: int = 2, sc
     from probedyn.schemes.sweep import GridError, axis, run_sweep
 
     if grid < 1:
-        raise GridError(f"--grid must be a positive number of points per axis, got {grid}")
+        raise GridError(f"--grid must be at least 1 point per axis, got {grid} (zero points)" if grid == 0 else f"--grid must be at least 1 point per axis, got {grid}")
     eq = equilibria(u0, psi)
     (a3, b3), (a4, b4) = default_basin_window(u0)
     if x3_range:
