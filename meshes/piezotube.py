@@ -73,7 +73,7 @@ def validate(p: dict[str, Any]) -> dict[str, Any]:
         raise GeometryError(f"piezotube inner radius Ri = {q['Ri']:g} m must be smaller than the outer radius Re = {q['Re']:g} m")
     d = math.hypot(q["delta_y"], q["delta_z"])
     wall = q["Re"] - q["Ri"]
-    if not math.isfinite(d) or d >= wall - MIN_WALL:
+    if not math.isfinite(d) or d >= wall - MIN_WALL - 1e-12 * q["Re"]:
         raise GeometryError(
             f"piezotube eccentricity |delta| = {d:g} m breaks the wall: it must stay below "
             f"Re - Ri - {MIN_WALL:g} m = {wall - MIN_WALL:g} m")
@@ -201,12 +201,13 @@ def _build(params: dict[str, Any]) -> MeshBundle:
             x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(2, s)
             if x1 > L + tol or x1 - x0 < tol:
                 continue  # holder or end faces
-            com = gmsh.model.occ.getCenterOfMass(2, s)
-            r = math.hypot(com[1], com[2])
-            ang = math.degrees(math.atan2(com[2], com[1]))
             if gmsh.model.getType(2, s) == "Plane":
                 continue  # radial planes between sectors (interior)
-            ri = math.hypot(com[1] - dy, com[2] - dz)
+            com = gmsh.model.occ.getCenterOfMass(2, s)
+            on = gmsh.model.getClosestPoint(2, s, com)[0]  # a point on the (cylindrical) face
+            r = math.hypot(on[1], on[2])
+            ang = math.degrees(math.atan2(on[2], on[1]))
+            ri = math.hypot(on[1] - dy, on[2] - dz)
             if abs(ri - Ri) < abs(r - Re):
                 inner.append(s)
             else:
