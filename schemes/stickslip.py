@@ -857,3 +857,37 @@ def steady_branches(u0_values: np.ndarray, v: float, n_ic: int = 12, psi: float 
         for i in range(u0_values.size):
             out.append(np.stack([st["x3_min"][i], st["x3_max"][i], st["x3_mean"][i]], axis=1))
     return {"u0": u0_values, "v": v, "x3": out}
+
+
+def is_stick(u0: float, v: float, n_ic: int = 3, **kw) -> bool:
+    """True when the steady motion at (u0, v) contains stick phases (regimes 1, 2, 4)."""
+    return int(regime_cell(np.array([u0]), np.array([v]), n_ic=n_ic, **kw)["regime"][0]) in (1, 2, 4)
+
+
+def stick_boundary(fixed: float, lo: float, hi: float, along: str = "v", rtol: float = 1e-2,
+                   n_ic: int = 3, **kw) -> float:
+    """Boundary of the stick-slip region found by bisection (Fig 4.13).
+
+    ``along="v"``: at u0 = ``fixed``, the speed in [lo, hi] above which the motion no longer
+    sticks (geometric bisection).  ``along="u0"``: at v = ``fixed``, the amplitude u0 in
+    [lo, hi] above which stick-slip appears; in the quasi-static limit v -> 0 this tends to
+    the fold criterion u0 = 1 (eq 4.12).  Requires the criterion to differ at the two ends.
+    """
+    if along not in ("v", "u0"):
+        raise ParameterError(f"along must be 'v' or 'u0', got {along!r}")
+    if not (0 < lo < hi):
+        raise ParameterError(f"bisection bracket must satisfy 0 < lo < hi, got [{lo:g}, {hi:g}]")
+
+    def f(x: float) -> bool:
+        return is_stick(fixed, x, n_ic, **kw) if along == "v" else is_stick(x, fixed, n_ic, **kw)
+
+    flo, fhi = f(lo), f(hi)
+    if flo == fhi:
+        raise SolverError(f"no stick-slip boundary in [{lo:g}, {hi:g}] along {along} (both ends {'stick' if flo else 'smooth'})")
+    while hi / lo - 1 > rtol:
+        mid = math.sqrt(lo * hi) if along == "v" else 0.5 * (lo + hi)
+        if f(mid) == flo:
+            lo = mid
+        else:
+            hi = mid
+    return math.sqrt(lo * hi) if along == "v" else 0.5 * (lo + hi)

@@ -254,3 +254,19 @@ def test_cli_equilibria_json(capsys):
         assert len(out["stable_X"]) == ns and len(out["unstable_X"]) == nu
     assert main(["stickslip", "equilibria", "--u0", "-2"]) == 2
     assert "u0 must be >= 0" in capsys.readouterr().err
+
+
+def test_stick_boundary_tends_to_fold_criterion():
+    # quasi-static limit: stick-slip appears exactly when the branch of eq 4.11 folds, u0 = 1
+    # (with the lab-speed threshold v/2, see STICK_FRACTION); at v = 0.01 the dynamic
+    # correction is below the bisection tolerance 1e-3.
+    u_star = ss.stick_boundary(0.01, 0.5, 2.0, along="u0", rtol=1e-3)
+    assert abs(u_star - 1.0) < 5e-3
+    # the end of stick moves to higher speed with stronger corrugation (Fig 4.13)
+    v3 = ss.stick_boundary(3.0, 0.05, 30.0, along="v")
+    v20 = ss.stick_boundary(20.0, 0.05, 30.0, along="v")
+    assert 0.05 < v3 < v20 < 30.0
+    # and it is set by the frequency of the sample in a substrate well, sqrt(u0 / (m2/m)):
+    # the ratio v*/omega_well stays O(1) (here within a factor 2) over a decade of u0
+    for u, vs in ((3.0, v3), (20.0, v20)):
+        assert 0.5 < vs / math.sqrt(u / M.mu2) < 2.0

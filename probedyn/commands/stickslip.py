@@ -148,13 +148,40 @@ def run_regime_map(v_values, u0_values, out: Path | None, workers: int = 2, sche
                     processes=processes, progress=progress, restart=restart,
                     attrs={"regimes": json_regimes()})
     ds = res.dataset
+    bis = bisected_boundaries(g["v"], g["u0"])
     png = None
     if out is not None:
-        png = plot_regime_map(ds, Path(out).with_suffix(".png"))
+        png = plot_regime_map(ds, Path(out).with_suffix(".png"), bis)
     reg = ds["regime"].values
     return {**res.to_dict(), "plot": str(png) if png else None,
             "fractions": {REGIMES[k]: float((reg == k).mean()) for k in REGIMES},
-            "boundaries": regime_boundaries(ds)}
+            "grid_boundaries": regime_boundaries(ds), **bis}
+
+
+def bisected_boundaries(v_values, u0_values, n_u: int = 6) -> dict[str, Any]:
+    """Stick-slip boundary refined by bisection: the speed v*(u0) above which stick ends, for
+    a few u0 > 1.2 of the map, and the amplitude u0* above which stick-slip starts at the
+    lowest speed of the map (-> 1, the fold criterion, as v -> 0)."""
+    import numpy as np
+
+    from probedyn.errors import SolverError
+    from probedyn.schemes.stickslip import DEFAULT_MODEL, stick_boundary
+
+    vmin, vmax = float(np.min(v_values)), float(np.max(v_values))
+    rows = []
+    us = [u for u in np.linspace(max(1.2, float(np.min(u0_values))), float(np.max(u0_values)), n_u) if u >= 1.2]
+    for u in us:
+        try:
+            vs = stick_boundary(float(u), vmin, vmax, along="v", rtol=1e-2)
+        except SolverError:
+            continue
+        rows.append({"u0": float(u), "v_star": vs, "V_star_m_s": DEFAULT_MODEL.speed_from_v(vs),
+                     "v_star_over_well_frequency": vs / math.sqrt(u / DEFAULT_MODEL.mu2)})
+    try:
+        u_star = stick_boundary(vmin, 0.3, 2.0, along="u0", rtol=1e-3)
+    except SolverError:
+        u_star = None
+    return {"v_star": rows, "u0_star_at_vmin": u_star, "vmin": vmin}
 
 
 def json_regimes() -> str:
@@ -183,7 +210,7 @@ def regime_boundaries(ds) -> list[dict[str, Any]]:
     return rows
 
 
-def plot_regime_map(ds, path: Path) -> Path:
+def plot_regime_map(ds, path: Path, bis: dict[str, Any] | None = None) -> Path:
     import numpy as np
     from matplotlib.colors import ListedColormap
 
@@ -192,14 +219,23 @@ def plot_regime_map(ds, path: Path) -> Path:
 
     plt = _mpl()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    cmap = ListedColormap(["#9ecae1", "#fd8d3c", "#d62728", "#74c476"])
-    ax.pcolormesh(ds["v"].values, ds["u0"].values, ds["regime"].values, cmap=cmap, vmin=-0.5, vmax=3.5, shading="nearest")
+    cmap = ListedColormap(["#9ecae1", "#fd8d3c", "#d62728", "#74c476", "#6a51a3"])
+    ax.pcolormesh(ds["v"].values, ds["u0"].values, ds["regime"].values, cmap=cmap, vmin=-0.5, vmax=4.5, shading="nearest")
     ax.set_xscale("log")
     ax.set_xlabel("non-dimensional speed v (eq 4.6)")
     ax.set_ylabel("$u_0$")
     ax.axhline(1.0, color="k", lw=0.8, ls="--")
+    if "period" in ds:
+        per = ds["period"].values.astype(float)
+        cs = ax.contour(ds["v"].values, ds["u0"].values, per, levels=[1.5, 2.5, 3.5, 4.5], colors="k", linewidths=0.6)
+        ax.clabel(cs, fmt=lambda x: f"period {x - 0.5:.0f}|{x + 0.5:.0f}", fontsize=6)
     handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(k)) for k in REGIMES]
-    ax.legend(handles, list(REGIMES.values()), loc="upper left", fontsize=8, framealpha=0.9)
+    labels = list(REGIMES.values())
+    if bis and bis.get("v_star"):
+        h, = ax.plot([r["v_star"] for r in bis["v_star"]], [r["u0"] for r in bis["v_star"]], "k^-", ms=5, lw=1)
+        handles.append(h)
+        labels.append("end of stick (bisection)")
+    ax.legend(handles, labels, loc="upper left", fontsize=7, framealpha=0.9)
     ax.set_title("regime map (Fig 4.13); dashed: quasi-static fold u0 = 1")
     fig.tight_layout()
     with atomic_path(path) as tmp:
@@ -380,8 +416,8 @@ def cmd_limit_cycles(
 
 @stickslip_app.command("regime-map")
 def cmd_regime_map(
-    u0: str = typer.Option("0.25:8:24", "--u0", help="u0 axis: LO:HI:N or V1,V2,..."),
-    v: str = typer.Option("0.03:10:24:log", "--v", help="v axis: LO:HI:N[:log] or V1,V2,..."),
+    u0: str = typer.Option("0.25:25:24", "--u0", help="u0 axis: LO:HI:N or V1,V2,..."),
+    v: str = typer.Option("0.05:10:24:log", "--v", help="v axis: LO:HI:N[:log] or V1,V2,..."),
     out: Path = typer.Option(Path("regime-map.nc"), "--out", help="NetCDF file (a PNG is written next to it)."),
     n_ic: int = typer.Option(6, "--n-ic", help="Initial conditions per cell."),
     workers: int = WORKERS_OPT,
