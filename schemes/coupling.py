@@ -133,3 +133,222 @@ def scan_metrics(x: np.ndarray, F: np.ndarray, drop_fraction: float = 0.3,
         valley_n=float(np.mean(F[valleys])) if valleys else math.nan,
         n_slips=int(peaks.size),
     )
+
+
+# --------------------------------------------------------------------------------------------
+# An independent 1D FFM line scan (eqs 2.7-2.9, 2.13, 2.15 with V_y = 0)
+# --------------------------------------------------------------------------------------------
+
+#: Table 2.1 (mica), x direction; F_nu in N s/m (SOURCE-NOTES item 9)
+MICA_X = dict(m=1.98e-18, c=7e-9, k=0.2, sigma0=1e4, Vs=1e-5, Fnu=1e-7, Fs=12.95e-9, Fc=12.45e-9)
+
+
+def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out: int = 4000,
+                   params: dict | None = None, rtol: float = 1e-7) -> dict[str, np.ndarray]:
+    """1D FFM line scan with the source's generalised-bristle friction, written out here as an
+    independent reference (and the fallback when :mod:`probedyn.schemes.ffm` is absent).
+
+    States ``x`` (tip), ``v`` (tip velocity), ``z`` (bristle deflection); base at ``V t``::
+
+        m x'' = c (V - x') + k (V t - x) - F          (2.13) with (2.15)
+        F     = sigma0 z + F_nu x'                     (2.7)
+        z'    = x' - |x'| z / g(x')                    (2.8) with V_y = 0 (max(V_x, V_y) -> x' while sliding forward)
+        g     = [F_c + (F_s - F_c) exp(-(x' / 2 V_s)^2)] / sigma0     (2.9)
+
+    ``scale`` multiplies ``F_s`` and ``F_c`` (the adhesion coupling's friction scale). Stiff
+    (sigma0 / m ~ 5e21 s^-2): BDF with the analytic Jacobian. Returns base position, time,
+    tip position, the lateral spring force ``k (V t - x)`` (what the FFM measures) and ``F``.
+    """
+    from scipy.integrate import solve_ivp
+
+    p = dict(MICA_X)
+    p.update(params or {})
+    if scale <= 0 or not math.isfinite(scale):
+        raise ParameterError(f"friction scale must be positive, got {scale}")
+    m, c, k, s0, Vs, Fnu = p["m"], p["c"], p["k"], p["sigma0"], p["Vs"], p["Fnu"]
+    Fs, Fc = p["Fs"] * scale, p["Fc"] * scale
+    V = speed
+    zs = Fs / s0  # bristle scale
+
+    def g_of(v):
+        u = v / (2 * Vs)
+        e = math.exp(-u * u)
+        g = (Fc + (Fs - Fc) * e) / s0
+        dg = -(Fs - Fc) * e * u / (Vs * s0)
+        return g, dg
+
+    def rhs(t, y):
+        x, v, z = y
+        g, _ = g_of(v)
+        F = s0 * z + Fnu * v
+        return [v, (c * (V - v) + k * (V * t - x) - F) / m, v - abs(v) * z / g]
+
+    def jac(t, y):
+        x, v, z = y
+        g, dg = g_of(v)
+        sg = math.copysign(1.0, v) if v != 0 else 0.0
+        return [[0.0, 1.0, 0.0],
+                [-k / m, -(c + Fnu) / m, -s0 / m],
+                [0.0, 1.0 - z * (sg / g - abs(v) * dg / (g * g)), -abs(v) / g]]
+
+    T = length / V
+    t_eval = np.linspace(0.0, T, n_out)
+    sol = solve_ivp(rhs, (0.0, T), [0.0, 0.0, 0.0], method="BDF", jac=jac, t_eval=t_eval,
+                    rtol=rtol, atol=[1e-6 * zs * s0 / k, 1e-6 * V, 1e-6 * zs])
+    if not sol.success:
+        raise SolverError(f"FFM reference scan failed: {sol.message}")
+    x, v, z = sol.y
+    return dict(base=V * sol.t, t=sol.t, x=x, spring_force=k * (V * sol.t - x),
+                friction=s0 * z + Fnu * v, nfev=sol.nfev)
+
+
+# --------------------------------------------------------------------------------------------
+# The study
+# --------------------------------------------------------------------------------------------
+
+ScanFn = Callable[[float, float, float], dict]
+
+
+def _default_scan(length: float, speed: float, scale: float) -> dict:
+    return reference_scan(length, speed, scale)
+
+
+def run(setup: CouplingSetup | None = None, scan: ScanFn | None = None) -> dict[str, Any]:
+    """FFM line scans for each lambda of ``setup``; rows of the table and the traces.
+
+    ``scan(length, speed, scale)`` runs one line scan with the friction levels multiplied by
+    ``scale`` and returns ``base`` and ``spring_force`` arrays (default: :func:`reference_scan`).
+    The scan length covers the first stick plus ``n_periods`` sawtooth periods, estimated from
+    the friction levels (``F_s f / k`` and ``2 (F_s - F_c) f / k``).
+    """
+    setup = setup or CouplingSetup()
+    setup.validate()
+    scan = scan or _default_scan
+    p = MICA_X
+    rows, traces = [], []
+    for lam in setup.lams:
+        c = contact_at(lam, setup)
+        f = c["scale"]
+        first_est = p["Fs"] * f / p["k"]
+        period_est = 2 * (p["Fs"] - p["Fc"]) * f / p["k"]
+        length = 1.1 * first_est + setup.n_periods * period_est
+        tr = scan(length, setup.speed, f)
+        met = scan_metrics(tr["base"], tr["spring_force"])
+        rows.append({**c, **met, "scan_length_m": length})
+        traces.append(dict(lam=lam, base=tr["base"], force=tr["spring_force"], scale=f))
+    return dict(setup=asdict(setup), rows=rows, traces=traces)
+
+
+def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Is the source's claim (more adhesion -> longer initial sticking, longer period) borne out?
+
+    Also tests whether the effect is a pure rescaling of the friction levels: first stick / f and
+    period / f constant across lambda.
+    """
+    lam = np.array([r["lam"] for r in rows])
+    order = np.argsort(lam)
+    first = np.array([r["first_stick_m"] for r in rows])[order]
+    period = np.array([r["period_m"] for r in rows])[order]
+    f = np.array([r["scale"] for r in rows])[order]
+    ok = np.isfinite(first) & np.isfinite(period)
+    first_up = bool(np.all(np.diff(first[ok]) > 0))
+    period_up = bool(np.all(np.diff(period[ok]) > 0))
+    r1 = first[ok] / f[ok]
+    r2 = period[ok] / f[ok]
+    return dict(first_stick_increases=first_up, period_increases=period_up,
+                first_over_scale_spread=float(np.ptp(r1) / np.mean(r1)),
+                period_over_scale_spread=float(np.ptp(r2) / np.mean(r2)))
+
+
+# --------------------------------------------------------------------------------------------
+# Report
+# --------------------------------------------------------------------------------------------
+
+def plot_traces(res: dict[str, Any], path: Path) -> Path:
+    """Fig 2.22 counterpart: lateral force vs base position for each lambda, and the same
+    traces with both axes divided by the friction scale f (a collapse = pure rescaling)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from probedyn.jsonio import atomic_path
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    cmap = plt.get_cmap("plasma")
+    n = len(res["traces"])
+    for i, tr in enumerate(res["traces"]):
+        col = cmap(i / max(1, n))
+        lab = f"$\\lambda$ = {tr['lam']:g}, f = {tr['scale']:.3g}"
+        a1.plot(tr["base"] * 1e9, tr["force"] * 1e9, color=col, lw=0.9, label=lab)
+        a2.plot(tr["base"] / tr["scale"] * 1e9, tr["force"] / tr["scale"] * 1e9, color=col, lw=0.9, label=lab)
+    a1.set_xscale("log")
+    a1.set_yscale("log")
+    a1.set_xlim(left=1.0)
+    a1.set_ylim(bottom=1.0)
+    a1.set_xlabel("base position [nm]")
+    a1.set_ylabel("lateral force k (Vt - x) [nN]")
+    a1.set_title("FFM scans (mica preset) for increasing adhesion")
+    a2.set_xlabel("base position / f [nm]")
+    a2.set_ylabel("lateral force / f [nN]")
+    a2.set_xlim(40, None)
+    a2.set_ylim(11.5, 13.3)
+    a2.set_title("rescaled by the friction scale f: the traces collapse")
+    a1.legend(fontsize=7)
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
+    return Path(path)
+
+
+def report_markdown(outdir: Path, quick: bool) -> str:
+    """The coupling part of the contact report section: figure, table and verdict."""
+    from probedyn.commands._common import markdown_table
+
+    setup = CouplingSetup(lams=(0.0, 0.3, 1.0, 3.0), n_periods=3) if quick else CouplingSetup()
+    res = run(setup)
+    fig = plot_traces(res, Path(outdir) / "coupling_fig_2_22.png")
+    v = verdict(res["rows"])
+    rows = []
+    for r in res["rows"]:
+        rows.append(dict(lam=r["lam"], W=r["W"], pc=abs(r["pull_off"]) * 1e9, pcl=abs(r["pull_off_over_load"]),
+                         aa=r["radius"] / r["radius_hertz"], f=r["scale"], first=r["first_stick_m"] * 1e9,
+                         period=r["period_m"] * 1e9, mean=r["mean_friction_n"] * 1e9,
+                         peak=r["peak_n"] * 1e9, valley=r["valley_n"] * 1e9))
+    table = markdown_table(rows, [
+        ("lam", "lambda", "g"), ("W", "W [J/m^2]", ".3g"), ("pc", "pull-off [nN]", ".4g"),
+        ("pcl", "pull-off / L", ".3g"), ("aa", "a / a_Hertz", ".3f"), ("f", "friction scale f", ".3f"),
+        ("first", "first stick [nm]", ".4g"), ("period", "period [nm]", ".4g"),
+        ("mean", "mean friction [nN]", ".4g"), ("peak", "peak [nN]", ".4g"), ("valley", "valley [nN]", ".4g")])
+    yes = v["first_stick_increases"] and v["period_increases"]
+    text = [
+        "### Adhesion–friction coupling (section 2.2.4, Fig 2.22)",
+        "",
+        f"FFM line scans (Table 2.1 mica preset, V = {setup.speed * 1e6:g} um/s, applied load "
+        f"L = {setup.load * 1e9:g} nN) for increasing adhesion at fixed tip radius (lambda set through W by 2.24;"
+        " silicon tip R = 100 nm on flat mica, zeta_0 = 0.375 nm). Contact from Maugis–Dugdale at the applied load;"
+        f" friction levels F_s, F_c scaled by f = {'(a/a_Hertz)^2 (friction proportional to contact area)' if setup.law == 'area' else '(L - P_c)/L'}."
+        " Measured on the lateral spring force k (Vt - x).",
+        "",
+        f"![adhesion-friction coupling]({fig.name})",
+        "",
+        table,
+        "",
+        "**Verdict on the source's claim** (\"as lambda is increased ... the initial sticking values are increased;"
+        " higher adhesion values correspond to larger periods\"): "
+        + ("**confirmed** for the source's friction model" if yes else "**not confirmed**")
+        + f" — first stick length and period both grow monotonically with adhesion. But the growth is a pure"
+        f" rescaling: first stick / f varies by {100 * v['first_over_scale_spread']:.2g} % and period / f by"
+        f" {100 * v['period_over_scale_spread']:.2g} % across lambda (sampling resolution), i.e. first stick = F_s f / k_x"
+        " and period = (peak - valley) / k_x, as the traces' collapse shows. The period of this model is set by the friction"
+        " levels and the cantilever stiffness, not by the lattice, so the source's further statement that \"the periodicity"
+        " of the pattern is correlated with the periodicity of the substrate lattice\" cannot hold in it; with a lattice"
+        " model (Prandtl–Tomlinson) the period stays at the lattice constant while adhesion raises the corrugation"
+        " (see below when available). Note the adhesion needed for large lambda at this geometry:"
+        f" W = {res['rows'][-1]['W']:.3g} J/m^2 at lambda = {res['rows'][-1]['lam']:g}, far above real solid surfaces (< 1 J/m^2):"
+        " 'lambda from 0 to large' at a fixed tip radius is not a physically reachable range for silicon on mica.",
+    ]
+    return "\n".join(text)
