@@ -322,16 +322,19 @@ def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
     return Path(path)
 
 
-def plot_branches(qs: dict[str, Any], fast: dict[str, Any], path: Path) -> Path:
+def plot_branches(qs: dict[str, Any], fast: dict[str, Any], path: Path, qs2: dict[str, Any] | None = None) -> Path:
     import numpy as np
 
     from probedyn.jsonio import atomic_path
 
     plt = _mpl()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
+    if qs2 is not None:
+        for u, xs in zip(qs2["u0"], qs2["x3"]):
+            a1.plot([u] * len(xs), xs, ".", color="0.6", ms=2)
     for u, xs in zip(qs["u0"], qs["x3"]):
         a1.plot([u] * len(xs), xs, "k.", ms=2)
-    a1.set_title(f"(a) quasi-static (v = 0, psi = {qs.get('psi', 5):g})")
+    a1.set_title("(a) quasi-static (v = 0): psi = 0 black" + (", psi = 5 grey" if qs2 is not None else ""))
     a1.set_xlabel("$u_0$")
     a1.set_ylabel("$x_3^*$")
     for u, arr in zip(fast["u0"], fast["x3"]):
@@ -540,15 +543,18 @@ def report_section(outdir: Path, quick: bool) -> str:
            "", "![limit cycles](stickslip_limit_cycles.png)", ""]
 
     u0s = np.linspace(0.25, 12 if quick else 25, 24 if quick else 60)
-    qs = steady_branches(u0s, 0.0, n_ic=16 if quick else 32)
-    qs["psi"] = 5.0
+    qs = steady_branches(u0s, 0.0, n_ic=16 if quick else 32, psi=0.0)
+    qs5 = steady_branches(u0s, 0.0, n_ic=16 if quick else 32, psi=5.0)
     fast = steady_branches(u0s, 0.5, n_ic=8 if quick else 12)
-    plot_branches(qs, fast, outdir / "stickslip_branches.png")
-    md += ["**Steady-state branches vs u0 (Fig 4.12)**: (a) nodes reached quasi-statically, (b) x3 range of the "
-           "attractors at v = 0.5.", "", "![branches](stickslip_branches.png)", ""]
+    plot_branches(qs, fast, outdir / "stickslip_branches.png", qs5)
+    md += ["**Steady-state branches vs u0 (Fig 4.12)**: (a) nodes reached quasi-statically from rest states "
+           "spread over |x3(0)| <= u0 + pi, at psi = 0 (black: symmetric, equally spaced by about 2 pi, as in the "
+           "text) and psi = 5 (grey); (b) x3 range (bars) and mean (dots) of the attractors at v = 0.5: stick-slip "
+           "widens the branches and only negative separations (sample lagging the base) remain.", "",
+           "![branches](stickslip_branches.png)", ""]
 
-    vv = np.geomspace(0.03, 10, 12 if quick else 24)
-    uu = np.linspace(0.25, 8, 10 if quick else 24)
+    vv = np.geomspace(0.05, 10, 12 if quick else 24)
+    uu = np.linspace(0.25, 25, 10 if quick else 24)
     rm = run_regime_map(vv, uu, outdir / "stickslip_regime_map.nc", workers=2, processes=False, progress=False,
                         restart=True, n_ic=4 if quick else 6)
     fr = ", ".join(f"{k} {100 * f:.0f} %" for k, f in rm["fractions"].items())
@@ -557,4 +563,12 @@ def report_section(outdir: Path, quick: bool) -> str:
            "boundary at the fold u0 = 1), steady sliding when its modulation is below 20 % of v, coexisting when "
            "several attractors are reached from different initial conditions.", "",
            "![regime map](stickslip_regime_map.png)", ""]
+    brows = [dict(u=r["u0"], v=r["v_star"], V=r["V_star_m_s"] * 1e6, w=r["v_star_over_well_frequency"]) for r in rm["v_star"]]
+    md += [f"Boundaries by bisection: stick-slip starts above u0* = {rm['u0_star_at_vmin']:.4f} at v = {rm['vmin']:.3g} "
+           "(the fold criterion u0 = 1 of eq 4.12 is the v -> 0 limit); stick ends (stick-slip gives way to sliding) above "
+           "the speed v*(u0):", "",
+           markdown_table(brows, [("u", "u0", ".2f"), ("v", "v*", ".3f"), ("V", "V* [um/s]", ".0f"),
+                                  ("w", "v* / sqrt(u0 m/m2)", ".2f")]),
+           "", "The last column compares v* with the frequency of the sample in a substrate well: stick-slip ends "
+           "when the washboard frequency v exceeds it by about 20 %.", ""]
     return "\n".join(md)
