@@ -74,3 +74,39 @@ def test_scan_metrics_smooth_sliding_has_no_slips():
 def test_bad_setup_raises(kw):
     with pytest.raises(ParameterError):
         CouplingSetup(**kw).validate()
+
+
+# ---------------------------------------------------------------- FFM scans
+def test_reference_scan_mica_levels_and_first_stick():
+    # 1D reduction of 2.13-2.15 with 2.7-2.9 (SOURCE-NOTES item 12): the spring force rises with
+    # slope ~k_x until friction reaches F_s, so the first slip comes after F_s / k_x = 64.75 nm;
+    # then a sawtooth between ~F_c and ~F_s. Stribeck at V/(2 V_s) = 0.1 lowers the peak by
+    # (F_s - F_c)(1 - e^-0.01) = 0.005 nN (0.04 %); the tolerances are a few times that.
+    from probedyn.schemes.coupling import MICA_X, reference_scan
+
+    Fs, Fc, k = MICA_X["Fs"], MICA_X["Fc"], MICA_X["k"]
+    r = reference_scan(Fs / k + 4 * (Fs - Fc) / k, n_out=3000)
+    m = scan_metrics(r["base"], r["spring_force"])
+    dx = r["base"][1] - r["base"][0]
+    assert m["first_stick_m"] == pytest.approx(Fs / k, abs=0.002 * Fs / k + 2 * dx)
+    assert m["peak_n"] == pytest.approx(Fs, rel=2e-3)
+    assert m["valley_n"] == pytest.approx(Fc, rel=2e-3)
+    # during a stick the spring force climbs from the valley to the peak at slope ~k_x:
+    # period = (peak - valley) / k_x within the sampling resolution
+    assert m["period_m"] == pytest.approx((m["peak_n"] - m["valley_n"]) / k, abs=3 * dx)
+
+
+def test_friction_scale_rescales_lengths_in_the_bristle_model():
+    # inertia and damping are negligible on the stick time scale, so multiplying F_s and F_c
+    # by f multiplies the first stick and the period by f (to the sampling resolution)
+    from probedyn.schemes.coupling import MICA_X, reference_scan
+
+    Fs, Fc, k = MICA_X["Fs"], MICA_X["Fc"], MICA_X["k"]
+    L = Fs / k + 3 * (Fs - Fc) / k
+    out = []
+    for f in (1.0, 2.5):
+        r = reference_scan(L * f, scale=f, n_out=2000)
+        out.append(scan_metrics(r["base"], r["spring_force"]))
+    dx = L / 2000
+    assert out[1]["first_stick_m"] == pytest.approx(2.5 * out[0]["first_stick_m"], abs=2.5 * 2 * dx)
+    assert out[1]["period_m"] == pytest.approx(2.5 * out[0]["period_m"], abs=2.5 * 3 * dx)

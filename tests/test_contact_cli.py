@@ -1,0 +1,76 @@
+"""``probedyn contact`` and the contact report section."""
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+from probedyn.cli import main
+
+
+def _run_json(args, capsys):
+    assert main(["contact", *args, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("model,expected", [("dmt", -2.0), ("jkr", -1.5)])
+def test_limits_from_the_command_line(model, expected, capsys):
+    res = _run_json(["--model", model], capsys)
+    assert res["pull_off_normalized"] == pytest.approx(expected, abs=1e-9)
+
+
+def test_md_json_has_pull_off_curve_and_published_fit(capsys):
+    res = _run_json(["--model", "md", "--lambda", "0.5"], capsys)
+    assert res["lam"] == 0.5
+    fit = res["pull_off_published_fit"]
+    assert abs(fit["relative_difference"]) < 0.02
+    c = res["curve"]
+    n = len(c["penetration_normalized"])
+    assert n > 100 and len(c["load_normalized_loading"]) == n
+    # DMT-like lambda: loading and unloading coincide and have no gaps
+    assert all(v is not None for v in c["load_normalized_loading"])
+    assert c["load_normalized_loading"] == pytest.approx(c["load_normalized_unloading"], abs=1e-12)
+    # dimensional pull-off = normalised * pi W R
+    p = res["parameters"]
+    assert res["pull_off_n"] == pytest.approx(res["pull_off_normalized"] * math.pi * p["W_j_m2"] * p["R_m"], rel=1e-12)
+
+
+def test_out_folder_gets_json_and_plot(tmp_path, capsys):
+    assert main(["contact", "--model", "md", "--lambda", "3", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "contact.json").stat().st_size > 1000
+    assert (tmp_path / "contact_md.png").stat().st_size > 10000
+    out = capsys.readouterr().out
+    assert "pull-off" in out
+
+
+@pytest.mark.parametrize("args", [["--lambda", "-1"], ["--model", "hertz"], ["--set", "E_t=-3"],
+                                  ["--set", "nu_s=0.9"], ["--set", "nonsense=1"]])
+def test_bad_input_is_a_one_line_error(args):
+    proc = subprocess.run([sys.executable, "-m", "probedyn.cli", "contact", *args],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    err = proc.stderr.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("probedyn: error:"), proc.stderr
+
+
+def test_fig_2_19_and_pull_off_table(tmp_path):
+    from probedyn.commands.contact import plot_fig_2_19, pull_off_table
+
+    path = plot_fig_2_19(tmp_path / "fig.png")
+    assert path.stat().st_size > 20000
+    rows = pull_off_table((1e-3, 0.3, 3.0, 1e3))
+    assert rows[0]["pull_off"] == pytest.approx(-2.0, rel=0.01)
+    assert rows[-1]["pull_off"] == pytest.approx(-1.5, rel=0.01)
+    assert all(abs(r["rel_diff_pct"]) < 2 for r in rows)
+
+
+@pytest.mark.slow
+def test_report_section_quick(tmp_path):
+    from probedyn.commands.contact import report_section
+
+    md = report_section(tmp_path, quick=True)
+    assert "contact_fig_2_19.png" in md and "coupling_fig_2_22.png" in md
+    assert (tmp_path / "contact_fig_2_19.png").exists() and (tmp_path / "coupling_fig_2_22.png").exists()
+    assert "Verdict" in md
