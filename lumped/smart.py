@@ -558,3 +558,18 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
                      "coupling_yz": float(K2[0, 1] / math.sqrt(K2[0, 0] * K2[1, 1])),
                      "families": [m.family for m in res.modes]})
     return {"angle_deg": angle_deg, "rows": rows}
+
+
+def study_holder_mass(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 4) -> dict[str, Any]:
+    """SOURCE-NOTES item 10: the first modes of body + holder (no tip) with the holder mass of
+    the table (m_h) and with the mass of the holder geometry."""
+    out, masses = {}, {}
+    for src in ("table", "geometry"):
+        p, v = _probe(name, {**(overrides or {}), "holder_mass_source": src, "tip": "none"})
+        out[src] = p.build(v).modes(n_modes)
+        masses[src] = p.holder_mass(v)
+    rows = []
+    for a, b in zip(out["table"].modes, out["geometry"].modes):
+        rows.append({"mode": a.index, "family_table": a.family, "table_hz": a.frequency_hz,
+                     "family_geometry": b.family, "geometry_hz": b.frequency_hz, "ratio": b.frequency_hz / a.frequency_hz})
+    return {"probe": name, "holder_mass": masses, "rows": rows}
