@@ -19,8 +19,9 @@ of the number of workers); every chunk is one Dask task.  By default a
 (``processes=False`` runs them as threads in this process, fine for numba ``nogil`` kernels);
 ``scheduler="tcp://HOST:PORT"`` uses an existing cluster instead (reachability is checked with
 a short connect timeout first).  As each chunk finishes, the client writes it atomically to
-``OUT.nc.parts/chunk-NNNNN.nc``; a rerun of the same sweep (same function, grid, fixed
-parameters, chunk size, seed — recorded in ``manifest.json``) skips the chunks already there.
+``OUT.nc.parts/chunk-NNNNN.npz``; a rerun of the same sweep (same function, grid, fixed
+parameters, chunk size, seed — recorded in ``manifest.json``) skips the chunks already there
+(chunks are stored as ``.npz``, which is ~100x faster to write than a NetCDF file).
 At the end the chunks are merged, ``OUT.nc`` is written atomically (h5netcdf engine) and the
 parts folder is removed.
 
@@ -165,7 +166,7 @@ def cell_seeds(seed: int, flat_index: np.ndarray) -> np.ndarray:
         return _splitmix64(np.asarray(flat_index, dtype=np.uint64) ^ base)
 
 
-def default_chunk_size(n_cells: int, target_chunks: int = 16) -> int:
+def default_chunk_size(n_cells: int, target_chunks: int = 64) -> int:
     """Cells per chunk: about ``target_chunks`` chunks, independent of the worker count."""
     return max(1, math.ceil(n_cells / target_chunks))
 
@@ -225,17 +226,23 @@ def _qualname(func: Callable) -> str:
 
 
 def _chunk_path(parts: Path, i: int) -> Path:
-    return parts / f"chunk-{i:05d}.nc"
+    return parts / f"chunk-{i:05d}.npz"
 
 
-def _chunk_dataset(res: dict[str, np.ndarray], start: int, stop: int):
-    import xarray as xr
-
-    data = {}
+def _write_chunk(res: dict[str, np.ndarray], path: Path) -> None:
+    """Persist one finished chunk atomically (npz: ~100x faster to write than a NetCDF file;
+    the final result is NetCDF)."""
     for k, a in res.items():
-        dims = ("cell",) + tuple(f"{k}_dim{j}" for j in range(1, a.ndim))
-        data[k] = (dims, a)
-    return xr.Dataset(data, coords={"cell": np.arange(start, stop)})
+        if a.dtype.kind == "O":
+            raise SolverError(f"sweep output '{k}' has dtype object; return numeric or string arrays")
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, **{f"v_{k}": a for k, a in res.items()})
+
+
+def _read_chunk(path: Path) -> dict[str, np.ndarray]:
+    with np.load(path, allow_pickle=False) as z:
+        return {k[2:]: z[k] for k in z.files}
 
 
 def _write_nc(ds, path: Path) -> None:
@@ -470,8 +477,7 @@ def run_sweep(
                         ) from exc
                     res = fut.result()
                     if parts is not None:
-                        start = i * chunk_size
-                        _write_nc(_chunk_dataset(res, start, min(n_cells, start + chunk_size)), _chunk_path(parts, i))
+                        _write_chunk(res, _chunk_path(parts, i))
                     else:
                         results[i] = res
                     bar.update(1)
@@ -484,8 +490,8 @@ def run_sweep(
 
     # Merge
     if parts is not None:
-        pieces = [_read_nc(_chunk_path(parts, i)) for i in range(n_chunks)]
-        merged = {k: np.concatenate([p[k].values for p in pieces]) for k in pieces[0].data_vars}
+        pieces = [_read_chunk(_chunk_path(parts, i)) for i in range(n_chunks)]
+        merged = {k: np.concatenate([p[k] for p in pieces]) for k in pieces[0]}
     else:
         merged = {k: np.concatenate([results[i][k] for i in range(n_chunks)]) for k in results[0]}
     data = {}
