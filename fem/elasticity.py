@@ -272,11 +272,41 @@ def vector_dof_permutation(mesh, vector_basis) -> np.ndarray:
 def interpolation_operator(basis, x: np.ndarray) -> sp.csr_matrix:
     """(3 m, 3N) sparse matrix evaluating the displacement at points ``x`` (3, m);
     row ``3 j + c`` gives component c at point j."""
-    P = basis.probes(np.asarray(x, dtype=float).reshape(3, -1)).tocoo()  # (m, N)
+    x = np.asarray(x, dtype=float).reshape(3, -1)
+    P = _scalar_probes(basis, x).tocoo()  # (m, N)
     rows = np.concatenate([3 * P.row + c for c in range(3)])
     cols = np.concatenate([3 * P.col + c for c in range(3)])
     data = np.concatenate([P.data] * 3)
     return sp.csr_matrix((data, (rows, cols)), shape=(3 * P.shape[0], 3 * P.shape[1]))
+
+
+def _scalar_probes(basis, x: np.ndarray) -> sp.csr_matrix:
+    """Scalar interpolation matrix (m, N).  A point that coincides with a P2 node (within
+    1e-9 of the mesh extent, e.g. a tip apex that is a mesh vertex) takes that node's value
+    exactly (Lagrange property), which avoids the element finder's round-off failures on
+    vertices and edges; other points must lie inside the mesh."""
+    from probedyn.errors import GeometryError
+
+    locs = basis.doflocs
+    ext = float(np.ptp(locs, axis=1).max())
+    rows, cols, data = [], [], []
+    for j in range(x.shape[1]):
+        d = np.linalg.norm(locs - x[:, j : j + 1], axis=0)
+        i = int(np.argmin(d))
+        if d[i] <= 1e-9 * ext:
+            rows.append(np.array([j]))
+            cols.append(np.array([i]))
+            data.append(np.array([1.0]))
+            continue
+        try:
+            Pj = basis.probes(x[:, j : j + 1]).tocoo()
+        except ValueError:
+            raise GeometryError(f"point {x[:, j].tolist()} lies outside the mesh") from None
+        rows.append(np.full(Pj.nnz, j))
+        cols.append(Pj.col)
+        data.append(Pj.data)
+    return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
+                         shape=(x.shape[1], basis.N))
 
 
 def face_average_operator(mesh, facets: np.ndarray) -> tuple[sp.csr_matrix, float]:

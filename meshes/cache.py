@@ -19,7 +19,7 @@ from typing import Any, Callable
 import numpy as np
 
 #: Bump when the mesh format or a builder's meaning changes (invalidates old cache entries).
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 
 
 @dataclass(frozen=True)

@@ -7,8 +7,10 @@ Geometry (SI units, metres):
   beam-axis convention: flapwise = z bending, lateral = y bending);
 * optional tip on the underside at the free end, pointing to -z: a square ``pyramid`` or a
   ``cone`` of height ``tip_height`` and half-angle ``tip_half_angle`` (base half-size
-  ``tip_height * tan(half_angle)``), its base centred at ``(length - base, 0, -thickness/2)`` so
-  the base ends flush with the free end.
+  ``base = tip_height * tan(half_angle)``), its base centred at ``(length - base, 0, -thickness/2)``
+  for a pyramid (flush with the free end) and at ``length - 1.25 base`` for a cone
+  (:func:`tip_inset`).  The cone is meshed as a 24-sided pyramid whose base polygon has the
+  circle's area, so its volume (mass) and centroid are the cone's.
 
 Physical groups: volumes ``body`` and (with a tip) ``tip``; surfaces ``clamp`` (x = 0),
 ``free_end`` (x = length), ``top`` (z = +t/2), ``bottom`` (z = -t/2, outside the tip base).
@@ -30,6 +32,23 @@ from probedyn.meshes.cache import MeshBundle, MeshOptions, cached_mesh
 
 TIP_SHAPES = ("none", "pyramid", "cone")
 UM = 1e6  # gmsh model units per metre
+CONE_SIDES = 24
+
+
+def tip_inset(shape: str) -> float:
+    """Distance of the tip axis from the free end in units of the base half-size: a pyramid's
+    base ends flush with the free end (1.0); a cone's circular base would touch the end face
+    tangentially, a degenerate contact OpenCASCADE cannot mesh, so it is set back (1.25)."""
+    return 1.25 if shape == "cone" else 1.0
+
+
+def tip_apex(length: float, thickness: float, tip_shape: str, tip_height: float, tip_half_angle: float) -> np.ndarray:
+    """Coordinates [m] of the named point ``tip``: the apex, or without a tip the centre of the
+    lower free-end edge."""
+    if tip_shape == "none":
+        return np.array([length, 0.0, -thickness / 2])
+    base = tip_height * math.tan(tip_half_angle)
+    return np.array([length - tip_inset(tip_shape) * base, 0.0, -thickness / 2 - tip_height])
 
 
 def validate_geometry(length: float, width: float, thickness: float, tip_shape: str = "none",
@@ -51,7 +70,8 @@ def validate_geometry(length: float, width: float, thickness: float, tip_shape: 
     if not (0 < tip_half_angle < math.pi / 2):
         raise GeometryError(f"tip_half_angle must lie in (0, pi/2) rad, got {tip_half_angle:g}")
     base = tip_height * math.tan(tip_half_angle)
-    if 2 * base > width * (1 - 1e-9) or 2 * base > length:
+    half = base * (math.sqrt(2 * math.pi / (CONE_SIDES * math.sin(2 * math.pi / CONE_SIDES))) if tip_shape == "cone" else 1.0)
+    if 2 * half > width * (1 - 1e-9) or (tip_inset(tip_shape) * base + half) > length:
         raise GeometryError(
             f"tip base {2 * base:.3g} m (= 2 tip_height tan(half_angle)) does not fit on the "
             f"cantilever underside of width {width:.3g} m"
@@ -79,19 +99,26 @@ def _build(params: dict[str, Any]) -> MeshBundle:
         box = occ.addBox(0, -w / 2, -t / 2, L, w, t)
         tip_vol = None
         if shape != "none":
-            xc, zb = L - base, -t / 2
+            xc, zb = L - tip_inset(shape) * base, -t / 2
             if shape == "cone":
-                tip_vol = occ.addCone(xc, 0, zb, 0, 0, -th, base, 0)
+                # a right circular cone as a CONE_SIDES-sided pyramid with the circle's base area
+                # (OpenCASCADE's true cone apex makes gmsh's surface mesher fail, "overlapping
+                # facets", for many sizes); volume and centroid equal the cone's exactly.
+                n = CONE_SIDES
+                r = base * math.sqrt(2 * math.pi / (n * math.sin(2 * math.pi / n)))
+                corners = [(r * math.cos(2 * math.pi * k / n), r * math.sin(2 * math.pi * k / n)) for k in range(n)]
             else:
-                pts = [occ.addPoint(xc + sx * base, sy * base, zb) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
-                apex = occ.addPoint(xc, 0, zb - th)
-                base_lines = [occ.addLine(pts[i], pts[(i + 1) % 4]) for i in range(4)]
-                side = [occ.addLine(p, apex) for p in pts]
-                faces = [occ.addPlaneSurface([occ.addCurveLoop(base_lines)])]
-                for i in range(4):
-                    loop = occ.addCurveLoop([base_lines[i], side[(i + 1) % 4], -side[i]])
-                    faces.append(occ.addPlaneSurface([loop]))
-                tip_vol = occ.addVolume([occ.addSurfaceLoop(faces)])
+                corners = [(sx * base, sy * base) for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+            pts = [occ.addPoint(xc + cx, cy, zb) for cx, cy in corners]
+            apex = occ.addPoint(xc, 0, zb - th)
+            m = len(pts)
+            base_lines = [occ.addLine(pts[i], pts[(i + 1) % m]) for i in range(m)]
+            side = [occ.addLine(p, apex) for p in pts]
+            faces = [occ.addPlaneSurface([occ.addCurveLoop(base_lines)])]
+            for i in range(m):
+                loop = occ.addCurveLoop([base_lines[i], side[(i + 1) % m], -side[i]])
+                faces.append(occ.addPlaneSurface([loop]))
+            tip_vol = occ.addVolume([occ.addSurfaceLoop(faces)])
             occ.fragment([(3, box)], [(3, tip_vol)])
         occ.synchronize()
 
@@ -124,7 +151,7 @@ def _build(params: dict[str, Any]) -> MeshBundle:
     raw.points = raw.points / UM
     mesh = raw.to_skfem()
     points = {
-        "tip": np.array([L0 - base0, 0.0, -t0 / 2 - th0]) if shape != "none" else np.array([L0, 0.0, -t0 / 2]),
+        "tip": tip_apex(L0, t0, shape, th0, ta),
         "free_end_centre": np.array([L0, 0.0, 0.0]),
         "clamp_centre": np.array([0.0, 0.0, 0.0]),
     }

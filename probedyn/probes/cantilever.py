@@ -10,7 +10,6 @@ beam equation (3.10).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -90,11 +89,10 @@ class Cantilever(Probe):
                             name="cantilever")
 
     def tip_point(self, values: dict[str, Any]) -> np.ndarray:
-        L, t = values["length"], values["thickness"]
-        if values["tip_shape"] == "none":
-            return np.array([L, 0.0, -t / 2])
-        base = values["tip_height"] * math.tan(values["tip_half_angle"])
-        return np.array([L - base, 0.0, -t / 2 - values["tip_height"]])
+        from probedyn.meshes.cantilever import tip_apex
+
+        return tip_apex(values["length"], values["thickness"], values["tip_shape"], values["tip_height"],
+                        values["tip_half_angle"])
 
     def beam(self, values: dict[str, Any]):
         """The equivalent :class:`probedyn.lumped.beam.RectBeam` (isotropic materials only;
