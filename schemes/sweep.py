@@ -89,8 +89,10 @@ def axis(name: str, lo: float, hi: float, n: int, log: bool = False) -> np.ndarr
         n_int = int(n)
     except (TypeError, ValueError):
         raise GridError(f"grid axis '{name}': number of points must be an integer, got {n!r}") from None
-    if n_int != n or n_int < 1:
-        raise GridError(f"grid axis '{name}': number of points must be a positive integer, got {n!r} (zero points)")
+    if n_int != n:
+        raise GridError(f"grid axis '{name}': number of points must be an integer, got {n!r}")
+    if n_int < 1:
+        raise GridError(f"grid axis '{name}': {n_int} points (zero points): give at least 1")
     for v, what in ((lo, "start"), (hi, "end")):
         if not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
             raise GridError(f"grid axis '{name}': {what} {v!r} is not a finite number")
@@ -110,15 +112,20 @@ def parse_axis(spec: str) -> tuple[str, np.ndarray]:
     if "=" not in spec:
         raise GridError(f"grid spec {spec!r}: expected NAME=LO:HI:N or NAME=V1,V2,...")
     name, rhs = (s.strip() for s in spec.split("=", 1))
+    form = f"grid spec {spec!r}: expected NAME=LO:HI:N[:log] or NAME=V1,V2,..."
+    if ":" in rhs:
+        parts = rhs.split(":")
+        if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+            raise GridError(form)
+        try:
+            lo, hi, n = float(parts[0]), float(parts[1]), float(parts[2])
+        except ValueError:
+            raise GridError(form) from None
+        return name, axis(name, lo, hi, int(n) if n.is_integer() else n, log=len(parts) == 4)
     try:
-        if ":" in rhs:
-            parts = rhs.split(":")
-            if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
-                raise ValueError
-            return name, axis(name, float(parts[0]), float(parts[1]), int(parts[2]), log=len(parts) == 4)
         vals = np.array([float(x) for x in rhs.split(",") if x.strip()])
     except ValueError:
-        raise GridError(f"grid spec {spec!r}: expected NAME=LO:HI:N[:log] or NAME=V1,V2,...") from None
+        raise GridError(form) from None
     return name, vals
 
 
