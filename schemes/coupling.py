@@ -261,6 +261,73 @@ def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------------------------------------
+# The same question with a lattice model: 1D Prandtl–Tomlinson
+# --------------------------------------------------------------------------------------------
+
+#: mica lattice constant (Table 4.2 of the source)
+MICA_LATTICE = 0.519e-9
+
+
+def pt_scan(eta: float, length: float, speed: float = 2e-6, a: float = MICA_LATTICE, k: float = 0.2,
+            m: float = 1.98e-18, zeta: float = 1.0, n_out: int = 6000, rtol: float = 1e-6) -> dict[str, np.ndarray]:
+    """1D Prandtl–Tomlinson line scan (the standard atomic stick-slip model)::
+
+        m x'' + gamma x' = k (V t - x) - (2 pi U0 / a) sin(2 pi x / a),   eta = 4 pi^2 U0 / (k a^2)
+
+    with ``gamma = 2 zeta sqrt(m k (1 + eta))`` (``zeta = 1``: critically damped at the bottom
+    of a well). Defaults: Table 2.1 ``k_x``, ``m_x``; mica lattice ``a`` (Table 4.2). Returns base
+    position and the lateral spring force ``k (V t - x)``. BDF with the analytic Jacobian.
+    """
+    from scipy.integrate import solve_ivp
+
+    if not (eta > 0 and length > 0 and speed > 0 and a > 0 and k > 0 and m > 0 and zeta > 0):
+        raise ParameterError("pt_scan needs positive eta, length, speed, a, k, m and zeta")
+    U0 = eta * k * a * a / (4 * math.pi**2)
+    q = 2 * math.pi / a
+    F0 = q * U0
+    gam = 2 * zeta * math.sqrt(m * k * (1 + eta))
+    V = speed
+
+    def rhs(t, y):
+        x, v = y
+        return [v, (k * (V * t - x) - F0 * math.sin(q * x) - gam * v) / m]
+
+    def jac(t, y):
+        return [[0.0, 1.0], [(-k - F0 * q * math.cos(q * y[0])) / m, -gam / m]]
+
+    T = length / V
+    te = np.linspace(0.0, T, n_out)
+    sol = solve_ivp(rhs, (0.0, T), [0.0, 0.0], method="BDF", jac=jac, t_eval=te, rtol=rtol,
+                    atol=[1e-6 * a, 1e-6 * a * math.sqrt(k / m)])
+    if not sol.success:
+        raise SolverError(f"Prandtl-Tomlinson scan failed: {sol.message}")
+    return dict(base=V * sol.t, spring_force=k * (V * sol.t - sol.y[0]), x=sol.y[0])
+
+
+def run_pt(setup: CouplingSetup | None = None, eta0: float = 3.0, zetas: Sequence[float] = (1.0, 0.1),
+           n_lattice: int = 10) -> list[dict[str, Any]]:
+    """Prandtl–Tomlinson scans for each lambda: the corrugation ``U0`` scales with the same
+    friction scale ``f`` as the bristle model's levels (``eta = eta0 f``; ``eta0`` at zero adhesion).
+
+    The scan covers the first stick (about ``eta a / 2 pi``) plus ``n_lattice`` lattice constants
+    (times ``eta / 10`` more when underdamped, where slips may skip several sites)."""
+    setup = setup or CouplingSetup()
+    setup.validate()
+    a = MICA_LATTICE
+    rows = []
+    for zeta in zetas:
+        for lam in setup.lams:
+            c = contact_at(lam, setup)
+            eta = eta0 * c["scale"]
+            length = eta * a / (2 * math.pi) + n_lattice * a * (1 + (eta / 10 if zeta < 1 else 0))
+            tr = pt_scan(eta, length, setup.speed, zeta=zeta)
+            met = scan_metrics(tr["base"], tr["spring_force"])
+            rows.append(dict(lam=lam, zeta=zeta, scale=c["scale"], eta=eta, **met,
+                             period_over_a=met["period_m"] / a))
+    return rows
+
+
+# --------------------------------------------------------------------------------------------
 # Report
 # --------------------------------------------------------------------------------------------
 
@@ -324,6 +391,16 @@ def report_markdown(outdir: Path, quick: bool) -> str:
         ("first", "first stick [nm]", ".4g"), ("period", "period [nm]", ".4g"),
         ("mean", "mean friction [nN]", ".4g"), ("peak", "peak [nN]", ".4g"), ("valley", "valley [nN]", ".4g")])
     yes = v["first_stick_increases"] and v["period_increases"]
+    pt_rows = run_pt(setup)
+    pt_table = markdown_table(pt_rows, [
+        ("zeta", "damping ratio", "g"), ("lam", "lambda", "g"), ("eta", "eta = eta0 f", ".3g"),
+        ("first_stick_m", "first stick [m]", ".3e"), ("period_over_a", "period / a", ".3f"),
+        ("mean_friction_n", "mean friction [N]", ".3e"), ("n_slips", "slips", "d")])
+    crit = [r for r in pt_rows if r["zeta"] >= 1]
+    under = [r for r in pt_rows if r["zeta"] < 1]
+    dev = max(abs(r["period_over_a"] - 1) for r in crit) if crit else math.nan
+    multi = sorted({round(r["period_over_a"]) for r in under}) if under else []
+    first_pt_up = all(np.diff([r["first_stick_m"] for r in crit]) > 0) if crit else False
     text = [
         "### Adhesion–friction coupling (section 2.2.4, Fig 2.22)",
         "",
@@ -335,20 +412,30 @@ def report_markdown(outdir: Path, quick: bool) -> str:
         "",
         f"![adhesion-friction coupling]({fig.name})",
         "",
+        "Source's friction model (generalised bristle, eqs 2.7-2.16 in 1D):",
+        "",
         table,
         "",
+        "The same adhesion scale applied to the corrugation of a lattice model (1D Prandtl–Tomlinson on the mica"
+        f" lattice a = {MICA_LATTICE * 1e9:g} nm, Table 2.1 k_x and m_x, eta = 3 without adhesion):",
+        "",
+        pt_table,
+        "",
         "**Verdict on the source's claim** (\"as lambda is increased ... the initial sticking values are increased;"
-        " higher adhesion values correspond to larger periods\"): "
-        + ("**confirmed** for the source's friction model" if yes else "**not confirmed**")
-        + f" — first stick length and period both grow monotonically with adhesion. But the growth is a pure"
-        f" rescaling: first stick / f varies by {100 * v['first_over_scale_spread']:.2g} % and period / f by"
-        f" {100 * v['period_over_scale_spread']:.2g} % across lambda (sampling resolution), i.e. first stick = F_s f / k_x"
-        " and period = (peak - valley) / k_x, as the traces' collapse shows. The period of this model is set by the friction"
-        " levels and the cantilever stiffness, not by the lattice, so the source's further statement that \"the periodicity"
-        " of the pattern is correlated with the periodicity of the substrate lattice\" cannot hold in it; with a lattice"
-        " model (Prandtl–Tomlinson) the period stays at the lattice constant while adhesion raises the corrugation"
-        " (see below when available). Note the adhesion needed for large lambda at this geometry:"
-        f" W = {res['rows'][-1]['W']:.3g} J/m^2 at lambda = {res['rows'][-1]['lam']:g}, far above real solid surfaces (< 1 J/m^2):"
-        " 'lambda from 0 to large' at a fixed tip radius is not a physically reachable range for silicon on mica.",
+        " higher adhesion values correspond to larger periods\"):",
+        "",
+        "* initial sticking: **confirmed** in both models — the first stick length grows monotonically with adhesion"
+        f" ({'and' if first_pt_up else 'but not'} in Prandtl–Tomlinson, where it is about eta a / 2 pi).",
+        "* period: in the source's model **confirmed, but only as a rescaling**: first stick / f varies by"
+        f" {100 * v['first_over_scale_spread']:.2g} % and period / f by {100 * v['period_over_scale_spread']:.2g} %"
+        " across lambda (sampling resolution); first stick = F_s f / k_x and period = (peak - valley) / k_x, so the"
+        " period is set by the friction levels and the cantilever stiffness, not by the lattice (the traces collapse"
+        " when rescaled). The source's statement that the period is correlated with the lattice cannot hold in that model."
+        f" In Prandtl–Tomlinson with critical damping the claim is **refuted**: the period stays at the lattice constant"
+        f" (largest deviation {100 * dev:.2g} %) from lambda = 0 to {max(setup.lams):g}. Only an underdamped tip"
+        f" (damping ratio 0.1) shows longer periods, as multiple slips: period / a = {', '.join(str(m) for m in multi)}.",
+        f"* adhesion needed: W = {res['rows'][-1]['W']:.3g} J/m^2 at lambda = {res['rows'][-1]['lam']:g} for this"
+        " geometry, far above real solid surfaces (< 1 J/m^2): 'lambda from 0 to large' at a fixed tip radius is not a"
+        " physically reachable range for silicon on mica.",
     ]
     return "\n".join(text)

@@ -110,3 +110,31 @@ def test_friction_scale_rescales_lengths_in_the_bristle_model():
     dx = L / 2000
     assert out[1]["first_stick_m"] == pytest.approx(2.5 * out[0]["first_stick_m"], abs=2.5 * 2 * dx)
     assert out[1]["period_m"] == pytest.approx(2.5 * out[0]["period_m"], abs=2.5 * 3 * dx)
+
+
+def test_prandtl_tomlinson_period_is_the_lattice_when_critically_damped():
+    # eta > 1: stick-slip; with critical damping each slip ends in the next well, so the
+    # period is the lattice constant. Sampling: 6000 points over ~16 a -> 0.3 % of a per sample;
+    # 1 % tolerance (the PT criterion).
+    from probedyn.schemes.coupling import MICA_LATTICE as a, pt_scan
+
+    for eta in (3.0, 45.0):
+        r = pt_scan(eta, eta * a / (2 * math.pi) + 10 * a, zeta=1.0)
+        m = scan_metrics(r["base"], r["spring_force"])
+        assert m["period_m"] == pytest.approx(a, rel=0.01)
+        # the first slip needs the spring to reach the maximum lateral force 2 pi U0 / a
+        # = eta k a / (2 pi) (for eta >> 1 the tip barely moves before it): first stick ~ eta a / 2 pi
+        if eta > 10:
+            assert m["first_stick_m"] == pytest.approx(eta * a / (2 * math.pi), rel=0.05)
+
+
+def test_prandtl_tomlinson_underdamped_skips_sites_at_high_eta():
+    # underdamped (zeta = 0.1), eta = 45: the tip overshoots several wells per slip; the period
+    # is then an integer multiple (> 1) of the lattice constant
+    from probedyn.schemes.coupling import MICA_LATTICE as a, pt_scan
+
+    r = pt_scan(45.0, 45 * a / (2 * math.pi) + 55 * a, zeta=0.1)
+    m = scan_metrics(r["base"], r["spring_force"])
+    ratio = m["period_m"] / a
+    assert ratio > 1.5
+    assert ratio == pytest.approx(round(ratio), abs=0.02)
