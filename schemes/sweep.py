@@ -431,6 +431,11 @@ def run_sweep(
                 old = json.loads(manifest.read_text())
             except (OSError, ValueError):
                 old = None
+            if old is None and not any(parts.glob("chunk-*.npz")):
+                # killed between creating the folder and writing the manifest: nothing to resume
+                write_json(manifest, {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
+                                      "chunk_size": chunk_size, "shape": list(shape), "names": names})
+                old = {"signature": sig}
             if old is None or old.get("signature") != sig:
                 raise ParameterError(
                     f"{parts} holds chunks of a different sweep (function, grid, fixed parameters or chunk "

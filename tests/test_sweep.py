@@ -299,3 +299,11 @@ def test_killed_cli_sweep_resumes(tmp_path):
     ref = ss.basin_labels(X3, X4, 20.0, 5.0)
     np.testing.assert_array_equal(ds["label"].values, ref["label"])
 
+
+
+def test_parts_folder_without_manifest_and_chunks_is_reused(tmp_path):
+    # a run killed right after creating the parts folder leaves it empty: not an error
+    out = tmp_path / "e.nc"
+    (tmp_path / "e.nc.parts").mkdir()
+    r = run(out, workers=1, chunk_size=7)
+    assert len(r.chunks_run) == 5 and out.exists()

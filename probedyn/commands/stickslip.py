@@ -557,11 +557,13 @@ def report_section(outdir: Path, quick: bool) -> str:
     uu = np.linspace(0.25, 25, 10 if quick else 24)
     rm = run_regime_map(vv, uu, outdir / "stickslip_regime_map.nc", workers=2, processes=False, progress=False,
                         restart=True, n_ic=4 if quick else 6)
-    fr = ", ".join(f"{k} {100 * f:.0f} %" for k, f in rm["fractions"].items())
+    fr = ", ".join(f"{k} {100 * f:.1f} %" for k, f in rm["fractions"].items())
     md += [f"**Regime map (Fig 4.13)** over {len(uu)} u0 x {len(vv)} v cells: {fr}. Classification "
            "(docs/stickslip.md): stick when the lab sample speed drops below v/2 (this puts the quasi-static "
            "boundary at the fold u0 = 1), steady sliding when its modulation is below 20 % of v, coexisting when "
-           "several attractors are reached from different initial conditions.", "",
+           "several periodic attractors are reached from different initial conditions, irregular when a trajectory "
+           "is not periodic (period <= 4) after the transient. Contours: period of the attractor in lattice "
+           "periods (single, double, triple slips).", "",
            "![regime map](stickslip_regime_map.png)", ""]
     brows = [dict(u=r["u0"], v=r["v_star"], V=r["V_star_m_s"] * 1e6, w=r["v_star_over_well_frequency"]) for r in rm["v_star"]]
     md += [f"Boundaries by bisection: stick-slip starts above u0* = {rm['u0_star_at_vmin']:.4f} at v = {rm['vmin']:.3g} "
