@@ -17,6 +17,11 @@ Geometry (SI metres, probedyn axes: x from the clamp to the free end, y across, 
   ``tip_height`` pointing to ``-z`` under the holder end (or under the body end without a meshed
   holder), volume ``tip``.
 
+Mesh: without a meshed tip the solid is a grid of boxes meshed as **structured** transfinite
+hexahedra split into tetrahedra (``element_size`` = in-plane size, at least
+``elements_through_thickness`` elements through every layer), so refinement studies see nested,
+uniformly refined meshes; with the tip cone it is meshed unstructured (size ``element_size``).
+
 Physical groups: volumes ``upper_layer``, ``lower_layer``, ``body`` (= both layers), ``holder``,
 ``holder_piezolayer``, ``tip``; surfaces ``clamp`` (x = 0), ``free_end`` (the part of x = length
 not covered by the holder), ``holder_end`` (the holder end face x = length + holder_length, or
@@ -113,7 +118,16 @@ def _build(params: dict[str, Any]) -> MeshBundle:
     thin = q["thickness"] / 2
     if q["holder"] == "meshed":
         thin = min(thin, q["holder_thickness"])
-    hs = opts.size_for(thin)
+    structured = q["tip"] != "meshed"
+    if structured:
+        # grid of boxes meshed as transfinite hexahedra (split into tets): element_size is the
+        # in-plane size and may exceed the layer thickness; through the thickness every
+        # interval gets at least elements_through_thickness elements
+        hs = float(opts.element_size) if opts.element_size else thin / max(1, int(opts.elements_through_thickness))
+        if not hs > 0:
+            raise GeometryError(f"element_size must be positive, got {hs:g} m")
+    else:
+        hs = opts.size_for(thin)
     L, w, h, g = (q[k] * UM for k in ("length", "width", "thickness", "electrode_gap"))
     Lh, wh, th, tp = (q[k] * UM for k in ("holder_length", "holder_width", "holder_thickness", "piezolayer_thickness"))
     tip_h, tip_r = q["tip_height"] * UM, q["tip_radius"] * UM
@@ -127,12 +141,28 @@ def _build(params: dict[str, Any]) -> MeshBundle:
         occ = gmsh.model.occ
         tools = []
         ystrips = [(-w / 2, -g / 2), (-g / 2, g / 2), (g / 2, w / 2)]
-        for z0 in (-h / 2, 0.0):
-            for y0, y1 in ystrips:
-                tools.append((3, occ.addBox(0, y0, z0, L, y1 - y0, h / 2)))
-        if q["holder"] == "meshed":
-            tools.append((3, occ.addBox(L, -wh / 2, -h / 2, Lh, wh, th)))
-            tools.append((3, occ.addBox(L, -wh / 2, -h / 2 + th, Lh, wh, tp)))
+        if structured:
+            mh = q["holder"] == "meshed"
+            xb = [0.0, L] + ([L + Lh] if mh else [])
+            yb = sorted({-w / 2, -g / 2, g / 2, w / 2} | ({-wh / 2, wh / 2} if mh else set()))
+            zb = sorted({-h / 2, 0.0, h / 2} | ({-h / 2 + th, -h / 2 + th + tp} if mh else set()))
+            for i in range(len(xb) - 1):
+                for j in range(len(yb) - 1):
+                    for k in range(len(zb) - 1):
+                        yc, zc = 0.5 * (yb[j] + yb[j + 1]), 0.5 * (zb[k] + zb[k + 1])
+                        if xb[i] >= L and not (abs(yc) < wh / 2 and zc < -h / 2 + th + tp):
+                            continue
+                        if yb[j + 1] - yb[j] < 1e-9 * w or zb[k + 1] - zb[k] < 1e-9 * h:
+                            continue
+                        tools.append((3, occ.addBox(xb[i], yb[j], zb[k], xb[i + 1] - xb[i], yb[j + 1] - yb[j],
+                                                    zb[k + 1] - zb[k])))
+        else:
+            for z0 in (-h / 2, 0.0):
+                for y0, y1 in ystrips:
+                    tools.append((3, occ.addBox(0, y0, z0, L, y1 - y0, h / 2)))
+            if q["holder"] == "meshed":
+                tools.append((3, occ.addBox(L, -wh / 2, -h / 2, Lh, wh, th)))
+                tools.append((3, occ.addBox(L, -wh / 2, -h / 2 + th, Lh, wh, tp)))
         if q["tip"] == "meshed":
             xt = (L + Lh if q["holder"] == "meshed" else L) - tip_r
             tools.append((3, occ.addCone(xt, 0, -h / 2, 0, 0, -tip_h, tip_r, 0)))
@@ -185,8 +215,24 @@ def _build(params: dict[str, Any]) -> MeshBundle:
         gmsh.model.addPhysicalGroup(2, hend, name="holder_end")
         for name, fs in elec.items():
             gmsh.model.addPhysicalGroup(2, fs, name=name)
-        set_mesh_size(s, s / 10)
-        gmsh.option.setNumber("Mesh.Optimize", 1 if opts.optimize else 0)
+        if structured:
+            ett = max(1, int(opts.elements_through_thickness))
+            for _, c in gmsh.model.getEntities(1):
+                x0, y0, z0, x1, y1, z1 = gmsh.model.getBoundingBox(1, c)
+                ext = (x1 - x0, y1 - y0, z1 - z0)
+                ell = max(ext)
+                n = max(1, math.ceil(ell / s - 1e-6))
+                if ext[2] >= ell:
+                    n = max(n, ett)
+                gmsh.model.mesh.setTransfiniteCurve(c, n + 1)
+            for _, f in gmsh.model.getEntities(2):
+                gmsh.model.mesh.setTransfiniteSurface(f)
+            for _, vv in gmsh.model.getEntities(3):
+                gmsh.model.mesh.setTransfiniteVolume(vv)
+            gmsh.option.setNumber("Mesh.Optimize", 0)
+        else:
+            set_mesh_size(s, s / 10)
+            gmsh.option.setNumber("Mesh.Optimize", 1 if opts.optimize else 0)
         gmsh.model.mesh.generate(3)
         raw: RawMesh = extract_tet_mesh()
 

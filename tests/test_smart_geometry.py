@@ -47,6 +47,21 @@ def test_duo_bimorph_groups_and_areas(duo):
     assert duo.points["tip"][2] == pytest.approx(-h / 2 - 5e-6)
 
 
+def test_duo_bimorph_structured_mesh_is_nested_grid():
+    """Without a tip cone the mesh is a structured grid of boxes: halving element_size halves
+    the element edges along x (60 -> 120 intervals on the body electrode edges)."""
+    a = duo_bimorph_mesh({}, MeshOptions(element_size=10e-6, elements_through_thickness=1))
+    b = duo_bimorph_mesh({}, MeshOptions(element_size=5e-6, elements_through_thickness=1))
+    for bun in (a, b):
+        m = bun.mesh
+        assert tet_volume(m, m.subdomains["body"]) == pytest.approx(300e-6 * 30e-6 * 10e-6, rel=1e-9)
+        assert facet_area(m, m.boundaries["electrode_upper_left"]) == pytest.approx(300e-6 * 12.5e-6, rel=1e-9)
+    xa = np.unique(np.round(a.mesh.p[0] / 1e-9))
+    xb = np.unique(np.round(b.mesh.p[0] / 1e-9))
+    assert len(xb) - 1 == 2 * (len(xa) - 1)
+    assert set(xa.tolist()) <= set(xb.tolist())
+
+
 @pytest.fixture(scope="module")
 def tube():
     return piezotube_mesh({}, MeshOptions(element_size=400e-6, elements_through_thickness=1))
