@@ -200,6 +200,21 @@ def test_energy_balance_on_limit_cycle():
     lc = ss.limit_cycles(3.0, v)
     np.testing.assert_allclose(-lc["friction_mean"] * 2 * math.pi, lc["dissipated"], rtol=2e-3)
     np.testing.assert_allclose(M.kappa1 * lc["y1_mean"], lc["friction_mean"], rtol=2e-3, atol=1e-6)
+    # mean force balance on the sample, (k2/k)<y2 - y1> = <F>, with 1/k = 1/k1 + 1/k2 gives
+    # <y2> = <F>: the centre of the cycle IS the mean friction = -D/(2 pi) <= 0, which is why
+    # only negative separations survive at speed (Fig 4.12-b)
+    np.testing.assert_allclose(lc["centre"], lc["friction_mean"], rtol=2e-3)
+    assert np.all(lc["centre"] < 0)
+
+
+def test_quasi_static_branches_reach_every_node_and_are_symmetric_at_psi0():
+    # psi = 0: eq 4.11 is odd in X, so the nodes come in +- pairs; the basin integration from
+    # rest states over |x3(0)| <= u0 + pi must reach every node of the exact solver
+    for u0 in (3.0, 8.0, 14.0):
+        br = ss.steady_branches(np.array([u0]), 0.0, n_ic=64, psi=0.0)["x3"][0]
+        nodes = ss.equilibria(u0, 0.0).stable
+        np.testing.assert_allclose(np.sort(br), nodes, atol=1e-12)
+        np.testing.assert_allclose(np.sort(br), -np.sort(br)[::-1], atol=1e-9)
 
 
 def test_quasi_static_friction_limit_and_two_thirds_law():
