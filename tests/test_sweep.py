@@ -307,3 +307,15 @@ def test_parts_folder_without_manifest_and_chunks_is_reused(tmp_path):
     (tmp_path / "e.nc.parts").mkdir()
     r = run(out, workers=1, chunk_size=7)
     assert len(r.chunks_run) == 5 and out.exists()
+
+
+def test_process_workers_match_in_process(tmp_path):
+    # the default LocalCluster runs workers as processes: the scheme is pickled by reference
+    # and imported there; results must equal the in-process computation bit for bit
+    g = {"x4_0": sw.axis("x4_0", -8, 8, 6), "x3_0": sw.axis("x3_0", -12, 12, 6)}
+    r = sw.run_sweep(ss.basin_cell, g, fixed={"u0": 8.0, "psi": 5.0}, out=tmp_path / "p.nc", workers=2,
+                     processes=True, progress=False, chunk_size=9)
+    X3, X4 = np.meshgrid(g["x3_0"], g["x4_0"])
+    ref = ss.basin_labels(X3, X4, 8.0, 5.0)
+    np.testing.assert_array_equal(r.dataset["label"].values, ref["label"])
+    np.testing.assert_array_equal(r.dataset["t_settle"].values, ref["t_settle"])
