@@ -761,7 +761,7 @@ def _distinct(strobes: list[np.ndarray], tol: float) -> int:
 
 def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 128,
                 t_transient: float = 300.0, transient_periods: int = 8, record_periods: int = 8,
-                **model_params) -> dict[str, np.ndarray]:
+                confirm_factor: float = 10.0, **model_params) -> dict[str, np.ndarray]:
     """Sweep-engine entry point: classify the steady dynamics at each (u0[i], v[i]) (Fig 4.13).
 
     ``n_ic`` trajectories start at rest at x3(0) evenly spread over [-u0-pi, u0+pi] (the
@@ -777,9 +777,28 @@ def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 
       STICK_FRACTION v, else 3 "steady sliding" if the lab-speed modulation is below
       SLIDING_MODULATION v, else 0 "no stick-slip" (smooth, corrugated motion).
 
+    Cells classified 2 or 4 are re-run with a transient ``confirm_factor`` times longer
+    (long transients near period-doubling transitions otherwise look like extra attractors);
+    the confirmed class is returned.
+
     Also returns the number of distinct periodic attractors, the period of the attractor
     reached from x3(0) = 0 (0 = irregular), the extreme lab-speed ratios and its mean friction.
     """
+    out = _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_periods, record_periods,
+                       model_params)
+    redo = np.nonzero((out["regime"] == 2) | (out["regime"] == 4))[0]
+    if redo.size and confirm_factor > 1:
+        u0a, va = (np.broadcast_arrays(np.atleast_1d(np.asarray(u0, float)), np.atleast_1d(np.asarray(v, float))))
+        again = _regime_pass(u0a.ravel()[redo], va.ravel()[redo], n_ic, psi, steps_per_period,
+                             t_transient * confirm_factor, int(transient_periods * confirm_factor), record_periods,
+                             model_params)
+        for k in out:
+            out[k][redo] = again[k]
+    return out
+
+
+def _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_periods, record_periods,
+                 model_params) -> dict[str, np.ndarray]:
     model = TwoMassModel.from_params(model_params) if model_params else DEFAULT_MODEL
     u0 = np.atleast_1d(np.asarray(u0, dtype=float))
     v = np.atleast_1d(np.asarray(v, dtype=float))
