@@ -285,3 +285,12 @@ def test_stick_boundary_tends_to_fold_criterion():
     # the ratio v*/omega_well stays O(1) (here within a factor 2) over a decade of u0
     for u, vs in ((3.0, v3), (20.0, v20)):
         assert 0.5 < vs / math.sqrt(u / M.mu2) < 2.0
+
+
+def test_distinct_attractors_compare_strobe_sets_not_phases():
+    # the same period-2 orbit seen from two phases is one attractor; a shifted one is another
+    a = np.array([[1.0, 0.0], [2.0, 0.0]] * 2)
+    b = a[[1, 0, 3, 2]]
+    c = a + 0.5
+    assert ss._distinct([a, b], 1e-6) == 1
+    assert ss._distinct([a, b, c], 1e-6) == 2
