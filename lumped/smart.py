@@ -346,7 +346,7 @@ def duo_bimorph_references(probe, values: dict[str, Any], result) -> list[dict[s
     the corrected (3.10)+(3.18) with the holder as a point mass, the printed (3.10), the
     textbook Rayleigh tip-mass estimate, the end-body model with the holder's real offset and
     rotary inertia ("holder geometry"), and with a lumped tip the analytic 2-DOF (3.4)."""
-    from probedyn.lumped.smart_analytic import end_body_frequencies
+    from probedyn.lumped.smart_analytic import end_body_first_mode_at, end_body_frequencies
 
     model = result.model
     b = probe.beam(values)
@@ -363,7 +363,7 @@ def duo_bimorph_references(probe, values: dict[str, Any], result) -> list[dict[s
         "(3.10) as printed": "printed form, wrong (SOURCE-NOTES 1)",
         "Rayleigh tip mass 3EI/L^3, m_h + 33/140 m_b": "textbook one-mode estimate",
         "beam + holder rigid body (offset, rotary inertia)": "holder geometry from the mesh",
-        "2-DOF (3.4): Rayleigh body + tip on k_t": "analytic lumped model",
+        "2-DOF (3.4): beam + holder body + tip on k_t": "analytic lumped model at the holder end",
     }
     for d in ("y", "z"):
         EI = b.EI(d)
@@ -374,12 +374,11 @@ def duo_bimorph_references(probe, values: dict[str, Any], result) -> list[dict[s
             refs[(d, "beam + holder rigid body (offset, rotary inertia)")] = end_body_frequencies(
                 EI, b.rho * b.A, b.L, m_h, e, J[d])
         else:
-            fb = end_body_frequencies(EI, b.rho * b.A, b.L, m_h, e, J[d])[0]
-            Mb = m_h + 33.0 / 140.0 * b.mass
-            kb = Mb * (2 * math.pi * fb) ** 2
+            x_ref = 2 * e if c is not None else 0.0  # holder end face (the spring's attachment)
+            Mb, kb = end_body_first_mode_at(EI, b.rho * b.A, b.L, m_h, e, J[d], x_ref)
             kt = lt.stiffness[AX[d]]
             lam = eigh(np.array([[kb + kt, -kt], [-kt, kt]]), np.diag([Mb, lt.mass]), eigvals_only=True)
-            refs[(d, "2-DOF (3.4): Rayleigh body + tip on k_t")] = np.sqrt(lam) / (2 * math.pi)
+            refs[(d, "2-DOF (3.4): beam + holder body + tip on k_t")] = np.sqrt(lam) / (2 * math.pi)
     attach = lt.attach if lt is not None else "holder_end"
     return _rows_by_direction(result, model, attach, {"y": ("y",), "z": ("z",)}, refs, notes)
 
@@ -416,6 +415,22 @@ def piezotube_references(probe, values: dict[str, Any], result) -> list[dict[str
         refs[(d, "annulus + holder rigid body + shear (Timoshenko)")] = two(end_body_frequencies(
             t.I(True) / t.s11, t.rho * t.A, t.L, m_h, e, J, cs))
         refs[("x", "(3.27-3.29) rod with holder mass")] = t.axial_frequencies(m_h, 2)
+    else:
+        from probedyn.lumped.smart_analytic import end_body_first_mode_at
+
+        cs = t.shear_compliance(probe.s66(values), nu=_nu(probe, values))
+        x_ref = 2 * e if c is not None else 0.0
+        Mb, kb = end_body_first_mode_at(t.I(True) / t.s11, t.rho * t.A, t.L, m_h, e, J, x_ref, cs)
+        two = lambda f: np.repeat(np.asarray(f)[:2], 2)  # noqa: E731
+        name = "2-DOF (3.20): annulus + holder body + shear, tip on k_t"
+        notes[name] = "analytic lumped model at the holder end"
+        kt = lt.stiffness[1]
+        lam = eigh(np.array([[kb + kt, -kt], [-kt, kt]]), np.diag([Mb, lt.mass]), eigvals_only=True)
+        refs[("lateral", name)] = two(np.sqrt(lam) / (2 * math.pi))
+        # axial: rod stiffness A/(s11 L), mass m_h + m_rod/3 (Rayleigh, exact in the heavy-holder limit)
+        ka, Ma, kx = t.A / (t.s11 * t.L), m_h + t.mass / 3, lt.stiffness[0]
+        lam = eigh(np.array([[ka + kx, -kx], [-kx, kx]]), np.diag([Ma, lt.mass]), eigvals_only=True)
+        refs[("x", "2-DOF (3.20) axial: rod + holder mass, tip on k_t")] = np.sqrt(lam) / (2 * math.pi)
     return _rows_by_direction(result, model, lt.attach if lt else "holder_end",
                               {"x": ("x",), "lateral": ("y", "z")}, refs, notes)
 

@@ -301,6 +301,25 @@ def end_body_frequencies(EI: float, rho_A: float, L: float, m: float, e: float =
     return np.sqrt(np.maximum(lam, 0.0)) / (2 * math.pi)
 
 
+def end_body_first_mode_at(EI: float, rho_A: float, L: float, m: float, e: float, J: float, x_ref: float,
+                           shear_compliance: float = 0.0) -> tuple[float, float]:
+    """First mode of :func:`end_body_frequencies` as a 1-DOF oscillator referred to the
+    displacement at ``x_ref`` beyond the beam end (e.g. the holder end face, where the tip
+    spring acts): returns (M, k) with ``M = v^T M v / (w + x_ref theta)^2`` and
+    ``k = omega^2 M`` (eqs 3.1, 3.3 referred to that point)."""
+    F = np.array([[L**3 / (3 * EI) + shear_compliance, L**2 / (2 * EI)], [L**2 / (2 * EI), L / EI]])
+    K = np.linalg.inv(F)
+    Mt = rho_A * L / 420.0 * np.array([[156.0, -22 * L], [-22 * L, 4 * L**2]]) \
+        + m * np.array([[1.0, e], [e, e * e]]) + np.array([[0.0, 0.0], [0.0, J]])
+    from scipy.linalg import eigh
+
+    lam, V = eigh(K, Mt)
+    v = V[:, 0]
+    u = v[0] + x_ref * v[1]
+    M = float(v @ Mt @ v) / u**2
+    return M, float(lam[0]) * M
+
+
 def rigid_body_properties(p: np.ndarray, t: np.ndarray, density: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
     """Mass [kg], centre of mass (3,) and inertia tensor about it (3, 3) [kg m^2] of a set of
     straight tetrahedra (vertices ``p`` (3, n), connectivity ``t`` (4, k), ``density`` (k,)).
