@@ -122,3 +122,19 @@ def test_rayleigh_estimate_textbook_error_without_mass():
 def test_bad_tube_raises():
     with pytest.raises(GeometryError):
         Piezotube(0.5e-3, 0.5e-3, 5e-3, 7800.0, 16.5e-12)
+
+
+def test_end_body_mode_referred_to_a_point():
+    """Heavy end mass at the end (e = J = 0): the first mode is the static cubic, so the
+    referred mass is m + 33/140 m_beam and the stiffness 3 EI / L^3 (to O(m_beam/m));
+    referring to a point x_ref beyond the end scales M by (w / (w + x_ref theta))^2 with
+    theta = 3 w / (2 L) for the static shape."""
+    from probedyn.lumped.smart_analytic import end_body_first_mode_at
+
+    EI, rA, L, m = 2.0, 1.0, 1.0, 1e4
+    M, k = end_body_first_mode_at(EI, rA, L, m, 0.0, 0.0, 0.0)
+    assert M == pytest.approx(m + 33 / 140 * rA * L, rel=1e-6)
+    assert k == pytest.approx(3 * EI / L**3, rel=1e-4)
+    M2, k2 = end_body_first_mode_at(EI, rA, L, m, 0.0, 0.0, 0.2)
+    assert M2 / M == pytest.approx(1 / (1 + 0.2 * 1.5 / L) ** 2, rel=1e-4)
+    assert k2 / M2 == pytest.approx(k / M, rel=1e-12)  # same frequency
