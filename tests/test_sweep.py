@@ -258,6 +258,7 @@ def test_cli_sweep_basins_and_errors(tmp_path, capsys):
     assert time.perf_counter() - t0 < 8.0
 
 
+@pytest.mark.slow  # ~13 s: a subprocess with its own Dask cluster
 def test_killed_cli_sweep_resumes(tmp_path):
     """A real interruption: SIGKILL the `probedyn sweep basins` process after a few chunks
     are on disk, rerun the same command, and compare with the in-process computation."""
