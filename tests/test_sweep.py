@@ -320,3 +320,20 @@ def test_process_workers_match_in_process(tmp_path):
     ref = ss.basin_labels(X3, X4, 8.0, 5.0)
     np.testing.assert_array_equal(r.dataset["label"].values, ref["label"])
     np.testing.assert_array_equal(r.dataset["t_settle"].values, ref["t_settle"])
+
+
+def test_cli_generic_sweep_run(tmp_path, capsys):
+    import json
+
+    from probedyn.cli import main
+
+    out = tmp_path / "g.nc"
+    assert main(["sweep", "run", "tests.test_sweep:scalar_scheme", "--grid", "a=1,2", "--grid", "b=0:2:3",
+                 "--scalar", "--workers", "1", "--threads", "--out", str(out), "--no-progress", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["dims"] == {"a": 2, "b": 3, "v_dim1": 2}
+    np.testing.assert_array_equal(sw.open_sweep(out)["s"].values, [[1, 11, 21], [2, 12, 22]])
+    assert main(["sweep", "run", "tests.test_sweep:nope", "--grid", "a=1", "--out", str(out)]) == 2
+    assert "has no function" in capsys.readouterr().err
+    assert main(["sweep", "run", "tests.test_sweep:scalar_scheme", "--grid", "a=2:1:3", "--out", str(out)]) == 2
+    assert "inverted range" in capsys.readouterr().err
