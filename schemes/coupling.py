@@ -152,7 +152,7 @@ def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out
 
         m x'' = c (V - x') + k (V t - x) - F          (2.13) with (2.15)
         F     = sigma0 z + F_nu x'                     (2.7)
-        z'    = x' - |x'| z / g(x')                    (2.8) with V_y = 0 (max(V_x, V_y) -> x' while sliding forward)
+        z'    = max(x', 0) - |x'| z / g(x')            (2.8) with V_y = 0: max(V_x, V_y) = max(x', 0)
         g     = [F_c + (F_s - F_c) exp(-(x' / 2 V_s)^2)] / sigma0     (2.9)
 
     ``scale`` multiplies ``F_s`` and ``F_c`` (the adhesion coupling's friction scale). Stiff
@@ -181,7 +181,7 @@ def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out
         x, v, z = y
         g, _ = g_of(v)
         F = s0 * z + Fnu * v
-        return [v, (c * (V - v) + k * (V * t - x) - F) / m, v - abs(v) * z / g]
+        return [v, (c * (V - v) + k * (V * t - x) - F) / m, max(v, 0.0) - abs(v) * z / g]
 
     def jac(t, y):
         x, v, z = y
@@ -189,7 +189,7 @@ def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out
         sg = math.copysign(1.0, v) if v != 0 else 0.0
         return [[0.0, 1.0, 0.0],
                 [-k / m, -(c + Fnu) / m, -s0 / m],
-                [0.0, 1.0 - z * (sg / g - abs(v) * dg / (g * g)), -abs(v) / g]]
+                [0.0, (1.0 if v > 0 else 0.0) - z * (sg / g - abs(v) * dg / (g * g)), -abs(v) / g]]
 
     T = length / V
     t_eval = np.linspace(0.0, T, n_out)
