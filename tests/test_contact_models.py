@@ -116,3 +116,24 @@ def test_every_model_rejects_non_physical_parameters(bad):
     for name in list_models():
         with pytest.raises(ParameterError):
             get_contact_model(name, **bad)
+
+
+@pytest.mark.parametrize("name,lam", [("dmt", None), ("jkr", None), ("md", 0.3), ("md", 3.0)])
+@pytest.mark.parametrize("branch", ["loading", "unloading"])
+def test_interpolant_matches_the_exact_solver(name, lam, branch):
+    # cubic spline in u = sqrt(D - D_edge) with 400 nodes on u in [0, ~4.6]: h ~ 0.012,
+    # error ~ h^4 |P''''| ~ 1e-8 of pi W R; tolerance 1e-6 leaves room for the edge node
+    kw = {} if lam is None else dict(lam=lam)
+    m = get_contact_model(name, **kw)
+    s = m.scales
+    f = m.interpolant(branch)
+    d = np.linspace(-3.0, 19.0, 997) * s.d_unit
+    F, k = f(d)
+    exact = m.state(d, branch)
+    assert np.allclose(F, exact["force"], rtol=0, atol=1e-6 * s.P_unit)
+    # the stiffness: same, away from the vertical tangent at the jump-out point
+    ok = np.isfinite(exact["stiffness"]) & (np.abs(exact["stiffness"]) < 50 * s.P_unit / s.d_unit)
+    assert np.allclose(k[ok], exact["stiffness"][ok], rtol=1e-4, atol=1e-5 * s.P_unit / s.d_unit)
+    # scalar call for ODE right-hand sides
+    F0, k0 = f(0.5 * s.d_unit)
+    assert isinstance(F0, float) and F0 == pytest.approx(m.force(0.5 * s.d_unit, branch), abs=1e-6 * s.P_unit)

@@ -492,6 +492,57 @@ class ContactModel(ABC):
             x = xn
         return x
 
+    # ------------------------------------------------------------------ fast evaluation for ODEs
+    def interpolant(self, branch: Branch = "loading", delta_max: float | None = None, n: int = 400):
+        """A fast callable ``f(delta) -> (force [N], stiffness [N/m])`` for time integration.
+
+        The contact part is a cubic spline of the load against ``u = sqrt(D_bar - D_edge)``
+        (``D_edge = D0`` for loading, ``D_min`` for unloading), in which the curve is smooth even
+        at a vertical tangent (the turning point, where ``dP/dD ~ 1/sqrt(D - D_min)``); the tail
+        is evaluated analytically. Spline error O(h^4): below 1e-8 of ``pi W R`` with the
+        defaults (tested). ``delta_max`` (m) bounds the spline (default 20 Maugis units);
+        beyond it the exact solver is used.
+        """
+        from scipy.interpolate import CubicSpline
+
+        if branch not in ("loading", "unloading"):
+            raise ParameterError(f"interpolant branch must be 'loading' or 'unloading', got {branch!r}")
+        s = self.scales
+        if s.W == 0:
+            return lambda delta: (self.state(delta)["force"], self.state(delta)["stiffness"])
+        D0, _ = self.nd_endpoint()
+        edge = D0 if branch == "loading" else self._table()["D_min"]
+        Dmax = 20.0 if delta_max is None else float(delta_max) / s.d_unit
+        if Dmax <= edge:
+            raise ParameterError(f"delta_max must exceed the contact edge {edge * s.d_unit:.3g} m")
+        u = np.linspace(0.0, math.sqrt(Dmax - edge), n)
+        st = self.nd_state(edge + u * u + np.r_[1e-15, np.zeros(n - 1)], "stable")
+        spline = CubicSpline(u, st["P"])
+        dspline = spline.derivative()
+
+        def f(delta):
+            d, scalar = _as_array(delta)
+            Db = d / s.d_unit
+            P = np.empty_like(Db)
+            k = np.empty_like(Db)
+            tail = Db < edge
+            far = Db > Dmax
+            mid = ~tail & ~far
+            if np.any(tail):
+                P[tail], k[tail] = self.nd_tail(Db[tail])
+            if np.any(mid):
+                uu = np.sqrt(Db[mid] - edge)
+                P[mid] = spline(uu)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    k[mid] = np.where(uu > 0, dspline(uu) / (2 * uu), np.inf)
+            if np.any(far):
+                ex = self.nd_state(Db[far], "stable")
+                P[far], k[far] = ex["P"], ex["k"]
+            F, K = P * s.P_unit, k * s.P_unit / s.d_unit
+            return (float(F[0]), float(K[0])) if scalar else (F, K)
+
+        return f
+
     # ------------------------------------------------------------------ curves for plots
     def nd_curves(self, D_range: tuple[float, float] = (-2.5, 3.0), n: int = 400) -> dict[str, np.ndarray]:
         """The full normalised picture: parametric contact curve, its stable/unstable split and
