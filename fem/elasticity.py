@@ -227,7 +227,6 @@ def assemble_stiffness(
 def assemble_scalar_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
     """Scalar P2 mass ``int rho N_a N_b`` (N x N) with a per-element density."""
     basis = scalar_basis(mesh, MASS_INTORDER)
-    nel = mesh.t.shape[1]
     vals = np.stack([np.asarray(basis.basis[a][0]) for a in range(10)], axis=-1)  # (nel, nq, 10)
     wq = basis.dx * elem_density[:, None]
     Me = np.einsum("eqa,eqb,eq->eab", vals, vals, wq, optimize=True)
@@ -236,7 +235,6 @@ def assemble_scalar_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
     cols = np.tile(ed, (1, 10)).ravel()
     Ms = sp.coo_matrix((Me.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr()
     Ms.sum_duplicates()
-    del nel
     return Ms
 
 
@@ -342,12 +340,8 @@ def lumped_weights(mesh, elem_density: np.ndarray) -> np.ndarray:
     return d * (Ms.sum() / d.sum())
 
 
-def region_mass_fields(mesh, elem_region: np.ndarray, densities: Sequence[float]) -> np.ndarray:
-    return np.asarray(densities, dtype=float)[elem_region]
-
-
 __all__: Sequence[str] = [
     "aniso_elasticity", "mass_form", "assemble_stiffness", "assemble_mass", "assemble_scalar_mass",
     "assemble_stiffness_skfem", "interpolation_operator", "face_average_operator", "element_regions",
-    "stiffness_field", "scalar_basis", "lumped_weights",
+    "stiffness_field", "scalar_basis", "lumped_weights", "vector_dof_permutation",
 ]

@@ -231,8 +231,6 @@ class ElasticModel:
         free = self.free_dofs
         Kf = K[free][:, free].tocsr()
         Mf = M[free][:, free].tocsr()
-        if not self.clamp and not self.springs:
-            pass  # free-floating: rigid modes at ~0 Hz are returned as such
         res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
         t0 = time.perf_counter()
         Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
@@ -314,9 +312,10 @@ class ElasticModel:
                 out[i]["point_masses"] = float(e[i] / totals[i]) if totals[i] > 0 else float("nan")
         return out
 
-    def static_displacement(self, force_at: Mapping[str, Sequence[float]], solver: str = "auto") -> np.ndarray:
+    def static_displacement(self, force_at: Mapping[Any, Sequence[float]], solver: str = "auto") -> np.ndarray:
         """Full displacement vector [m] for static forces [N] at attachments
-        (``{"free_end": (0, 0, 1e-6)}``: uniform traction over that face)."""
+        (``{"free_end": (0, 0, 1e-6)}``: uniform traction over that face; keys may also be
+        named points or coordinate tuples)."""
         from probedyn.fem.eigen import factorize
 
         if not self.clamp and not self.springs:
@@ -324,8 +323,7 @@ class ElasticModel:
         K, _ = self.assemble()
         f = np.zeros(self.ndofs_total)
         for where, F in force_at.items():
-            F = np.asarray(F, dtype=float).reshape(3)
-            f += self.attachment(where).T @ F
+            f += self.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)
         free = self.free_dofs
         fac = factorize(K[free][:, free], spd=True, solver=solver)
         try:
@@ -338,33 +336,24 @@ class ElasticModel:
         return u
 
     def displacement_at(self, u: np.ndarray, where: Where) -> np.ndarray:
+        """Displacement (3,) [m] of the full vector ``u`` at an attachment."""
         return np.asarray(self.attachment(where) @ u).ravel()
 
-    def static_stiffness(self, point: Where = "tip", direction: Sequence[float] = (0, 0, 1), solver: str = "auto") -> float:
-        """``k = F / (d . u)`` for a unit force F d at ``point`` along unit ``direction`` d
-        [N/m]; with a boundary name the force is the uniform traction and u the face-averaged
-        displacement (work-conjugate, finite under refinement)."""
+    def static_stiffness(self, point: Where = "tip", direction: Sequence[float] = (0, 0, 1),
+                         solver: str = "auto") -> float:
+        """``k = F / (d . u)`` [N/m] for a force F d at ``point`` along the unit ``direction`` d.
+
+        With a boundary name the force is the uniform traction F/area and u the face-averaged
+        displacement (work-conjugate, converges under refinement); at a single point the
+        3D point-load displacement diverges slowly with refinement (use a face)."""
         d = np.asarray(direction, dtype=float)
         d = d / np.linalg.norm(d)
-        key = point if isinstance(point, str) else "point"
-        u = self.static_displacement({point if isinstance(point, str) else key: d}, solver=solver) \
-            if isinstance(point, str) else self._static_at_coords(point, d, solver)
+        key = point if isinstance(point, str) else tuple(np.asarray(point, dtype=float).ravel())
+        u = self.static_displacement({key: d}, solver=solver)
         ud = float(d @ self.displacement_at(u, point))
         if not ud > 0:
-            raise SolverError(f"static stiffness at '{key}': non-positive compliance {ud:g} m/N")
+            raise SolverError(f"static stiffness at {point!r}: non-positive compliance {ud:g} m/N")
         return 1.0 / ud
-
-    def _static_at_coords(self, x, d, solver):
-        from probedyn.fem.eigen import factorize
-
-        K, _ = self.assemble()
-        f = self.attachment(x).T @ d
-        free = self.free_dofs
-        fac = factorize(K[free][:, free], spd=True, solver=solver)
-        u = np.zeros(self.ndofs_total)
-        u[free] = fac.solve(f[free])
-        fac.release()
-        return u
 
     def describe(self) -> dict[str, Any]:
         return {

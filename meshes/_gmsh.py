@@ -158,7 +158,6 @@ def extract_tet_mesh() -> RawMesh:
     points = coords[used]
     tets = remap[tets]
 
-    etag_to_idx = {}
     order = np.argsort(tet_tags)
     subdomains: dict[str, np.ndarray] = {}
     boundary_tris: dict[str, np.ndarray] = {}
@@ -182,7 +181,6 @@ def extract_tet_mesh() -> RawMesh:
                         raise GeometryError(f"expected linear triangles on surface {e}, got type {et}")
                     tris.append(remap[tag_to_idx[nd.reshape(-1, 3).astype(np.int64)]])
             boundary_tris[name] = np.concatenate(tris) if tris else np.zeros((0, 3), dtype=np.int64)
-    del etag_to_idx
     return RawMesh(points, tets, subdomains, boundary_tris)
 
 
