@@ -249,7 +249,7 @@ def assemble_stiffness_skfem(mesh, elem_region, materials, orientations) -> sp.c
     from skfem import Basis, ElementTetP2, ElementVector
 
     vb = Basis(mesh, ElementVector(ElementTetP2()), intorder=STIFFNESS_INTORDER)
-    x_qp = vb.global_coordinates().value
+    x_qp = np.asarray(vb.global_coordinates())
     C = stiffness_field(elem_region, materials, orientations, x_qp)
     K = aniso_elasticity.assemble(vb, C=np.moveaxis(C, (2, 3), (0, 1)))
     perm = vector_dof_permutation(mesh, vb)
