@@ -146,3 +146,15 @@ def test_references_rows(probe, nu0):
     assert any("Timoshenko" in f for f in forms) and any("torsion" in f for f in forms)
     for r in rows:
         assert r["rel_diff"] == pytest.approx((r["fem_hz"] - r["value_hz"]) / r["value_hz"])
+
+
+@pytest.mark.slow
+def test_fine_mesh_converged(probe):
+    # 4 layers (142k DOFs): the converged values of the bounds, with margin
+    values = probe.resolve({"poisson_ratio": 0.0, "elements_through_thickness": 4})
+    res = probe.build(values).modes(3)
+    ft, lt = timoshenko("flapwise", 2), timoshenko("lateral", 1)
+    assert res.families() == ["flapwise", "lateral", "flapwise"]
+    assert abs(res.modes[0].frequency_hz / ft[0] - 1) < 0.005
+    assert abs(res.modes[2].frequency_hz / ft[1] - 1) < 0.005
+    assert abs(res.modes[1].frequency_hz / lt[0] - 1) < 0.01

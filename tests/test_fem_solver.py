@@ -150,3 +150,37 @@ def test_solver_errors(coarse):
 
     with pytest.raises(MaterialError, match="not a mesh subdomain"):
         ElasticModel(coarse, {"beam": NU0})
+
+
+def test_energy_shares_two_regions(tipped):
+    # body + tip regions: shares are fractions of phi^T M phi and add up to 1. The tip sits at
+    # the free end, where an Euler-Bernoulli mode has phi(L)^2 = 4 <phi^2>, so its share is
+    # about 4x its mass fraction (slightly less: its base is 1-2 base sizes from the end);
+    # 3..4.5 allows for that set-back and the tip's own rotation.
+    model = ElasticModel(tipped, {"body": NU0, "tip": NU0}, clamp=["clamp"])
+    res = model.modes(2)
+    masses = model.region_masses()
+    frac = masses["tip"] / (masses["tip"] + masses["body"])
+    for m in res.modes:
+        sh = m.kinetic_energy_share
+        assert sh["body"] + sh["tip"] == pytest.approx(1.0, abs=1e-10)
+        assert 3.0 * frac < sh["tip"] < 4.5 * frac
+
+
+def test_probe_from_toml(tmp_path):
+    from probedyn.errors import DataFormatError, ParameterError
+    from probedyn.probes import get_probe
+
+    f = tmp_path / "p.toml"
+    f.write_text('probe = "cantilever"\nlength = 400e-6\npoisson_ratio = 0.0\n')
+    probe, over = get_probe(str(f))
+    assert probe.name == "cantilever" and over == {"length": 400e-6, "poisson_ratio": 0.0}
+    assert probe.resolve(over)["length"] == 400e-6
+    f.write_text('probe = "cantilever"\nlenght = 400e-6\n')
+    with pytest.raises(ParameterError, match="unknown parameter 'lenght'"):
+        get_probe(str(f))
+    f.write_text("length = 400e-6\n")
+    with pytest.raises(DataFormatError, match="missing key 'probe'"):
+        get_probe(str(f))
+    with pytest.raises(ParameterError, match="unknown probe"):
+        get_probe("trampoline")
