@@ -543,7 +543,8 @@ def study_convergence(name: str, sizes: Sequence[float], overrides: dict[str, An
     return {"probe": name, "levels": levels, "ratio": ratio, "modes": modes}
 
 
-def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrides: dict[str, Any] | None = None,
+                       probe: str = "piezotube") -> dict[str, Any]:
     """Piezotube with its bore offset by ``delta`` along ``angle_deg`` (from +y towards +z; the
     source's delta_x = delta_y case is 45 degrees, |offset| = sqrt(2) delta there... here
     ``delta`` is the magnitude of the offset). For each delta: the lateral pair (f_low,
@@ -557,7 +558,9 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
     a = math.radians(angle_deg)
     for d in deltas:
         dy, dz = d * math.cos(a), d * math.sin(a)
-        p, v = _probe("piezotube", {**(overrides or {}), "delta_y": dy, "delta_z": dz, "tip": "none"})
+        p, v = _probe(probe, {**(overrides or {}), "delta_y": dy, "delta_z": dz, "tip": "none"})
+        if p.name != "piezotube":
+            raise ParameterError("the eccentricity study applies to the piezotube")
         model = p.build(v)
         res = model.modes(2)
         uh = holder_displacements(model, res, "holder_end")[:, 1:]

@@ -61,6 +61,8 @@ LUMPED_COLS = [("group", "group", ""), ("order", "n", ""), ("fem_mode", "FEM mod
                ("lumped_hz", "lumped [Hz]", ".6g"), ("rel_diff", "rel. diff", "+.2e"),
                ("predicted_error", "predicted", ".2e"), ("tolerance", "tolerance", ".2e"), ("within", "within", ""),
                ("valid", "valid", "")]
+PAR_COLS = [("direction", "dir", ""), ("M", "M_i [kg]", ".4g"), ("k", "k_i [N/m]", ".5g"), ("c", "c_i [N s/m]", ".3g"),
+            ("k_t", "k_t [N/m]", "g"), ("m", "m [kg]", ".3g"), ("f_body_hz", "f_i [Hz]", ".6g")]
 LOC_COLS = [("k_t", "k_t [N/m]", "g"), ("mode", "mode", ""), ("frequency_hz", "f [Hz]", ".5g"), ("direction", "dir", ""),
             ("ke_tip", "KE tip", ".3f"), ("ke_holder_tip", "KE holder+tip", ".4f"), ("ke_body", "KE body", ".2e"),
             ("se_holder_spring", "SE holder spring", ".3f")]
@@ -163,7 +165,7 @@ def cmd_lumped(probe: str = PROBE_ARG, set_: Optional[list[str]] = SET_OPT, as_j
     res = {"probe": r["probe"], "lumped": r["lumped"], "rows": r["rows"]}
     save(out, f"{r['probe']}-lumped.json", res)
     emit(res, as_json, lambda x: "body parameters (3.1-3.3 at the holder):\n"
-         + format_table(x["lumped"]["parameters"]) + "\n\n" + format_table(x["rows"], LUMPED_COLS))
+         + format_table(x["lumped"]["parameters"], PAR_COLS) + "\n\n" + format_table(x["rows"], LUMPED_COLS))
 
 
 @app.command("localisation")
@@ -191,7 +193,7 @@ def cmd_eccentricity(probe: str = typer.Argument("piezotube", help="piezotube (o
 
     if probe != "piezotube" and not probe.endswith(".toml"):
         raise ParameterError("eccentricity applies to the piezotube")
-    r = study_eccentricity(_floats(delta, "delta"), angle, _sets(set_))
+    r = study_eccentricity(_floats(delta, "delta"), angle, _sets(set_), probe)
     for row in r["rows"]:
         row["delta_um"] = row["delta"] * 1e6
     if out is not None:
@@ -279,10 +281,7 @@ def report_section(outdir: Path, quick: bool = False) -> str:
         lum = S.study_lumped(probe, ov)
         parts += ["Lumped model from FEM body modes (3.1-3.3 at the holder end face) vs FEM of the assembled probe "
                   "(tolerance = 2 x predicted truncation error + 1e-3, see `lumped/smart.py`):", "",
-                  markdown_table(lum["lumped"]["parameters"], [("direction", "dir", ""), ("M", "M_i [kg]", ".4g"),
-                                                              ("k", "k_i [N/m]", ".5g"), ("c", "c_i [N s/m]", ".3g"),
-                                                              ("k_t", "k_t [N/m]", "g"), ("m", "m [kg]", ".3g"),
-                                                              ("f_body_hz", "f_i [Hz]", ".6g")]), "",
+                  markdown_table(lum["lumped"]["parameters"], PAR_COLS), "",
                   markdown_table(lum["rows"], LUMPED_COLS), ""]
         loc = S.study_localisation(probe, ks, ov)
         curves = lumped_sweep_curves(lum["lumped"], ks, S.PROBE_SETUP[probe]["sweep_dirs"])
