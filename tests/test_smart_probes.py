@@ -121,9 +121,10 @@ def test_piezotube_eccentricity_split_and_tilt():
 
 
 def test_localisation_claim_section_341():
-    """Compliant holder (1 N/m): the lowest mode is the tip on its spring, the holder spring
-    takes the strain energy; stiff holder (100 N/m, above the tip-on-spring frequency of the
-    stiff... body): the lowest mode deforms the body (holder-spring share small)."""
+    """Compliant holder (1 N/m): the lowest mode is the tip on its spring and the holder spring
+    takes the strain energy; stiff holder (100 N/m: the tip-on-spring frequency sqrt(k_t/m)
+    = 7.1 kHz exceeds the tube's lateral mode, 4.8 kHz): the lowest mode deforms the body and
+    the holder spring's strain-energy share is small."""
     r = S.study_localisation("piezotube", [1.0, 100.0], {"element_size": 400e-6})
     first = {row["k_t"]: row for row in r["rows"] if row["mode"] == 1}
     assert first[1.0]["se_holder_spring"] > 0.9 and first[1.0]["ke_tip"] > 0.9
