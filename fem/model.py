@@ -335,6 +335,16 @@ class ElasticModel:
             raise SolverError("static solve produced non-finite displacements (singular stiffness)")
         return u
 
+    def vertex_displacement(self, u: np.ndarray) -> np.ndarray:
+        """The P2 field ``u`` (full interleaved DOF vector) at the mesh vertices, (nverts, 3):
+        the vertex DOFs of the scalar basis (Lagrange: nodal values are point values)."""
+        U = np.asarray(u, dtype=float).reshape(self.n_nodes, 3)
+        return U[self.basis.nodal_dofs[0]]
+
+    def node_displacement(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(positions (N, 3), displacements (N, 3)) at all P2 nodes (vertices and edge midpoints)."""
+        return self.basis.doflocs.T.copy(), np.asarray(u, dtype=float).reshape(self.n_nodes, 3)
+
     def displacement_at(self, u: np.ndarray, where: Where) -> np.ndarray:
         """Displacement (3,) [m] of the full vector ``u`` at an attachment."""
         return np.asarray(self.attachment(where) @ u).ravel()

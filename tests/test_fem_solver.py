@@ -184,3 +184,14 @@ def test_probe_from_toml(tmp_path):
         get_probe(str(f))
     with pytest.raises(ParameterError, match="unknown probe"):
         get_probe("trampoline")
+
+
+def test_vertex_displacement_is_the_field_at_vertices(coarse):
+    # interpolating the mode at the vertex coordinates must give the vertex values
+    model = ElasticModel(coarse, {"body": NU0}, clamp=["clamp"])
+    res = model.modes(1)
+    uv = model.vertex_displacement(res.modes[0].shape)
+    idx = np.array([5, 17, coarse.mesh.p.shape[1] - 1])
+    for i in idx:
+        x = coarse.mesh.p[:, i]
+        assert np.allclose(model.displacement_at(res.modes[0].shape, x), uv[i], rtol=1e-10, atol=1e-14 * np.abs(uv).max())
