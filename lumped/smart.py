@@ -164,14 +164,21 @@ def reduce_from_fem(model, directions: Sequence[str], attach: str, *, mu: float 
     for i, mode in enumerate(res.modes):
         if mode.family not in ("lateral", "flapwise", "axial"):
             continue
-        d = dominant(uh[i], dirs, share=0.0)
-        if d is None:
+        u2 = np.array([uh[i][AX[d]] ** 2 for d in dirs])
+        if u2.sum() <= 0:
             continue
-        if d not in chosen:
-            chosen[d] = i
-        elif d not in second:
+        share = u2 / u2.sum()
+        # first modes: the unassigned direction with the largest share (a pair tilted by an
+        # eccentric bore has equal y and z shares: its two modes take one direction each)
+        free = [k for k, d in enumerate(dirs) if d not in chosen]
+        if free:
+            k = max(free, key=lambda k: share[k])
+            if share[k] >= 0.25:
+                chosen[dirs[k]] = i
+                continue
+        d = dirs[int(np.argmax(share))]
+        if d not in second:
             second[d] = mode.frequency_hz
-    # a degenerate lateral pair may have been assigned twice to one direction: reassign
     missing = [d for d in dirs if d not in chosen]
     if missing:
         raise SolverError(
@@ -544,14 +551,17 @@ def study_convergence(name: str, sizes: Sequence[float], overrides: dict[str, An
 
 
 def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrides: dict[str, Any] | None = None,
-                       probe: str = "piezotube") -> dict[str, Any]:
+                       probe: str = "piezotube", n_modes: int = 4) -> dict[str, Any]:
     """Piezotube with its bore offset by ``delta`` along ``angle_deg`` (from +y towards +z; the
     source's delta_x = delta_y case is 45 degrees, |offset| = sqrt(2) delta there... here
     ``delta`` is the magnitude of the offset). For each delta: the lateral pair (f_low,
     f_high), its split, the direction of the lower mode (holder end face motion), the
     Euler-Bernoulli prediction of both from the exact eccentric section, and the lateral
     stiffness coupling ``K_yz / sqrt(K_yy K_zz)`` of the 2x2 lumped lateral model in the
-    electrode axes (the FEM counterpart of the off-diagonal terms of Gamma, eqs 3.38-3.44)."""
+    electrode axes, and the axial-lateral coupling ``|K_x,lat| / sqrt(K_xx K_lat)`` of the 3x3
+    model (lateral pair + axial mode) at the holder end face: the section's centroid moves by
+    ``A_i delta / A`` off the axis, so an axial load on the holder bends the tube (the FEM
+    counterparts of the off-diagonal terms of Gamma, eqs 3.38-3.44)."""
     from probedyn.lumped.smart_analytic import EccentricSection
 
     rows = []
@@ -562,18 +572,32 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
         if p.name != "piezotube":
             raise ParameterError("the eccentricity study applies to the piezotube")
         model = p.build(v)
-        res = model.modes(2)
-        uh = holder_displacements(model, res, "holder_end")[:, 1:]
-        f = np.array([m.frequency_hz for m in res.modes])
+        res = model.modes(n_modes)
+        lat = [i for i, m in enumerate(res.modes) if m.family in ("lateral", "flapwise")][:2]
+        ax = [i for i, m in enumerate(res.modes) if m.family == "axial"][:1]
+        if len(lat) < 2:
+            raise SolverError("eccentricity: the lateral pair was not found among the lowest modes")
+        uh_all = holder_displacements(model, res, "holder_end")
+        uh = uh_all[lat][:, 1:]
+        f = np.array([res.modes[i].frequency_hz for i in lat])
         ang = math.degrees(math.atan2(uh[0, 1], uh[0, 0])) % 180.0
         Ui = np.linalg.inv(uh.T)  # rows: directions y, z; columns: modes
         K2 = Ui.T @ np.diag((2 * np.pi * f) ** 2) @ Ui
+        c_xl = float("nan")
+        if ax:  # 3x3 (x, y, z) stiffness at the holder from the pair + the axial mode
+            idx = ax + lat
+            U3 = uh_all[idx].T
+            U3i = np.linalg.inv(U3)
+            K3 = U3i.T @ np.diag([res.modes[i].omega ** 2 for i in idx]) @ U3i
+            c_xl = float(math.hypot(K3[0, 1], K3[0, 2]) / math.sqrt(K3[0, 0] * 0.5 * (K3[1, 1] + K3[2, 2])))
         sec = EccentricSection(v["Re"], v["Ri"], dy, dz)
+        A_i, A = math.pi * v["Ri"] ** 2, math.pi * (v["Re"] ** 2 - v["Ri"] ** 2)
         split = f[1] / f[0] - 1
         rows.append({"delta": d, "delta_y": dy, "delta_z": dz, "f_low_hz": f[0], "f_high_hz": f[1],
                      "split": split, "split_predicted": sec.frequency_split(),
                      "angle_low_deg": ang if d > 0 else None, "angle_predicted_deg": sec.lower_mode_angle_deg() if d > 0 else None,
                      "coupling_yz": float(K2[0, 1] / math.sqrt(K2[0, 0] * K2[1, 1])),
+                     "coupling_axial_lateral": c_xl, "centroid_offset": A_i * d / A,
                      "families": [m.family for m in res.modes]})
     return {"angle_deg": angle_deg, "rows": rows}
 

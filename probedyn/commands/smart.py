@@ -68,7 +68,8 @@ LOC_COLS = [("k_t", "k_t [N/m]", "g"), ("mode", "mode", ""), ("frequency_hz", "f
             ("se_holder_spring", "SE holder spring", ".3f")]
 ECC_COLS = [("delta_um", "|delta| [um]", "g"), ("f_low_hz", "f low [Hz]", ".7g"), ("f_high_hz", "f high [Hz]", ".7g"),
             ("split", "split", ".3e"), ("split_predicted", "split EB", ".3e"), ("angle_low_deg", "angle low [deg]", ".3f"),
-            ("angle_predicted_deg", "angle EB [deg]", ".1f"), ("coupling_yz", "K_yz/sqrt(K_yy K_zz)", "+.3e")]
+            ("angle_predicted_deg", "angle EB [deg]", ".1f"), ("coupling_yz", "K_yz/sqrt(K_yy K_zz)", "+.3e"),
+            ("coupling_axial_lateral", "axial-lateral coupling", ".3e"), ("centroid_um", "centroid offset [um]", ".3g")]
 MAT_COLS = [("mode", "mode", ""), ("family", "family", ""), ("aniso_hz", "PZT-5H [Hz]", ".6g"),
             ("iso_hz", "iso E=1/s11 [Hz]", ".6g"), ("rel_diff", "rel. diff", "+.3e")]
 REF_COLS = [("mode", "mode", ""), ("direction", "dir", ""), ("order", "n", ""), ("formula", "formula", ""),
@@ -196,6 +197,7 @@ def cmd_eccentricity(probe: str = typer.Argument("piezotube", help="piezotube (o
     r = study_eccentricity(_floats(delta, "delta"), angle, _sets(set_), probe)
     for row in r["rows"]:
         row["delta_um"] = row["delta"] * 1e6
+        row["centroid_um"] = row["centroid_offset"] * 1e6
     if out is not None:
         save(out, "piezotube-eccentricity.json", r)
         plot_eccentricity(r["rows"], Path(out) / "piezotube-eccentricity.png")
@@ -301,6 +303,7 @@ def report_section(outdir: Path, quick: bool = False) -> str:
     ecc = S.study_eccentricity(deltas, 45.0, QUICK_MESH["piezotube"] if quick else {})
     for row in ecc["rows"]:
         row["delta_um"] = row["delta"] * 1e6
+        row["centroid_um"] = row["centroid_offset"] * 1e6
     fig = plot_eccentricity(ecc["rows"], outdir / "piezotube-eccentricity.png")
     parts += ["### Piezotube eccentricity (bore offset along 45 degrees, as delta_x = delta_y in section 3.5.4)", "",
               markdown_table(ecc["rows"], ECC_COLS), "", f"![eccentricity]({fig.name})", ""]
