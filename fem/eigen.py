@@ -132,8 +132,9 @@ def shift_invert_eigsh(
 ) -> EigenResult:
     """Lowest ``n_modes`` eigenpairs of ``K phi = lambda M phi`` nearest ``sigma``.
 
-    ``sigma`` [rad^2/s^2]: shift; default ``-1e-6 * mean(diag K)/mean(diag M)`` (slightly below
-    zero, so ``K - sigma M`` is SPD for any constrained or free-floating model).  Raises
+    ``sigma`` [rad^2/s^2]: shift; default ``-1e-12 * mean(diag K)/mean(diag M)`` (slightly below
+    zero, so ``K - sigma M`` is SPD also for a free-floating model; a constrained model passes
+    ``sigma = 0``).  Raises
     :class:`SolverError` for too few DOFs (fewer than 10 per requested mode), ARPACK
     non-convergence, or non-finite / negative eigenvalues.
     """
@@ -146,7 +147,9 @@ def shift_invert_eigsh(
         )
     dK, dM = K.diagonal(), M.diagonal()
     if sigma is None:
-        sigma = -1e-6 * float(np.mean(np.abs(dK)) / np.mean(np.abs(dM)))
+        # slightly below zero: |sigma| must stay well below the first elastic eigenvalue,
+        # which can be ~1e-9 of diag(K)/diag(M) for a long beam with small elements
+        sigma = -1e-12 * float(np.mean(np.abs(dK)) / np.mean(np.abs(dM)))
     A = (K - sigma * M).tocsr()
     fac = factorize(A, spd=sigma <= 0, solver=solver)
     count = [0]

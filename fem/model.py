@@ -231,6 +231,8 @@ class ElasticModel:
         free = self.free_dofs
         Kf = K[free][:, free].tocsr()
         Mf = M[free][:, free].tocsr()
+        if sigma is None and self.clamp:
+            sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
         res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
         t0 = time.perf_counter()
         Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
