@@ -53,10 +53,11 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
             gmsh.option.setNumber("General.Verbosity", 2 if verbose else 0)
             gmsh.model.add(model_name)
             yield gmsh
-        except Exception as exc:  # gmsh raises bare Exceptions with its log message
-            if isinstance(exc, GeometryError):
+        except Exception as exc:
+            if type(exc) is not Exception:  # gmsh raises bare Exceptions; anything else is ours
                 raise
-            raise GeometryError(f"gmsh failed for '{model_name}': {str(exc).splitlines()[0] if str(exc) else exc!r}") from exc
+            msg = str(exc).splitlines()[0] if str(exc) else repr(exc)
+            raise GeometryError(f"gmsh failed for '{model_name}': {msg}") from exc
         finally:
             with contextlib.suppress(Exception):
                 gmsh.model.remove()
