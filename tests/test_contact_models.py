@@ -137,3 +137,8 @@ def test_interpolant_matches_the_exact_solver(name, lam, branch):
     # scalar call for ODE right-hand sides
     F0, k0 = f(0.5 * s.d_unit)
     assert isinstance(F0, float) and F0 == pytest.approx(m.force(0.5 * s.d_unit, branch), abs=1e-6 * s.P_unit)
+
+
+def test_w_and_lambda_together_are_ambiguous():
+    with pytest.raises(ParameterError):
+        get_contact_model("md", W=0.1, lam=1.0)

@@ -140,6 +140,8 @@ def resolve_scales(values: Mapping[str, Any]) -> ContactScales:
     K = 4.0 / 3.0 * E_star
     R = R_t if R_s == 0 else 1.0 / (1.0 / R_t + 1.0 / R_s)
     lam_in, W_in, H_in = values.get("lam"), values.get("W"), values.get("H")
+    if lam_in is not None and W_in is not None:
+        raise ParameterError("give the work of adhesion W or the transition parameter lam, not both")
     if lam_in is not None:
         lam_in = float(lam_in)
         if not (math.isfinite(lam_in) and lam_in >= 0):
