@@ -10,4 +10,10 @@ The pipeline is geometry -> mesh -> modes -> lumped model -> scheme:
 All quantities are SI (m, kg, s, N, Pa, V).
 """
 
+import os as _os
+
+# OpenBLAS's spinning threads compete with MKL PARDISO's on few cores: ARPACK's dense steps ran
+# 3-5x slower on 2 cores with them (benchmarks/modal.py). Must be set before numpy is imported.
+_os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 __version__ = "0.1.0"
