@@ -197,3 +197,154 @@ def make_modal_case(folder, effect, seed, rel=1e-3, qrel=0.05, modes=MODES, with
     f = f * (1 + rel * rng.standard_normal(len(f)))
     q = q * np.exp(qrel * rng.standard_normal(len(q)))
     return write_modal(folder, f"case_{effect or 'null'}_{seed}", f, q, modes=modes, rel=rel, qrel=qrel, with_q=with_q), params
+
+
+# -------------------------------------------------------------- friction
+FRICTION = dict(k_x=1.0, a=0.5e-9, mu_c=0.0637, sigma=5e-12, scan_len=5e-9, n_pts=100,
+                speeds=(1e-8, 1e-6), loads=(2e-9, 4e-9))  # n_pts per direction
+FRICTION_EFFECTS = ["velocity-log", "scanner-nonlinearity", "force-offset-drift", "lattice-misalignment",
+                    "viscous-friction", "adhesion-load"]
+
+
+_GX, _GW = np.polynomial.legendre.leggauss(8)
+
+
+def track_pt(X, direction, F0, k, a, phi, slip_frac, boxcar=True):
+    """Sequential quasi-static PT: the tip's well is carried point by point (explicit state).
+
+    With ``boxcar`` each sample is the mean force over its sampling interval (midpoints to the
+    neighbours within the segment), by 8-point Gauss-Legendre quadrature of the tracked force,
+    the interval split at the slip position computed from the tracker's own state.
+    """
+    eta = 2 * math.pi * F0 / (k * a)  # = 4 pi^2 U0 / (k a^2): stability k + U'' > 0
+    xc = a / (2 * math.pi) * math.acos(-1 / eta) if eta > 1 else a / 2
+    xj = slip_frac * xc if eta > 1 else xc
+    state = {"c": phi + round((X[0] - phi) / a) * a}  # centre of the current well
+
+    def equilibrium(Xi, c):
+        lo, hi = c - xc, c + xc  # stable branch of this well
+        g = lambda x: k * (x - Xi) + F0 * math.sin(2 * math.pi * (x - phi) / a)  # noqa: E731
+        if g(lo) > 0 or g(hi) < 0:
+            return None
+        return brentq(g, lo, hi, xtol=1e-18)
+
+    def force(Xi, d):
+        for _ in range(10):
+            x = equilibrium(Xi, state["c"])
+            if x is not None and d * (x - state["c"]) <= xj * (1 + 1e-12):
+                return k * (Xi - x)
+            state["c"] += d * a  # slip into the next well along the motion
+        raise RuntimeError("tracker lost")
+
+    def slip_X(d):  # support position at which the tip reaches the slip point of its well
+        xs = state["c"] + d * xj
+        return xs + (F0 / k) * math.sin(2 * math.pi * (xs - phi) / a)
+
+    def integrate(x0, x1, d):  # mean force over [x0, x1] along the motion (x1 after x0)
+        if x1 == x0:
+            return force(x0, d)
+        tot = 0.0
+        pieces = [(x0, x1)]
+        xs = slip_X(d)
+        if d * (xs - x0) > 0 and d * (x1 - xs) > 0:
+            pieces = [(x0, xs), (xs, x1)]
+        for p0, p1 in pieces:
+            pts = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * _GX
+            vals = [force(q, d) for q in pts]
+            tot += 0.5 * abs(p1 - p0) * float(np.dot(_GW, vals))
+        return tot / abs(x1 - x0)
+
+    out = np.empty(len(X))
+    cuts = np.nonzero(np.diff(direction) != 0)[0] + 1
+    starts = np.concatenate([[0], cuts]); ends = np.concatenate([cuts, [len(X)]])
+    for s0, e0 in zip(starts, ends):
+        d = 1.0 if direction[s0] > 0 else -1.0
+        seg = X[s0:e0]
+        for i in range(len(seg)):
+            if not boxcar or len(seg) < 2:
+                out[s0 + i] = force(seg[i], d); continue
+            lo = seg[i] if i == 0 else 0.5 * (seg[i - 1] + seg[i])
+            hi = seg[i] if i == len(seg) - 1 else 0.5 * (seg[i] + seg[i + 1])
+            out[s0 + i] = integrate(lo, hi, d)
+    return out
+
+
+def friction_truth(effect, params, cfg=FRICTION, rng=None):
+    """Scans (list of dicts) of the truth model carrying ``effect``; noise added when rng given."""
+    k, a = cfg["k_x"], cfg["a"]
+    L, n = cfg["scan_len"], cfg["n_pts"]
+    v_max = max(cfg["speeds"])
+    loads = cfg["loads"]
+    n_mean = float(np.mean([ld for _ in cfg["speeds"] for ld in loads]))
+    scans = []
+    sid = 0
+    for v in cfg["speeds"]:
+        for N in loads:
+            Xn = np.concatenate([np.linspace(0, L, n), np.linspace(L, 0, n)[1:]])
+            dirs = np.concatenate([np.ones(n), -np.ones(n - 1)])
+            t = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(Xn)))]) / v
+            X = Xn.copy()
+            if effect == "scanner-nonlinearity":
+                X = Xn + params["bow"] * Xn * (L - Xn) / L
+            F0 = cfg["mu_c"] * (N + (params["n_adh"] * n_mean if effect == "adhesion-load" else 0.0))
+            slip = 1 + params["slip_b"] * math.log(v / v_max) if effect == "velocity-log" else 1.0
+            phi = rng.uniform(0, a) if rng is not None else 0.1 * a
+            if effect == "lattice-misalignment":
+                th = math.radians(params["theta"])
+                phy = rng.uniform(0, a) if rng is not None else 0.3 * a
+                F = (math.cos(th) * track_pt(X * math.cos(th), dirs, F0, k, a, phi, slip)
+                     + math.sin(th) * track_pt(X * math.sin(th), dirs, F0, k, a, phy, slip))
+            else:
+                F = track_pt(X, dirs, F0, k, a, phi, slip)
+            if effect == "viscous-friction":
+                F = F + params["visc"] * k * a * (v / v_max) * dirs
+            if effect == "force-offset-drift":
+                F = F + k * a * (params["offset"] + params["drift"] * (t - t.mean() * 0 - 0.5 * t[-1]) / t[-1])
+            if rng is not None:
+                F = F + cfg["sigma"] * rng.standard_normal(len(F))
+            scans.append(dict(id=sid, speed=v, load=N, position=Xn, force=F, time=t))
+            sid += 1
+    return scans
+
+
+def draw_friction_effect(effect, rng, strength=1.0):
+    sgn = rng.choice([-1.0, 1.0])
+    u = 1.0 - strength * rng.uniform(0.0, 1.0)
+    lerp = lambda lo, hi: lo + (hi - lo) * (1.0 - u)  # noqa: E731
+    if effect == "velocity-log":
+        return {"slip_b": float(lerp(0.005, 0.08))}
+    if effect == "scanner-nonlinearity":
+        return {"bow": float(sgn * lerp(0.01, 0.1))}
+    if effect == "force-offset-drift":
+        return {"offset": float(sgn * lerp(0.01, 0.2)), "drift": float(rng.choice([-1, 1]) * lerp(0.0, 0.2))}
+    if effect == "lattice-misalignment":
+        return {"theta": float(lerp(3.0, 30.0))}
+    if effect == "viscous-friction":
+        return {"visc": float(lerp(0.01, 0.2))}
+    if effect == "adhesion-load":
+        return {"n_adh": float(lerp(0.05, 1.0))}
+    raise ValueError(effect)
+
+
+def write_friction(folder, name, scans, cfg=FRICTION, sigma_stated=True):
+    folder = Path(folder); folder.mkdir(parents=True, exist_ok=True)
+    lines = ["scan,position_m,lateral_force_N,time_s"]
+    for s in scans:
+        for x, f, t in zip(s["position"], s["force"], s["time"]):
+            lines.append(f"{s['id']},{x:.9e},{f:.9e},{t:.9e}")
+    (folder / f"{name}.csv").write_text("\n".join(lines) + "\n")
+    side = ["[measurement]", 'kind = "friction"', f'data = "{name}.csv"', "", "[probe]", f"k_x = {cfg['k_x']!r}", "",
+            "[sample]", f"lattice = {cfg['a']!r}", ""]
+    if sigma_stated:
+        side += ["[noise]", f"force = {cfg['sigma']!r}", ""]
+    for s in scans:
+        side += ["[[scans]]", f"id = {s['id']}", f"speed = {s['speed']!r}", f"load = {s['load']!r}", ""]
+    (folder / f"{name}.toml").write_text("\n".join(side))
+    return folder / f"{name}.toml"
+
+
+def make_friction_case(folder, effect, seed, strength=1.0, cfg=FRICTION):
+    rng = np.random.default_rng(10_000 + seed)
+    params = draw_friction_effect(effect, rng, strength) if effect else {}
+    scans = friction_truth(effect, params, cfg, rng)
+    return write_friction(folder, f"fr_{effect or 'null'}_{seed}", scans, cfg), params

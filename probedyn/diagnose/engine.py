@@ -199,9 +199,23 @@ class _Fitter:
 
 
 def _cov(J: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """Parameter standard deviations and correlations from the whitened Jacobian.
+
+    Columns are normalised first (the covariance is invariant to parameter scaling, the
+    rank decision is not); directions with singular values below 1e-10 of the largest are
+    unidentifiable and get an infinite standard deviation.
+    """
+    cn = np.linalg.norm(J, axis=0)
+    cn = np.where(cn > 0, cn, 1.0)
+    s_, V_ = _cov_scaled(J / cn, scale)
+    sd = s_ / cn
+    return np.where(np.isfinite(s_), sd, np.inf), V_
+
+
+def _cov_scaled(J: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     tol = s.max() * 1e-10 if s.size else 0
-    inv = np.where(s > tol, 1.0 / np.maximum(s, 1e-300) ** 2, 1e30)  # 1e30: unidentifiable direction
+    inv = np.where(s > tol, 1.0 / np.maximum(s, tol if tol > 0 else 1e-300) ** 2, 1e30)  # 1e30: unidentifiable
     with np.errstate(invalid="ignore", over="ignore"):
         cov = (Vt.T * inv) @ Vt * scale
     sd = np.sqrt(np.maximum(np.diag(cov), 0))
@@ -212,11 +226,12 @@ def _cov(J: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _folds(problem) -> list[np.ndarray]:
+    """Leave-one-group-out for up to 10 groups, else K-fold (K = problem.n_folds or 8) over groups."""
     g = np.asarray(problem.groups)
     ug = list(dict.fromkeys(g.tolist()))
     if len(ug) <= 10:
         return [np.nonzero(g == x)[0] for x in ug]
-    k = 8
+    k = getattr(problem, "n_folds", 8)
     return [np.nonzero(np.isin(g, ug[i::k]))[0] for i in range(k)]
 
 
@@ -236,32 +251,35 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
     causes = [c for c in problem.causes if only is None or c.id in only]
     # 1. baseline
     base = F.fit(())
-    n_res = base.n
     p_base = float(chi2_dist.sf(base.chi2, base.dof))
-    if use_cv:
-        base.cv, base.cv_r = F.crossval(base, folds)
+    significant = p_base < alpha
     structure = problem.structure(base.r)
-    # 3. candidates
+    # 3. candidates: full fits and the likelihood-ratio test for all; cross-validation only
+    # where a claim is possible (significant baseline, LR test passed) -- the others cannot be
+    # claimed whatever their held-out error, and CV is the expensive part.
     cands = []
-    thr_cache: dict[int, float] = {}
     for c in causes:
         fit = F.fit((c,))
         if fit.k == base.k:  # all cause parameters held: nothing identifiable
             continue
         kc = fit.k - base.k
-        # sensitivity: a cause that cannot change these data is not applicable
         dchi2 = base.chi2 - fit.chi2
-        if use_cv:
-            fit.cv, fit.cv_r = F.crossval(fit, folds)
-            ev = 0.5 * (base.cv - fit.cv)
-        else:
-            ev = 0.5 * dchi2 - kc
-        thr = thr_cache.setdefault(kc, float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc)))
-        cands.append({"cause": c, "fit": fit, "evidence": ev, "dchi2": dchi2, "k": kc,
-                      "lr_pass": dchi2 > thr, "lr_threshold": thr})
-    cands.sort(key=lambda d: -d["evidence"])
-    significant = p_base < alpha
-    eligible = [d for d in cands if significant and d["lr_pass"] and d["evidence"] > 0]
+        thr = float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc))
+        cands.append({"cause": c, "fit": fit, "evidence": 0.5 * dchi2 - kc, "dchi2": dchi2, "k": kc,
+                      "lr_pass": bool(dchi2 > thr), "lr_threshold": thr, "cv": False})
+    if use_cv and significant and any(d["lr_pass"] for d in cands):
+        base.cv, base.cv_r = F.crossval(base, folds)
+        for d in cands:
+            if d["lr_pass"]:
+                fit = d["fit"]
+                fit.cv, fit.cv_r = F.crossval(fit, folds)
+                d["evidence"] = 0.5 * (base.cv - fit.cv)
+                d["cv"] = True
+    for d in cands:
+        if use_cv and not d["cv"]:
+            d["evidence"] = None
+    cands.sort(key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))
+    eligible = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
     findings = []
     confounded = []
     current = base
@@ -290,7 +308,7 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
         # 4. greedy extension while the chi-square test still fails
         while len(chosen) < max_causes and chi2_dist.sf(current.chi2, current.dof) < alpha:
             ext = []
-            for d in eligible[1:]:
+            for d in eligible[1:4]:
                 if d["cause"] in chosen:
                     continue
                 if confounded and d["cause"].id in confounded[0]["causes"]:
@@ -300,6 +318,9 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
                 if kc <= 0:
                     continue
                 dchi2 = current.chi2 - fit.chi2
+                thr = float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc))
+                if dchi2 <= thr:
+                    continue
                 if use_cv:
                     fit.cv, fit.cv_r = F.crossval(fit, folds)
                     ev = 0.5 * (current.cv - fit.cv)
@@ -336,13 +357,14 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
             "chi2": base.chi2, "dof": base.dof, "p_value": p_base,
             "residual_rms": _rms(base.r), "residual_rms_physical": problem.physical_residual_rms(base.r),
             "residual_unit": f"noise sigma (physical: {problem.unit})",
-            "heldout_rms": _rms(base.cv_r) if use_cv else None,
+            "heldout_rms": _rms(base.cv_r) if base.cv_r is not None else None,
             "residuals": base.r, "structure": structure,
         },
         "candidates": [
             {"cause": d["cause"].id, "evidence": d["evidence"], "delta_chi2": d["dchi2"], "k": d["k"],
              "lr_threshold": d["lr_threshold"], "lr_pass": bool(d["lr_pass"]), "chi2": d["fit"].chi2,
-             "heldout_rms": _rms(d["fit"].cv_r) if use_cv else None,
+             "heldout_rms": _rms(d["fit"].cv_r) if d["fit"].cv_r is not None else None,
+             "evidence_method": ("cross-validation" if d.get("cv") else ("not cross-validated (fails the LR test or no significant discrepancy)" if use_cv else "AIC")),
              "parameters": _params(d["fit"], d["cause"].params)}
             for d in cands
         ],
