@@ -212,14 +212,17 @@ class BeamFE:
             Kk, Mk, Mbk = K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], Mb[np.ix_(keep, keep)]
         nm = min(n_modes, Kk.shape[0])
         if not vectors:
-            return sla.eigh(Kk, Mk, eigvals_only=True, subset_by_index=[0, nm - 1], driver="gvx")
-        lam, phi = sla.eigh(Kk, Mk, subset_by_index=[0, nm - 1], driver="gvx")
+            # full spectrum with the divide-and-conquer driver: the subset driver (gvx) loses
+            # accuracy when stiff root springs make K ill-conditioned (tested)
+            return sla.eigh(Kk, Mk, eigvals_only=True, driver="gvd")[:nm]
+        lam, phi = sla.eigh(Kk, Mk, driver="gvd")
+        lam, phi = lam[:nm], phi[:, :nm]
         mb = np.einsum("in,ij,jn->n", phi, Mbk, phi)
         return lam, phi, mb
 
     def torsion(self, n_modes: int) -> np.ndarray:
         nm = min(n_modes, self.Kt.shape[0])
-        return sla.eigh(self.Kt, self.Mt, eigvals_only=True, subset_by_index=[0, nm - 1], driver="gvx")
+        return sla.eigh(self.Kt, self.Mt, eigvals_only=True, driver="gvd")[:nm]
 
 
 def solve_family(fe: BeamFE, props: BeamProps, family: str, n_modes: int, *,

@@ -301,7 +301,8 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
                 cm = problem.candidate_measurements(sa, sb)
                 seps.append({"cause": d["cause"].id, "evidence": d["evidence"], "prediction_difference_rms_sigma": sep,
                              "separating_measurement": cm[0] if cm else None})
-            confounded.append({"causes": [best["cause"].id] + [d["cause"].id for d, _ in group], "pairs": seps})
+            confounded.append({"causes": [best["cause"].id] + [d["cause"].id for d, _ in group], "pairs": seps,
+                               "group_measurement": _group_measurement(problem, best, [d for d, _ in group])})
         chosen.append(best["cause"])
         current = best["fit"]
         findings.append(_finding(problem, F, base, best, folds, use_cv, confounded[0] if confounded else None))
@@ -382,6 +383,51 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
     return result
 
 
+def _group_measurement(problem, best, others) -> dict[str, Any] | None:
+    """The extra measurements that separate *all* confounded causes.
+
+    Each fitted model predicts every candidate observable (other modes, Q; for friction, scans at
+    other speeds and loads); a pair of causes is separated by an observable when the two
+    predictions differ by more than 3 noise sigma. Observables are chosen greedily (set cover)
+    until every pair is separated (at most four).
+    """
+    sa = problem.state(best["fit"].values, best["fit"].causes)
+    preds: dict[str, dict[str, float]] = {}
+    sig: dict[str, float] = {}
+    unit: dict[str, str] = {}
+    for d in others:
+        sb = problem.state(d["fit"].values, d["fit"].causes)
+        for m in problem.candidate_measurements(sa, sb):
+            key = m["measure"]
+            preds.setdefault(key, {})[best["cause"].id] = m["a"]
+            preds[key][d["cause"].id] = m["b"]
+            unit[key] = m["unit"]
+            if m["separation_sigma"] > 0 and abs(m["a"] - m["b"]) > 0:
+                sig[key] = abs(m["a"] - m["b"]) / m["separation_sigma"]
+    # greedy set cover: pick measurements until every pair is > 3 sigma apart in at least one
+    names = [best["cause"].id] + [d["cause"].id for d in others]
+    pairs = {(i, j) for i in range(len(names)) for j in range(i + 1, len(names))}
+    sep_pairs: dict[str, set] = {}
+    for key, pr in preds.items():
+        if key not in sig or any(n not in pr or not np.isfinite(pr[n]) for n in names):
+            continue
+        sep_pairs[key] = {(i, j) for i, j in pairs if abs(pr[names[i]] - pr[names[j]]) / sig[key] > 3.0}
+    chosen, left = [], set(pairs)
+    while left and sep_pairs:
+        key = max(sep_pairs, key=lambda k: len(sep_pairs[k] & left))
+        gain = sep_pairs[key] & left
+        if not gain:
+            break
+        chosen.append({"measure": key, "unit": unit[key], "predictions": preds[key], "separates_pairs": len(gain)})
+        left -= gain
+        if len(chosen) == 4:
+            break
+    if not chosen:
+        return None
+    return {"measurements": chosen, "pairs_total": len(pairs),
+            "pairs_left_unseparated": [[names[i], names[j]] for i, j in sorted(left)]}
+
+
 def _params(fit: FitResult, plist) -> dict[str, Any]:
     out = {}
     for p in plist:
@@ -435,6 +481,15 @@ def _summary(res: dict[str, Any]) -> str:
                      f"{g['residual_rms_before']:.2f} -> {g['residual_rms_after']:.2f} sigma{ho}")
     for c in res["confounded"]:
         lines.append("CONFOUNDED: " + ", ".join(c["causes"]) + " explain the data equally well")
+        gm = c.get("group_measurement")
+        if gm:
+            lines.append("  to separate them (every pair > 3 sigma apart), measure: "
+                         + "; ".join(m["measure"] for m in gm["measurements"]))
+            for m in gm["measurements"]:
+                pv = ", ".join(f"{k} {v:.5g}" for k, v in m["predictions"].items())
+                lines.append(f"    {m['measure']} predicted [{m['unit']}]: {pv}")
+            if gm["pairs_left_unseparated"]:
+                lines.append("  still indistinguishable: " + "; ".join(" vs ".join(p) for p in gm["pairs_left_unseparated"]))
         for p in c["pairs"]:
             m = p["separating_measurement"]
             if m:

@@ -109,7 +109,8 @@ class ModalProblem:
                 if len(ff) < nm:
                     ff = np.concatenate([ff, np.full(nm - len(ff), np.nan)]); qq = np.concatenate([qq, np.full(nm - len(qq), np.nan)])
                 f[sel] = ff[order[sel] - 1]
-                Q[sel] = 1.0 / (1.0 / s["Q_int"] + 1.0 / qq[order[sel] - 1])
+                with np.errstate(divide="ignore"):
+                    Q[sel] = 1.0 / (1.0 / s["Q_int"] + 1.0 / qq[order[sel] - 1])
         return f, Q
 
     def residuals(self, values: dict[str, float], causes=()) -> np.ndarray:
