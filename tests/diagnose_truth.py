@@ -196,7 +196,7 @@ def make_modal_case(folder, effect, seed, rel=1e-3, qrel=0.05, modes=MODES, with
     f, q = modal_truth(effect, params, modes=modes)
     f = f * (1 + rel * rng.standard_normal(len(f)))
     q = q * np.exp(qrel * rng.standard_normal(len(q)))
-    return write_modal(folder, f"case_{effect or 'null'}_{seed}", f, q, modes=modes, rel=rel, qrel=qrel, with_q=with_q), params
+    return write_modal(folder, f"meas_{seed}", f, q, modes=modes, rel=rel, qrel=qrel, with_q=with_q), params
 
 
 # -------------------------------------------------------------- friction
@@ -347,4 +347,4 @@ def make_friction_case(folder, effect, seed, strength=1.0, cfg=FRICTION):
     rng = np.random.default_rng(10_000 + seed)
     params = draw_friction_effect(effect, rng, strength) if effect else {}
     scans = friction_truth(effect, params, cfg, rng)
-    return write_friction(folder, f"fr_{effect or 'null'}_{seed}", scans, cfg), params
+    return write_friction(folder, f"scan_{seed}", scans, cfg), params

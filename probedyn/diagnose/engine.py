@@ -21,7 +21,7 @@
 5. **Gain**: residual and held-out RMS before and after (in units of the stated noise, and
    physical), the parameters with 1-sigma uncertainties from the Jacobian (scaled by
    sqrt(chi^2/dof) when that exceeds 1). **Confounding**: causes whose evidence is within
-   ``max(2, 10 %)`` nats of the winner and whose fitted predictions of the measured data
+   2 nats of the winner (a Bayes factor below e^2 ~ 7) and whose fitted predictions of the measured data
    differ by less than the noise (RMS < 1 sigma) are reported as confounded, with the extra
    measurement that separates them (largest predicted difference in units of the noise).
 """
@@ -289,7 +289,7 @@ def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str]
         # confounding with the winner
         group = []
         for d in eligible[1:]:
-            close = d["evidence"] >= best["evidence"] - max(2.0, 0.1 * abs(best["evidence"]))
+            close = d["evidence"] >= best["evidence"] - 2.0
             sep = _rms(best["fit"].r - d["fit"].r)
             if close and sep < 1.0:
                 group.append((d, sep))

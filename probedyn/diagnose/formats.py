@@ -381,7 +381,7 @@ def _read_spectrum(side: Path, csv: Path, meta: dict, desc: str, kind: str) -> S
             raise _col_err(d, "time_s", int(np.argmax(np.abs(dt - dt.mean()))) + 1, "sampling must be uniform (to 0.1 %)")
         from scipy.signal import welch
 
-        nper = min(len(x), 4096)
+        nper = max(min(len(x) // 4, 65536), 8)  # 4 segments: resolution fs/(n/4)
         f, v = welch(x - x.mean(), fs=1.0 / dt.mean(), nperseg=nper)
         f, v = f[1:], v[1:]
         quantity = "psd"
