@@ -1,6 +1,6 @@
 """Detection, correct-cause and false-discovery rates of ``probedyn diagnose`` on seeded cases.
 
-Usage: ``python benchmarks/diagnose_rates.py KIND N_EFFECT N_NULL [OUT.json]`` with KIND modal or
+Usage: ``python benchmarks/diagnose_rates.py KIND N_EFFECT N_NULL [OUT.json [START]]`` with KIND modal or
 friction. Each hidden-effect case draws one catalog effect (cycling through the effects) with a
 seeded random magnitude over the full range of tests/diagnose_truth.py (from about the
 detection limit up), generates the measurement with the independent truth model plus noise,
@@ -70,15 +70,15 @@ def run_case(kind, effect, seed, folder, strength=1.0):
     return out
 
 
-def study(kind, n_effect, n_null, out=None):
+def study(kind, n_effect, n_null, out=None, start=0):
     effects = MODAL_EFFECTS if kind == "modal" else FRICTION_EFFECTS
     rows = []
     with tempfile.TemporaryDirectory() as d:
-        for i in range(n_effect):
+        for i in range(start, start + n_effect):
             rows.append(run_case(kind, effects[i % len(effects)], 1000 + i, d))
             if out:
                 Path(out).write_text(json.dumps({"rows": rows}, indent=1, default=float))
-        for i in range(n_null):
+        for i in range(start, start + n_null):
             rows.append(run_case(kind, None, 5000 + i, d))
             if out:
                 Path(out).write_text(json.dumps({"rows": rows}, indent=1, default=float))
@@ -118,4 +118,5 @@ def summarize(kind, rows, out=None):
 if __name__ == "__main__":
     kind, ne, nn = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
     out = sys.argv[4] if len(sys.argv) > 4 else None
-    print(json.dumps(study(kind, ne, nn, out), indent=1))
+    start = int(sys.argv[5]) if len(sys.argv) > 5 else 0
+    print(json.dumps(study(kind, ne, nn, out, start), indent=1))
