@@ -569,6 +569,10 @@ def analyse(res: PushResult, *, fast: float = 3.0, settle_lattice: float = 1.0,
         tot = pts[:, -1] - pts[:, 0]
         out["mean_direction_deg"] = float(np.degrees(np.arctan2(tot[1], tot[0])))
         out["advance_per_slip_m"] = float(np.hypot(*tot) / steps.shape[1])
+        # lattice sites (potential minima) holding the sample at each sticking point
+        sites = nearest_sites(m, pts)
+        hops = np.diff(sites, axis=1)
+        out["site_hops"] = [[int(h[0]), int(h[1])] for h in hops.T]
         # slip duration (fraction of the stick-slip period)
         offs = [off[off > i][0] for i in on if np.any(off > i)]
         dur = np.array([t[j] - t[i] for i, j in zip(on, offs)])
@@ -585,6 +589,34 @@ def analyse(res: PushResult, *, fast: float = 3.0, settle_lattice: float = 1.0,
     out["friction_min_N"] = float(fx[w].min()) if w.any() else None
     out["kinetic_expected_N"] = p["F_c"] + p["F_v"] * V
     return out
+
+
+def lattice_vectors(model: PushModel) -> np.ndarray:
+    """Primitive vectors (2, 2) of the triangular lattice of minima in the probe frame (columns)."""
+    a = model.p["a"]
+    g = math.radians(model.p["angle"])
+    return a * np.array([[math.cos(-g), math.cos(math.pi / 3 - g)], [math.sin(-g), math.sin(math.pi / 3 - g)]])
+
+
+def nearest_sites(model: PushModel, pts: np.ndarray) -> np.ndarray:
+    """Integer lattice coordinates (2, n) of the potential minimum nearest to each point (2, n)
+    (points are sample displacements from the start site)."""
+    A = lattice_vectors(model)
+    frac = np.linalg.solve(A, pts)
+    base = np.floor(frac)
+    best = None
+    bestd = None
+    for d1 in (0, 1):
+        for d2 in (0, 1):
+            c = base + np.array([[d1], [d2]])
+            dist = np.linalg.norm(A @ c - pts, axis=0)
+            if best is None:
+                best, bestd = c.copy(), dist
+            else:
+                sel = dist < bestd
+                best[:, sel] = c[:, sel]
+                bestd = np.minimum(bestd, dist)
+    return best.astype(int)
 
 
 def push(substrate_name: str = "mica", overrides: Mapping[str, Any] | None = None, *, dim: int | None = None,
