@@ -532,6 +532,9 @@ def analyse(res: PushResult, *, fast: float = 3.0, settle_lattice: float = 1.0,
     isfast = res.y[6] > fast * V
     on = np.flatnonzero(isfast[1:] & ~isfast[:-1]) + 1
     off = np.flatnonzero(~isfast[1:] & isfast[:-1]) + 1
+    # a slip needs the probe to push harder than the kinetic friction: this drops the sample's
+    # jump into contact (and its rebound) at the start, driven by adhesion, not by the push
+    on = on[res.tip_force()[on] > p["F_c"]]
     F = res.friction()
     fx = F[0]
     out: dict[str, Any] = {
@@ -541,8 +544,10 @@ def analyse(res: PushResult, *, fast: float = 3.0, settle_lattice: float = 1.0,
     }
     # pre-sliding: everything before the first slip (or before the sample reaches V in sliding)
     first = on[0] if on.size else int(np.argmax(sp > 0.5 * V))
+    path = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xy[0]), np.diff(xy[1])))])
     out["presliding"] = {
         "peak_friction_N": float(fx[: max(first, 1)].max()),
+        "path_length_m": float(path[first]),
         "sample_displacement_m": float(xy[0, first]),
         "base_travel_m": float(res.base[first]),
     }
