@@ -102,8 +102,8 @@ PARAMS = ParamSet([
     Param("nu_s", 0.33, "", "sample Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
     Param("nu_t", 0.33, "", "tip Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
     Param("H", 1.452e-20, "J", "tip-sample Hamaker constant", lo=0.0, hi=1e-17, source="Table 4.1"),
-    Param("zeta0", 0.3e-9, "m", "inter-atomic (cut-off) distance of the DMT law, eq 2.20 (not in Table 4.1)",
-          lo=5e-11, hi=2e-9, positive=True, source="eq 2.20"),
+    Param("zeta0", 3.75e-10, "m", "inter-atomic distance of the DMT law, eq 2.20 (Table 4.4, as schemes.contact)",
+          lo=5e-11, hi=2e-9, positive=True, source="eq 2.20, Table 4.4"),
     # sample-substrate friction
     Param("sigma0", 1e4, "N/m", "bristle stiffness", lo=1e-2, hi=1e9, positive=True, source="Table 4.1"),
     Param("sigma1", -1.0, "N s/m", "bristle damping; negative = critical 2 sqrt(sigma0 m_s)", lo=-1.0, hi=1.0,

@@ -87,10 +87,10 @@ def test_stairs_step_equals_lattice_constant(sub):
     assert np.allclose(r["step_lengths_m"], a, rtol=0.03)
 
 
-@pytest.mark.parametrize("a", [4.0e-10, 7.0e-10])
+@pytest.mark.parametrize("a", [3.5e-10, 8.0e-10])
 def test_step_follows_the_lattice_not_the_friction_levels(a):
     """Mica friction levels with another lattice constant: the step follows a (1 %, as above), while
-    the bristle model alone would slip by about (F_s - F_c)/k = 0.55 nm (SOURCE-NOTES 12), which
+    the bristle model alone would slip by about (F_s - F_c)/k = 0.59 nm (SOURCE-NOTES 12), which
     differs from both a by more than 20 %."""
     res, r = run("mica", a=a)
     m = res.model
@@ -215,3 +215,19 @@ def test_cli_push_json(tmp_path, capsys):
     assert main(["simulate", "push", "--substrate", "gold"]) == 2
     assert "unknown substrate" in capsys.readouterr().err
     assert main(["simulate", "push", "--set", "R_s=-1e-9"]) == 2
+
+
+def test_local_dmt_agrees_with_the_contact_registry():
+    """The model's closed-form DMT (force, stiffness of the gap) against the registry's DMT, which
+    solves Maugis' parametrised curve by Newton iteration: same eq 2.20, independent code paths;
+    agreement to 1e-6 relative (the registry's Newton tolerance is near machine precision)."""
+    from probedyn.schemes.contact import get_contact_model
+
+    m = P.make_model("mica", {})
+    c = m.contact
+    reg = get_contact_model("dmt", z0=c.zeta0, H=c.H)
+    for s in np.array([-2.0, -1.0, -0.3, 0.0, 0.5, 0.99, 1.01, 1.5, 3.0]) * c.zeta0:
+        delta = c.zeta0 - s
+        assert float(reg.force(delta)) == pytest.approx(c.force(s), rel=1e-6)
+        if abs(delta) > 1e-3 * c.zeta0:
+            assert float(reg.stiffness(delta)) == pytest.approx(c.stiffness(s), rel=1e-6)
