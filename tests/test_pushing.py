@@ -231,3 +231,22 @@ def test_local_dmt_agrees_with_the_contact_registry():
         assert float(reg.force(delta)) == pytest.approx(c.force(s), rel=1e-6)
         if abs(delta) > 1e-3 * c.zeta0:
             assert float(reg.stiffness(delta)) == pytest.approx(c.stiffness(s), rel=1e-6)
+
+
+def test_lattice_force_agrees_with_the_friction_registry_hexagonal_potential():
+    """The pinning potential is the registry's hexagonal Prandtl–Tomlinson potential
+    U = -(2 U0'/3) sum cos(b_i.r) with U0' = 3 U0 / 2, rotated by the push angle: the gradients of the
+    two implementations agree to rounding (1e-9 relative) over a patch of two lattice cells."""
+    from probedyn.schemes.friction.prandtl_tomlinson import _grad_u
+
+    for angle in (0.0, 20.0):
+        m = P.make_model("mica", {"angle": angle}, dim=2)
+        a = m.p["a"]
+        g = math.radians(angle)
+        rot = np.array([[math.cos(g), -math.sin(g)], [math.sin(g), math.cos(g)]])  # lattice -> probe
+        rng = np.random.default_rng(1)
+        for rl in rng.uniform(-2 * a, 2 * a, size=(20, 2)):
+            gx, gy = _grad_u(2, 1.5 * m.U0, a, rl[0], rl[1])
+            rp = rot.T @ rl  # probe-frame position of the lattice-frame point (lattice rotated by -angle)
+            mine, _ = m.lattice_force(m.x0 + rp[0], rp[1])
+            assert np.allclose(rot.T @ np.array([gx, gy]), mine, rtol=1e-9, atol=1e-9 * np.abs(mine).max())
