@@ -142,6 +142,9 @@ def scan_metrics(x: np.ndarray, F: np.ndarray, drop_fraction: float = 0.3,
 #: Table 2.1 (mica), x direction; F_nu in N s/m (SOURCE-NOTES item 9)
 MICA_X = dict(m=1.98e-18, c=7e-9, k=0.2, sigma0=1e4, Vs=1e-5, Fnu=1e-7, Fs=12.95e-9, Fc=12.45e-9)
 
+#: mica lattice constant (Table 4.2 of the source)
+MICA_LATTICE = 0.519e-9
+
 
 def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out: int = 4000,
                    params: dict | None = None, rtol: float = 1e-7) -> dict[str, np.ndarray]:
@@ -209,15 +212,44 @@ def reference_scan(length: float, speed: float = 2e-6, scale: float = 1.0, n_out
 ScanFn = Callable[[float, float, float], dict]
 
 
+def ffm_scan(length: float, speed: float, scale: float, preset: str = "mica", n_out: int = 4000) -> dict:
+    """One 1D line scan with the project's FFM model (:mod:`probedyn.schemes.ffm`, numba
+    Rosenbrock integrator) and the generalised-bristle friction model, the friction levels
+    scaled by ``scale`` (the FFM's normal-load input). Resampled to ``n_out`` base positions."""
+    from probedyn.schemes.ffm import FFM, line_scan
+
+    ffm = FFM.from_preset(preset, "bristle", overrides={"V": speed}, friction_scale=scale)
+    g = line_scan(ffm, length).on_grid(n_out)
+    return dict(base=g["base"], spring_force=g["lateral_force"])
+
+
+def ffm_pt_scan(eta: float, length: float, speed: float = 2e-6, zeta: float = 1.0,
+                a: float = MICA_LATTICE, n_out: int = 6000) -> dict:
+    """The Prandtl–Tomlinson scan of :func:`pt_scan` run through the project's FFM model with
+    the registry's ``pt`` friction model (cantilever damping c_x set to 0 and the PT damping
+    ``gamma = 2 zeta sqrt(m k (1 + eta))``, so the equation is the same)."""
+    from probedyn.schemes.ffm import FFM, PRESETS, line_scan
+
+    cp = PRESETS["mica"]["cantilever"]
+    k, m = cp["k_x"], cp["m_x"]
+    gam = 2 * zeta * math.sqrt(m * k * (1 + eta))
+    U0 = eta * k * a * a / (4 * math.pi**2)
+    ffm = FFM.from_preset("mica", "pt", overrides=dict(U0=U0, a=a, gamma=gam, c_x=0.0, V=speed))
+    g = line_scan(ffm, length).on_grid(n_out)
+    return dict(base=g["base"], spring_force=g["lateral_force"])
+
+
 def _default_scan(length: float, speed: float, scale: float) -> dict:
-    return reference_scan(length, speed, scale)
+    return ffm_scan(length, speed, scale)
 
 
 def run(setup: CouplingSetup | None = None, scan: ScanFn | None = None) -> dict[str, Any]:
     """FFM line scans for each lambda of ``setup``; rows of the table and the traces.
 
     ``scan(length, speed, scale)`` runs one line scan with the friction levels multiplied by
-    ``scale`` and returns ``base`` and ``spring_force`` arrays (default: :func:`reference_scan`).
+    ``scale`` and returns ``base`` and ``spring_force`` arrays (default: :func:`ffm_scan`, the
+    project's FFM model; :func:`reference_scan` is the independent implementation it is
+    tested against).
     The scan length covers the first stick plus ``n_periods`` sawtooth periods, estimated from
     the friction levels (``F_s f / k`` and ``2 (F_s - F_c) f / k``).
     """
@@ -264,10 +296,6 @@ def verdict(rows: list[dict[str, Any]]) -> dict[str, Any]:
 # The same question with a lattice model: 1D Prandtl–Tomlinson
 # --------------------------------------------------------------------------------------------
 
-#: mica lattice constant (Table 4.2 of the source)
-MICA_LATTICE = 0.519e-9
-
-
 def pt_scan(eta: float, length: float, speed: float = 2e-6, a: float = MICA_LATTICE, k: float = 0.2,
             m: float = 1.98e-18, zeta: float = 1.0, n_out: int = 6000, rtol: float = 1e-6) -> dict[str, np.ndarray]:
     """1D Prandtl–Tomlinson line scan (the standard atomic stick-slip model)::
@@ -305,12 +333,14 @@ def pt_scan(eta: float, length: float, speed: float = 2e-6, a: float = MICA_LATT
 
 
 def run_pt(setup: CouplingSetup | None = None, eta0: float = 3.0, zetas: Sequence[float] = (1.0, 0.1),
-           n_lattice: int = 10) -> list[dict[str, Any]]:
+           n_lattice: int = 10, scan: Callable | None = None) -> list[dict[str, Any]]:
     """Prandtl–Tomlinson scans for each lambda: the corrugation ``U0`` scales with the same
     friction scale ``f`` as the bristle model's levels (``eta = eta0 f``; ``eta0`` at zero adhesion).
 
     The scan covers the first stick (about ``eta a / 2 pi``) plus ``n_lattice`` lattice constants
-    (times ``eta / 10`` more when underdamped, where slips may skip several sites)."""
+    (times ``eta / 10`` more when underdamped, where slips may skip several sites). ``scan``:
+    default :func:`ffm_pt_scan` (the project's FFM with the registry's PT model); :func:`pt_scan`
+    is the independent implementation it is tested against."""
     setup = setup or CouplingSetup()
     setup.validate()
     a = MICA_LATTICE
@@ -320,7 +350,7 @@ def run_pt(setup: CouplingSetup | None = None, eta0: float = 3.0, zetas: Sequenc
             c = contact_at(lam, setup)
             eta = eta0 * c["scale"]
             length = eta * a / (2 * math.pi) + n_lattice * a * (1 + (eta / 10 if zeta < 1 else 0))
-            tr = pt_scan(eta, length, setup.speed, zeta=zeta)
+            tr = (scan or ffm_pt_scan)(eta, length, setup.speed, zeta=zeta)
             met = scan_metrics(tr["base"], tr["spring_force"])
             rows.append(dict(lam=lam, zeta=zeta, scale=c["scale"], eta=eta, **met,
                              period_over_a=met["period_m"] / a))
