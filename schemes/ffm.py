@@ -432,3 +432,41 @@ def presliding_force(ffm: FFM, base: np.ndarray) -> np.ndarray:
     xx = -g0 * np.log1p(-zeta)
     X = xx + s0 * zeta * g0 / k
     return np.interp(base, X, s0 * zeta * g0, right=np.nan)
+
+
+# ------------------------------------------------------------------------------------------
+# One call: scan + analysis (used by the CLI, the report and other schemes)
+# ------------------------------------------------------------------------------------------
+
+def run_ffm(preset: str = "mica", model: str = "bristle", overrides: Mapping[str, Any] | None = None,
+            length: float | None = None, friction_scale: float = 1.0, normal_load: float | None = None,
+            rtol: float = 1e-5) -> tuple[ScanResult, dict[str, Any]]:
+    """Line scan of ``preset`` with friction model ``model``; returns the scan and a summary:
+    static / kinetic friction, period, regime (:func:`probedyn.schemes.stickslip_analysis.analyze`),
+    the quasi-static estimates ``F_s / k_x`` (first slip) and ``(F_s - F_c) / k_x`` (period),
+    alpha, wall time and solver statistics."""
+    import time
+
+    from probedyn.schemes.stickslip_analysis import analyze
+
+    ffm = FFM.from_preset(preset, model, overrides, friction_scale=friction_scale, normal_load=normal_load)
+    t0 = time.perf_counter()
+    res = line_scan(ffm, length, rtol=rtol)
+    wall = time.perf_counter() - t0
+    an = analyze(res.base, res.lateral_force)
+    fv = ffm.friction.values
+    k = ffm.cantilever["k_x"]
+    summary = dict(
+        preset=preset, model=ffm.friction.name, scan_length_m=res.setup["length"],
+        scan_speed_m_s=ffm.cantilever["V"], k_x=k, alpha=ffm.alpha,
+        static_friction_n=an["static_friction_n"], kinetic_friction_n=an["kinetic_friction_n"],
+        period_m=an["period_m"], regime=an["regime"], first_slip_m=an["first_slip_m"],
+        n_slips=an["n_slips"], slip_fraction=an["slip_fraction"], abruptness=an.get("abruptness"),
+        max_force_n=an["max_force_n"],
+        first_slip_estimate_m=(fv["F_s"] / k) if "F_s" in fv else None,
+        period_estimate_m=((fv["F_s"] - fv["F_c"]) / k) if "F_s" in fv else None,
+        F_s=fv.get("F_s"), F_c=fv.get("F_c"),
+        wall_time_s=wall, n_steps=res.n_steps, n_rejected=res.n_rejected,
+        parameters=dict(cantilever=dict(ffm.cantilever), friction=dict(fv)),
+    )
+    return res, summary

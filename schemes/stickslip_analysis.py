@@ -17,9 +17,16 @@ of the periodic part"):
   cycles (over the single first slip when there is no complete cycle). A regular sawtooth
   (slow loading, abrupt slip) has slip_fraction -> 0; reverse stick-slip (abrupt sticking,
   gradual slipping, Fig 2.10) has slip_fraction > 1/2.
+* **abruptness**: the steepest force change over the periodic part (after the first peak),
+  ``max |dF/dX|`` divided by the median ``|dF/dX|`` there (the loading slope). A slip is a fold
+  of the force-balance curve, so in the quasi-static limit ``dF/dX`` is infinite at the slip
+  and the ratio is bounded only by the sampling (of order ``points per period``); a smooth
+  periodic modulation (Prandtl–Tomlinson with eta < 1) has the finite ratio
+  ``(1 + eta) / (1 - eta)``. Periodic traces with abruptness < ``abrupt_ratio`` (default 50)
+  are ``smooth``.
 * **regime**: ``regular`` (slip_fraction < 1/2), ``reverse`` (>= 1/2), ``smooth`` (no slip and
-  a force plateau: the force over the last 20 % of the trace varies by less than the threshold)
-  or ``presliding`` (no slip yet: the force still rises at the end of the scan, the initial
+  a force plateau: the force over the last 20 % of the trace varies by less than the threshold;
+  or a periodic force without abrupt changes, see abruptness) or ``presliding`` (no slip yet: the force still rises at the end of the scan, the initial
   sticking of the scan has not ended; this is what a 10 nm mica scan with Table 2.1 gives,
   SOURCE-NOTES item 12).
 """
@@ -44,12 +51,14 @@ def noise_sigma(force: np.ndarray) -> float:
 
 
 def analyze(base, force, rel_prominence: float = 0.01, noise_factor: float = 6.0,
-            n_grid: int | None = 20000) -> dict[str, Any]:
+            n_grid: int | None = 20000, abrupt_ratio: float = 50.0,
+            noise: float | None = 0.0) -> dict[str, Any]:
     """Slips, friction levels, period and regime of a trace (see the module docstring).
 
     ``base``: base position (or time; then ``period_m`` is in the unit of ``base``), increasing;
     ``force``: lateral force [N]. Clean traces are resampled to ``n_grid`` uniform points
-    (``None``: used as given)."""
+    (``None``: used as given). ``noise``: the force noise standard deviation [N]; 0 for a
+    simulation (default), ``None`` to estimate it from the data (measured traces)."""
     from scipy.signal import find_peaks
 
     b = np.asarray(base, float)
@@ -60,12 +69,13 @@ def analyze(base, force, rel_prominence: float = 0.01, noise_factor: float = 6.0
         raise DataFormatError("stick-slip analysis: trace contains NaN or inf")
     if np.any(np.diff(b) <= 0):
         raise DataFormatError("stick-slip analysis: base position must increase strictly")
-    sig = noise_sigma(f)
+    sig = noise_sigma(f) if noise is None else float(noise)
+    if sig < 0:
+        raise DataFormatError(f"noise sigma must be >= 0, got {sig}")
     if n_grid is not None and sig == 0.0:
         bg = np.linspace(b[0], b[-1], n_grid)
         f = np.interp(bg, b, f)
         b = bg
-        sig = 0.0
     rng = float(f.max() - f.min())
     thr = max(rel_prominence * rng, noise_factor * sig, 1e-300)
     pk, _ = find_peaks(f, prominence=thr)
@@ -102,7 +112,14 @@ def analyze(base, force, rel_prominence: float = 0.01, noise_factor: float = 6.0
         fall = b[valleys[0]] - b[peaks[0]]
         fracs.append(fall / (rise + fall))
     sf = float(np.mean(fracs))
+    seg = slice(peaks[0], None)
+    dfdx = np.abs(np.diff(f[seg]) / np.diff(b[seg]))
+    med = float(np.median(dfdx)) if dfdx.size else 0.0
+    abrupt = float(dfdx.max() / med) if med > 0 else math.inf
+    if sig > 0:  # noisy data: the derivative ratio is meaningless, rely on the slip detection
+        abrupt = math.inf
+    regime = "smooth" if abrupt < abrupt_ratio else ("reverse" if sf >= 0.5 else "regular")
     out.update(static_friction_n=Fs, kinetic_friction_n=Fk, period_m=period, first_slip_m=float(b[peaks[0]]),
-               slip_fraction=sf, regime="reverse" if sf >= 0.5 else "regular",
+               slip_fraction=sf, abruptness=abrupt, regime=regime,
                max_force_n=float(f.max()), mean_force_n=float(f[peaks[0]:].mean()))
     return out

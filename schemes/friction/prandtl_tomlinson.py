@@ -168,9 +168,9 @@ class PT2DResult:
     params: dict
 
 
-def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k: float = 1.0,
-              m: float = 1e-12, zeta: float = 0.5, angle_deg: float = 0.0, length: float | None = None,
-              speed: float = 1e-3, temperature: float = 0.0, seed: int = 0, start=(0.0, 0.0),
+def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k: float = 0.2,
+              m: float = 1.98e-18, zeta: float = 0.5, angle_deg: float = 0.0, length: float | None = None,
+              speed: float = 1e-4, temperature: float = 0.0, seed: int = 0, start=(0.0, 0.0),
               steps_per_period: int = 40, n_out: int = 20000) -> PT2DResult:
     """2D PT line scan along ``angle_deg`` (from lattice vector a1 = x axis).
 
@@ -178,8 +178,9 @@ def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k
     slips end in the next well, no multiple-site jumps for moderate eta). Time step:
     ``T_0 / steps_per_period`` with ``T_0 = 2 pi sqrt(m / (k (1 + eta)))`` (the stiffest
     curvature, 4 pi^2 U0/a^2 + k along an axis; for the hex lattice the curvature is the same).
-    Default mass/stiffness: generic (m = 1e-12 kg effective, k = 1 N/m) with a speed of
-    1 mm/s, so that the quasi-static regime holds (V << a / T_0) while the run stays short.
+    Defaults: the Table 2.1 cantilever (k = 0.2 N/m, m = 1.98e-18 kg, isotropic) at 100 um/s:
+    ``V T_0 ~ 1e-12 m = 0.002 a``, quasi-static (V << a / T_0) while the run stays short
+    (about 5e4 steps per lattice constant).
     """
     if lattice not in LATTICES:
         raise ParameterError(f"unknown lattice {lattice!r} (known: {', '.join(LATTICES)})")
