@@ -250,3 +250,27 @@ def test_lattice_force_agrees_with_the_friction_registry_hexagonal_potential():
             rp = rot.T @ rl  # probe-frame position of the lattice-frame point (lattice rotated by -angle)
             mine, _ = m.lattice_force(m.x0 + rp[0], rp[1])
             assert np.allclose(rot.T @ np.array([gx, gy]), mine, rtol=1e-9, atol=1e-9 * np.abs(mine).max())
+
+
+def test_bristle_part_is_the_registry_lugre_without_stribeck():
+    """In 1D the Coulomb part of the substrate friction is the registry's LuGre kernel with
+    F_s = F_c (no Stribeck term: the excess static friction is the lattice pinning) and F_v = 0:
+    force, bristle rate and their derivatives agree up to the |v| regularisation
+    sqrt(v^2 + v_eps^2) = |v| (1 + (v_eps/v)^2 / 2): relative tolerance (v_eps/v)^2."""
+    from probedyn.schemes.friction.lugre import lugre_kernel
+
+    m = P.make_model("mica", {}, dim=1)
+    p = m.p
+    kp = np.array([p["sigma0"], m.sigma1, p["F_c"], p["F_c"], p["V_s"], 0.0])
+    far = 1e3 * m.x0  # any position: the pinning is switched off through the memory speed w
+    for v, z in [(1e-4, 3e-14), (-2e-5, -1e-14), (3e-6, 5e-14)]:
+        y = np.zeros(P.NS)
+        y[4], y[6], y[8], y[10] = far, v, z, 1e3 * p["V_s"]  # memory speed >> V_s: pinning off
+        tol = (p["v_eps"] / v) ** 2 + 1e-12
+        f = m.forces(0.0, y)
+        F, zd, _, dF_dv, dF_dz, _, dzd_dv, dzd_dz = lugre_kernel(kp, 0.0, v, z)
+        assert f["Fsub"][0] - p["F_v"] * v == pytest.approx(F, rel=tol, abs=tol * p["F_c"])
+        assert f["zdot"][0] == pytest.approx(zd, rel=tol, abs=tol * abs(v))
+        J = m.jac(0.0, y)
+        assert J[8, 8] == pytest.approx(dzd_dz, rel=tol)
+        assert J[8, 6] == pytest.approx(dzd_dv, rel=tol, abs=tol)
