@@ -274,3 +274,14 @@ def test_bristle_part_is_the_registry_lugre_without_stribeck():
         J = m.jac(0.0, y)
         assert J[8, 8] == pytest.approx(dzd_dz, rel=tol)
         assert J[8, 6] == pytest.approx(dzd_dv, rel=tol, abs=tol)
+
+
+def test_2d_model_at_zero_angle_reproduces_the_1d_model():
+    """By mirror symmetry of the hexagonal potential about its axis, the 2D model at angle 0 keeps
+    y = 0 (to rounding) and reproduces the 1D run: same sticking points to the integrator's
+    tolerance (rtol 1e-6 on positions of ~nm: 1e-3 of a covers the step-size differences)."""
+    r1 = run("hopg")[1]
+    res2, r2 = P.push("hopg", {}, dim=2)
+    assert np.max(np.abs(res2.y[[1, 5]])) < 1e-6 * r1["lattice_constant_m"]
+    assert r2["mean_step_m"] == pytest.approx(r1["mean_step_m"], rel=1e-3)
+    assert len(r2["step_lengths_m"]) == len(r1["step_lengths_m"])
