@@ -21,8 +21,9 @@ friction levels of Table 4.2 are taken at a fixed load, as in the source).
 * **Sample–substrate friction** (section 2.1.4, eqs 2.4–2.9, with the lattice entering as a
   modelling choice, SOURCE-NOTES item 12)::
 
-      F_sub = sigma0 z + sigma1 dz/dt + F_v v + S(|v|) grad U(r),    S(v) = exp(-(v/V_s)^2)
+      F_sub = sigma0 z + sigma1 dz/dt + F_v v + S(w) grad U(r),      S(w) = exp(-(w/V_s)^2)
       dz/dt = v - |v| z sigma0 / F_c                                  (isotropic LuGre bristle)
+      dw/dt = (|v| - w) / tau_p,  tau_p = a / V_s                     (memory speed of the pinning)
       U(r)  = -U0 sum_j cos(G_j . r),  |G_j| = 4 pi / (sqrt(3) a),  U0 = (F_s - F_c) a / (4 pi)
 
   The bristle carries the kinetic (Coulomb) part ``F_c`` exactly as the LuGre model of eq 2.5 with
@@ -30,7 +31,9 @@ friction levels of Table 4.2 are taken at a fixed load, as in the source).
   it is the pinning of the sample in the hexagonal (triangular-minima) lattice potential ``U`` of
   the substrate, a Prandtl–Tomlinson-type corrugation whose peak force along a lattice axis is
   exactly ``F_s - F_c`` (along the axis ``U = -U0 (1 + 2 cos(2 pi x / a))``). Its amplitude fades
-  with speed through the source's own Stribeck factor ``S(v)`` of eq 2.4/2.9: at rest the
+  with speed through the source's own Stribeck factor of eq 2.4/2.9, evaluated on the memory
+  speed ``w`` (the sliding rate averaged over the time to cross a lattice constant at ``V_s``; on
+  the instantaneous speed it would make every creep violently unstable): at rest the
   resistance ranges from ``F_c`` (at a lattice site) to ``F_s`` (a quarter period uphill), which is
   how this model realises the "jumping mechanism" ``F_s = F_s(a, gamma)``, ``F_c = F_c(a, gamma)``
   of eq 2.6; when sliding much faster than ``V_s`` the friction is ``F_c + F_v V``. The step
