@@ -49,8 +49,8 @@ def _plot_push(res, r, path: Path, title: str) -> Path:
 @simulate_app.command("push")
 def push_cmd(
     substrate: str = typer.Option("mica", "--substrate", help="mica or hopg (Table 4.2)."),
-    speed: Optional[float] = typer.Option(None, "--speed", help="Base pushing speed V [m/s] (default 3e-6)."),
-    angle: Optional[float] = typer.Option(None, "--angle", help="Push direction vs main lattice axis [deg] (2D if non-zero)."),
+    speed: Optional[float] = typer.Option(None, "--speed", help="Base pushing speed V in m/s (default 3e-6)."),
+    angle: Optional[float] = typer.Option(None, "--angle", help="Angle between push direction and main lattice axis, in degrees (2D if non-zero)."),
     sets: Optional[list[str]] = SET_OPT,
     out: Optional[Path] = OUT_OPT,
     as_json: bool = JSON_OPT,
