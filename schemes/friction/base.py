@@ -103,12 +103,10 @@ class FrictionModel:
         """Vectorised evaluation of the kernel: force, rate and the six partial derivatives."""
         x, v, z = np.broadcast_arrays(np.asarray(x, float), np.asarray(v, float), np.asarray(z, float))
         p = self.pack()
-        out = np.empty((8,) + x.shape)
-        flat = [o.reshape(-1) for o in out]
+        flat = np.empty((8, x.size))
         for i, (xi, vi, zi) in enumerate(zip(x.reshape(-1), v.reshape(-1), z.reshape(-1))):
-            r = self.kernel(p, xi, vi, zi)
-            for j in range(8):
-                flat[j][i] = r[j]
+            flat[:, i] = self.kernel(p, float(xi), float(vi), float(zi))
+        out = flat.reshape((8,) + x.shape)
         keys = ("F", "zdot", "dF_dx", "dF_dv", "dF_dz", "dzd_dx", "dzd_dv", "dzd_dz")
         return dict(zip(keys, out))
 
