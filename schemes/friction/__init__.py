@@ -1,11 +1,17 @@
-"""Friction model registry (one module per model).
+"""Friction model registry (section 2.1 of the source); one module per model.
 
->>> from probedyn.schemes.friction import get_friction_model, list_models
->>> m = get_friction_model("lugre")(F_s=1e-9, F_c=0.5e-9)
+``get_friction_model(name, **params)`` returns an instance, ``list_models()`` the names,
+``register(cls)`` adds a model class. Every model is a component with the interface of
+:class:`.base.FrictionModel`: friction force given position, sliding velocity and internal
+state, rates of the internal state, analytic partial derivatives (one compiled kernel).
 
-Each model is a :class:`~probedyn.schemes.friction.base.FrictionModel`: friction force,
-internal-state rates and their analytic Jacobians, usable as a component by FFM
-(:mod:`probedyn.schemes.ffm`) and nano-pushing.
+===========  ====================================================  ===============================
+name         model                                                 source
+===========  ====================================================  ===============================
+``lugre``    LuGre bristle model with Stribeck effect               (2.3)–(2.5)
+``bristle``  generalised-bristle nano-friction model (1D, V_y = 0)  (2.7)–(2.9); 2D in ffm (2.10–2.12)
+``pt``       Prandtl–Tomlinson sinusoidal potential (1D)            standard model; 2D in pt2d_scan
+===========  ====================================================  ===============================
 """
 
 from __future__ import annotations
@@ -13,31 +19,46 @@ from __future__ import annotations
 from probedyn.errors import ParameterError
 
 from .base import FrictionModel
-from .bristle import Bristle
+from .bristle import GeneralisedBristle
 from .lugre import LuGre
 from .prandtl_tomlinson import PrandtlTomlinson
 
 _REGISTRY: dict[str, type[FrictionModel]] = {}
+_ALIASES = {"generalised-bristle": "bristle", "generalized-bristle": "bristle", "source": "bristle",
+            "prandtl-tomlinson": "pt", "tomlinson": "pt"}
 
 
 def register(cls: type[FrictionModel]) -> type[FrictionModel]:
-    """Register a model class under ``cls.name`` (usable as a decorator)."""
+    """Add a friction model class to the registry (usable as a decorator)."""
+    if not (isinstance(cls, type) and issubclass(cls, FrictionModel) and cls.name):
+        raise TypeError("register() expects a FrictionModel subclass with a name")
     _REGISTRY[cls.name] = cls
     return cls
 
 
-def get_friction_model(name: str) -> type[FrictionModel]:
-    try:
-        return _REGISTRY[name]
-    except KeyError:
-        raise ParameterError(f"unknown friction model '{name}' (known: {', '.join(sorted(_REGISTRY))})") from None
+for _cls in (GeneralisedBristle, LuGre, PrandtlTomlinson):
+    register(_cls)
 
 
 def list_models() -> list[str]:
-    return sorted(_REGISTRY)
+    """Names of the registered friction models."""
+    return list(_REGISTRY)
 
 
-for _c in (LuGre, Bristle, PrandtlTomlinson):
-    register(_c)
+def get_friction_model(name: str, **params) -> FrictionModel:
+    """An instance of friction model ``name`` with parameter overrides (SI units)."""
+    key = _ALIASES.get(str(name).lower(), str(name).lower())
+    if key not in _REGISTRY:
+        raise ParameterError(f"unknown friction model {name!r} (known: {', '.join(_REGISTRY)})")
+    return _REGISTRY[key](**params)
 
-__all__ = ["FrictionModel", "LuGre", "Bristle", "PrandtlTomlinson", "register", "get_friction_model", "list_models"]
+
+def model_class(name: str) -> type[FrictionModel]:
+    key = _ALIASES.get(str(name).lower(), str(name).lower())
+    if key not in _REGISTRY:
+        raise ParameterError(f"unknown friction model {name!r} (known: {', '.join(_REGISTRY)})")
+    return _REGISTRY[key]
+
+
+__all__ = ["FrictionModel", "GeneralisedBristle", "LuGre", "PrandtlTomlinson", "get_friction_model",
+           "list_models", "model_class", "register"]

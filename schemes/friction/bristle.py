@@ -1,117 +1,159 @@
-"""The source's generalised-bristle nano-friction model, eqs 2.7-2.12.
+"""The source's generalised-bristle nano-friction model, eqs (2.7)–(2.12).
 
-    F_x = sigma0x z_x + F_vx V_x                                          (2.7)
-    dz_x/dt = max(V_i) - z_x ||V||_inf / g_x                              (2.8)
-    g_x = [F_cx + (F_sx - F_cx) exp(-((V_x + V_y) / 2 V_s)^2)] / sigma0x  (2.9)
-and the same in y (2.10-2.12).
+As printed::
 
-Interpretation of the print (documented in docs/friction.md):
+    F_x   = sigma_0x z_x + F_vx(a) V_x                                            (2.7)
+    z_x'  = max(V_i)_{i=x,y} - z_x ||V||_inf / g_x                                 (2.8)
+    g_x   = [F_cx(a) + (F_sx(a) - F_cx(a)) exp(-((V_x + V_y) / 2 V_s)^2)] / sigma_0x (2.9)
 
-* ``max(V_i)`` taken literally (``vmax_rule = "literal"``) is not odd in V: for a backward
-  scan (V_x < 0, V_y = 0) it is 0, so the bristle relaxes to zero and friction vanishes
-  instead of reversing. The default ``vmax_rule = "dominant"`` uses the signed velocity
-  component of largest magnitude; for V_y = 0 this is V_x, i.e. exactly LuGre (2.3) with
-  sigma1 = 0. For forward scans (V_x >= 0 > V_y or V_y = 0) both rules coincide.
-* ``||V||_inf = max(|V_x|, |V_y|)``; the Stribeck exponent uses the signed mean
-  (V_x + V_y)/2 as printed, so along x alone the effective Stribeck velocity is 2 V_s.
-* F_nu is a viscous coefficient in N s/m (SOURCE-NOTES item 9; Table 2.1 prints N).
-* ``F_c <= F_s`` is required in each direction (the exponential must fall to F_c).
-* The lattice dependence F(a) of (2.6) enters only through the values of F_s, F_c, F_nu:
-  the model contains no length that sets a stick-slip period (see docs/friction.md).
-Friction levels scale with the normal-load factor ``load``.
+and the same for y (2.10)–(2.12). How the print is read here:
+
+* ``V = (V_x, V_y)`` is the **sliding velocity of the tip relative to the sample** (the text
+  calls it "the scan velocity"; in the FFM model the tip is the only moving body, so it is the
+  tip velocity ``(x', y')``, not the base speed). With the base velocity instead, the force
+  would not depend on the tip's motion and no slip could occur.
+* ``max(V_i)`` is read literally: the larger *signed* component (``vmax="literal"``,
+  default). Consequence, stated in docs/friction.md: in 1D (V_y = 0) ``z' = max(V,0) - |V| z/g``,
+  so for V < 0 the deflection only relaxes towards 0 — a backward scan has no friction
+  plateau. ``vmax="magnitude"`` uses the component of largest magnitude with its sign; in 1D
+  it is exactly the LuGre state equation (2.3) with the Stribeck argument V/(2 V_s), and it is
+  odd under scan reversal.
+* ``F_s(a)``, ``F_c(a)``, ``F_v(a)``: the lattice (jumping mechanism, 2.6) enters only through
+  the values of the friction levels; they are constants for a given sample.
+* There is no bristle damping ``sigma_1`` in (2.7) (unlike LuGre 2.5).
+* F_c > F_s is rejected: the text defines F_s and F_c as the highest and the lowest values of
+  the periodic friction curve.
+
+This module provides the 1D reduction (V_y = 0) as the registry model ``bristle`` (numba
+kernel, used by the FFM line scan) and the full 2D right-hand side with its analytic Jacobian
+(:func:`bristle2d_eval`) used by the full FFM model (2.13)–(2.16).
 """
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
+from numba import njit
+
+from probedyn.errors import ParameterError
 from probedyn.params import Param, ParamSet
 
-from .base import FrictionModel, require
+from .base import FrictionModel, positive_param
 
 
-class Bristle(FrictionModel):
+@njit(cache=True)
+def bristle_kernel(p, x, v, z):
+    """1D reduction (V_y = 0) of (2.7)-(2.9). p = (sigma0, F_s, F_c, V_s, F_v, literal)."""
+    s0, Fs, Fc, Vs, Fv, literal = p[0], p[1], p[2], p[3], p[4], p[5]
+    u = v / (2.0 * Vs)
+    e = math.exp(-u * u)
+    g = (Fc + (Fs - Fc) * e) / s0
+    dg = -(Fs - Fc) * e * u / (Vs * s0)
+    av = abs(v)
+    sg = 1.0 if v > 0 else (-1.0 if v < 0 else 0.0)
+    if literal > 0.5:
+        drive = v if v > 0 else 0.0
+        ddrive = 1.0 if v > 0 else 0.0
+    else:
+        drive = v
+        ddrive = 1.0
+    zd = drive - av * z / g
+    dzd_dv = ddrive - z * (sg / g - av * dg / (g * g))
+    dzd_dz = -av / g
+    return (s0 * z + Fv * v, zd, 0.0, Fv, s0, 0.0, dzd_dv, dzd_dz)
+
+
+class GeneralisedBristle(FrictionModel):
     name = "bristle"
-    equations = "2.7-2.12"
-    n_state = 2
-    dim = 2
+    title = "generalised-bristle nano-friction model of the source (1D reduction, V_y = 0)"
+    equations = "(2.7)-(2.9) [(2.10)-(2.12) in 2D]"
+    kind = 1
+    n_state = 1
     params = ParamSet([
-        Param("sigma0x", 1e4, "N/m", "bristle stiffness x", positive=True, source="2.7, Table 2.1"),
-        Param("sigma0y", 1e4, "N/m", "bristle stiffness y", positive=True, source="2.10, Table 2.1"),
-        Param("F_sx", 12.95e-9, "N", "static friction x", positive=True, source="2.9, Table 2.1"),
-        Param("F_sy", 12.95e-9, "N", "static friction y", positive=True, source="2.12, Table 2.1"),
-        Param("F_cx", 12.45e-9, "N", "kinetic friction x", positive=True, source="2.9, Table 2.1"),
-        Param("F_cy", 12.45e-9, "N", "kinetic friction y", positive=True, source="2.12, Table 2.1"),
-        Param("F_vx", 1e-7, "N s/m", "viscous friction x (N s/m, SOURCE-NOTES 9)", lo=0.0, source="2.7"),
-        Param("F_vy", 1e-7, "N s/m", "viscous friction y (N s/m, SOURCE-NOTES 9)", lo=0.0, source="2.10"),
-        Param("V_s", 1e-5, "m/s", "Stribeck velocity", positive=True, source="2.9"),
-        Param("vmax_rule", "dominant", "", "reading of max(V_i) in 2.8/2.11", kind=str,
-              choices=("dominant", "literal")),
+        positive_param("sigma0", 1e4, "N/m", "bristle stiffness sigma_0x", "(2.7); Table 2.1", hi=1e9),
+        positive_param("F_s", 12.95e-9, "N", "static friction F_sx", "(2.9); Table 2.1", hi=1e-3),
+        positive_param("F_c", 12.45e-9, "N", "kinetic friction F_cx", "(2.9); Table 2.1", hi=1e-3),
+        positive_param("V_s", 1e-5, "m/s", "Stribeck velocity", "(2.9); Table 2.1", hi=1e3),
+        Param("F_v", 1e-7, "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0, hi=1.0,
+              source="(2.7); Table 2.1"),
+        Param("vmax", "literal", "", "reading of max(V_i) in (2.8): signed max or largest magnitude",
+              kind=str, choices=("literal", "magnitude"), source="(2.8)"),
     ])
+    packed = ("sigma0", "F_s", "F_c", "V_s", "F_v", "vmax")
+    load_params = ("F_s", "F_c")
+    kernel = staticmethod(bristle_kernel)
 
-    def validate(self):
-        p = self.p
-        for a in "xy":
-            require(p[f"F_c{a}"] <= p[f"F_s{a}"],
-                    f"bristle: F_c{a} = {p[f'F_c{a}']:g} N exceeds F_s{a} = {p[f'F_s{a}']:g} N (the model forbids F_c > F_s)")
+    def validate(self) -> None:
+        if self.values["F_c"] > self.values["F_s"]:
+            raise ParameterError(
+                f"bristle model needs F_c <= F_s (kinetic <= static friction), got F_c = "
+                f"{self.values['F_c']:g} N > F_s = {self.values['F_s']:g} N")
 
-    def _vmax(self, V):
-        """max(V_i) and its gradient w.r.t. (V_x, V_y)."""
-        if self.p["vmax_rule"] == "literal":
-            return (V[0], np.array([1.0, 0.0])) if V[0] >= V[1] else (V[1], np.array([0.0, 1.0]))
-        return (V[0], np.array([1.0, 0.0])) if abs(V[0]) >= abs(V[1]) else (V[1], np.array([0.0, 1.0]))
+    def pack(self) -> np.ndarray:
+        v = self.values
+        return np.array([v["sigma0"], v["F_s"], v["F_c"], v["V_s"], v["F_v"],
+                         1.0 if v["vmax"] == "literal" else 0.0])
 
-    def _ninf(self, V):
-        if abs(V[0]) >= abs(V[1]):
-            return abs(V[0]), np.array([np.sign(V[0]), 0.0])
-        return abs(V[1]), np.array([0.0, np.sign(V[1])])
+    def steady_force(self, v):
+        """Steady sliding (z' = 0) for V > 0: F = F_c + (F_s - F_c) exp(-(V/2V_s)^2) + F_v V."""
+        v = np.asarray(v, float)
+        p = self.values
+        lvl = p["F_c"] + (p["F_s"] - p["F_c"]) * np.exp(-(v / (2 * p["V_s"])) ** 2)
+        if p["vmax"] == "literal":
+            return np.where(v > 0, lvl, 0.0) + p["F_v"] * v
+        return np.sign(v) * lvl + p["F_v"] * v
 
-    def _g(self, V, load):
-        p = self.p
-        u = (V[0] + V[1]) / (2.0 * p["V_s"])
-        e = np.exp(-u * u)
-        de = e * (-2.0 * u) / (2.0 * p["V_s"])  # d e / d V_x = d e / d V_y
-        g = np.empty(2)
-        dg = np.empty(2)
-        for i, a in enumerate("xy"):
-            g[i] = load * (p[f"F_c{a}"] + (p[f"F_s{a}"] - p[f"F_c{a}"]) * e) / p[f"sigma0{a}"]
-            dg[i] = load * (p[f"F_s{a}"] - p[f"F_c{a}"]) * de / p[f"sigma0{a}"]
-        return g, dg
 
-    def rates(self, X, V, Z, load=1.0):
-        vm, _ = self._vmax(V)
-        n, _ = self._ninf(V)
-        g, _ = self._g(V, load)
-        return vm - Z * n / g
+@njit(cache=True)
+def bristle2d_eval(p, vx, vy, zx, zy):
+    """Full 2D model (2.7)-(2.12). p = (s0x, s0y, Fsx, Fsy, Fcx, Fcy, Vs, Fvx, Fvy, literal).
 
-    def force(self, X, V, Z, load=1.0):
-        p = self.p
-        return np.array([p["sigma0x"] * Z[0] + p["F_vx"] * V[0], p["sigma0y"] * Z[1] + p["F_vy"] * V[1]])
-
-    def jacobian(self, X, V, Z, load=1.0):
-        p = self.p
-        vm, dvm = self._vmax(V)
-        n, dn = self._ninf(V)
-        g, dg = self._g(V, load)
-        dZv = np.empty((2, 2))
-        for i in range(2):
-            # d/dV [vm - z n / g] ; dg/dVx = dg/dVy = dg[i]
-            dZv[i] = dvm - Z[i] * (dn / g[i] - n * dg[i] / g[i] ** 2 * np.ones(2))
-        dZz = np.diag(-n / g)
-        dFv = np.diag([p["F_vx"], p["F_vy"]])
-        dFz = np.diag([p["sigma0x"], p["sigma0y"]])
-        return np.zeros((2, 2)), dFv, dFz, np.zeros((2, 2)), dZv, dZz
-
-    def steady_force(self, v, load=1.0):
-        g, _ = self._g(np.array([v, 0.0]), load)
-        return self.p["sigma0x"] * g[0] * np.sign(v) + self.p["F_vx"] * v
-
-    def length_scales(self):
-        p = self.p
-        return np.array([p["F_sx"] / p["sigma0x"], p["F_sy"] / p["sigma0y"]])
-
-    def force_scale(self):
-        return self.p["F_sx"]
-
-    def damping(self):
-        return self.p["F_vx"]
+    Returns Fx, Fy, zx', zy' and the Jacobian J (4 x 4) of (Fx, Fy, zx', zy') with respect to
+    (vx, vy, zx, zy). ||V||_inf = max(|vx|, |vy|); the Stribeck argument is (vx + vy)/(2 V_s).
+    """
+    s0x, s0y, Fsx, Fsy, Fcx, Fcy, Vs, Fvx, Fvy, literal = (p[0], p[1], p[2], p[3], p[4], p[5],
+                                                           p[6], p[7], p[8], p[9])
+    J = np.zeros((4, 4))
+    u = (vx + vy) / (2.0 * Vs)
+    e = math.exp(-u * u)
+    du = 1.0 / (2.0 * Vs)  # du/dvx = du/dvy
+    gx = (Fcx + (Fsx - Fcx) * e) / s0x
+    gy = (Fcy + (Fsy - Fcy) * e) / s0y
+    dgx = (Fsx - Fcx) * e * (-2.0 * u) * du / s0x
+    dgy = (Fsy - Fcy) * e * (-2.0 * u) * du / s0y
+    # drive = max(V_i)
+    if literal > 0.5:
+        if vx >= vy:
+            drive, ddx, ddy = vx, 1.0, 0.0
+        else:
+            drive, ddx, ddy = vy, 0.0, 1.0
+    else:
+        if abs(vx) >= abs(vy):
+            drive, ddx, ddy = vx, 1.0, 0.0
+        else:
+            drive, ddx, ddy = vy, 0.0, 1.0
+    # infinity norm
+    if abs(vx) >= abs(vy):
+        ninf = abs(vx)
+        dnx = 1.0 if vx > 0 else (-1.0 if vx < 0 else 0.0)
+        dny = 0.0
+    else:
+        ninf = abs(vy)
+        dnx = 0.0
+        dny = 1.0 if vy > 0 else -1.0
+    zxd = drive - zx * ninf / gx
+    zyd = drive - zy * ninf / gy
+    Fx = s0x * zx + Fvx * vx
+    Fy = s0y * zy + Fvy * vy
+    J[0, 0] = Fvx
+    J[0, 2] = s0x
+    J[1, 1] = Fvy
+    J[1, 3] = s0y
+    J[2, 0] = ddx - zx * (dnx / gx - ninf * dgx / (gx * gx))
+    J[2, 1] = ddy - zx * (dny / gx - ninf * dgx / (gx * gx))
+    J[2, 2] = -ninf / gx
+    J[3, 0] = ddx - zy * (dnx / gy - ninf * dgy / (gy * gy))
+    J[3, 1] = ddy - zy * (dny / gy - ninf * dgy / (gy * gy))
+    J[3, 3] = -ninf / gy
+    return Fx, Fy, zxd, zyd, J
