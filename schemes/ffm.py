@@ -41,7 +41,7 @@ from numba import njit
 
 from probedyn.errors import ParameterError, SolverError
 from probedyn.params import Param, ParamSet
-from probedyn.schemes.friction import FrictionModel, get_friction_model, model_class
+from probedyn.schemes.friction import FrictionModel, model_class
 from probedyn.schemes.friction.bristle import bristle2d_eval, bristle_kernel
 from probedyn.schemes.friction.lugre import lugre_kernel
 from probedyn.schemes.friction.prandtl_tomlinson import pt_kernel

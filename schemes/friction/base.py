@@ -29,7 +29,7 @@ with ``scales=True`` in :attr:`FrictionModel.load_params`) are multiplied by a f
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar, Mapping
+from typing import Any, ClassVar
 
 import numpy as np
 

@@ -19,7 +19,6 @@ import math
 import numpy as np
 from numba import njit
 
-from probedyn.errors import ParameterError
 from probedyn.params import Param, ParamSet
 
 from .base import FrictionModel, positive_param
