@@ -62,7 +62,7 @@ def _human(d: dict) -> str:
 def ffm_cmd(
     preset: str = typer.Option("mica", "--preset", help="mica (Table 2.1) or vamwcnt (Table 2.2)."),
     model: str = typer.Option("bristle", "--model", help="Friction model: bristle, lugre or pt."),
-    length: Optional[float] = typer.Option(None, "--length", help="Scan length [m] (default: the preset's scan range)."),
+    length: Optional[float] = typer.Option(None, "--length", help="Scan length in m (default: the preset's scan range, 10 nm for mica)."),
     sets: Optional[list[str]] = SET_OPT,
     out: Optional[Path] = OUT_OPT,
     as_json: bool = JSON_OPT,
@@ -83,7 +83,7 @@ def ffm_cmd(
 
 @app.command("fit-ffm")
 def fit_ffm_cmd(
-    trace: Path = typer.Argument(..., help="CSV: base position [m] (or time [s]), lateral force [N]; '# speed = ...', '# k_x = ...' lines."),
+    trace: Path = typer.Argument(..., help="CSV: base position in m (or time in s), lateral force in N; '# speed = ...', '# k_x = ...' lines."),
     free: str = typer.Option("F_s,F_c", "--free", help="Comma-separated parameters to fit."),
     preset: Optional[str] = typer.Option(None, "--preset", help="Cantilever/friction defaults (default: file's or mica)."),
     model: Optional[str] = typer.Option(None, "--model", help="Friction model (default: file's or bristle)."),
