@@ -227,6 +227,7 @@ class ElasticModel:
 
         if int(n_modes) != n_modes or n_modes < 1:
             raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
+        self.check_resolution(int(n_modes))
         K, M = self.assemble()
         free = self.free_dofs
         Kf = K[free][:, free].tocsr()
@@ -244,6 +245,31 @@ class ElasticModel:
                        postprocess_s=post_s, n_opinv=res.n_opinv)
         return ModalResult(modes, self.dofs, self, timings, self.ndofs_total, res.backend,
                            self.total_mass(), self.tip if isinstance(self.tip, str) else "tip")
+
+    def elements_along_axis(self) -> float:
+        """Typical number of elements along ``beam_axis``: the body's extent along the axis over
+        the edge of a regular tetrahedron of the mean element volume."""
+        p, t = self.mesh.p, self.mesh.t
+        a, b, c, d = (p[:, t[i]] for i in range(4))
+        vol = np.abs(np.einsum("ij,ij->j", b - a, np.cross(c - a, d - a, axis=0))) / 6.0
+        h = (6.0 * np.sqrt(2.0) * vol.mean()) ** (1.0 / 3.0)
+        extent = np.ptp(p[self.beam_axis])
+        return float(extent / h)
+
+    def check_resolution(self, n_modes: int) -> None:
+        """Refuse a request the mesh cannot resolve.  The lowest ``n`` modes of a slender body
+        contain bending modes with up to about ``n/2`` half-waves along its axis (flapwise and
+        lateral families alternate, torsion and axial come in between); a P2 element per
+        half-wave is the least that gives frequencies to a few per cent (Euler–Bernoulli beam
+        elements need about the same), so at least ``n/2`` elements along the axis are required."""
+        n_ax = self.elements_along_axis()
+        need = 0.5 * n_modes
+        if n_ax < need:
+            raise SolverError(
+                f"mesh too coarse for {n_modes} modes: about {n_ax:.0f} elements along the beam axis, "
+                f"at least {need:.0f} needed; refine the mesh (element_size, elements_through_thickness) "
+                f"or ask for fewer modes"
+            )
 
     def _postprocess(self, lam: np.ndarray, Phi: np.ndarray, M: sp.csr_matrix, free: np.ndarray) -> list[Mode]:
         k = Phi.shape[1]

@@ -1,0 +1,236 @@
+"""Off-screen pictures of mode shapes (pyvista/VTK), for reports and papers (source Figs 3.15–3.16).
+
+* :func:`check_offscreen_gl` makes sure an off-screen OpenGL library (OSMesa or EGL) can be
+  loaded *before* VTK is imported: without one, VTK does not raise but kills the process.
+  A missing library gives :class:`probedyn.errors.SystemLibraryError` naming the Debian
+  packages ``libosmesa6`` / ``libegl1``.
+* :func:`render_mode` writes one PNG per mode: the deformed shape coloured by the displacement
+  magnitude (normalised to its maximum: a mode's amplitude is arbitrary), the undeformed
+  outline in grey, a scalar bar and the title "mode n — family — f".
+* :func:`render_panel` draws any four (or fewer) modes of any
+  :class:`~probedyn.fem.modes.ModalResult` on a 2x2 grid (the smart-probe figures reuse it).
+
+The deformation scale is chosen per mode so that the picture is readable: bending and axial
+modes are scaled so the largest displacement is ``bend_fraction`` of the longest dimension of
+the body; torsion so the cross-section turns by about 25 degrees (largest displacement ~0.5 of
+the largest section half-size). Coordinates are drawn in micrometres.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import math
+import os
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from probedyn.errors import ParameterError, SystemLibraryError
+
+#: Off-screen GL back-ends VTK can use without a display: (name, VTK window class, sonames).
+_GL_CANDIDATES: list[tuple[str, str, tuple[str, ...]]] = [
+    ("EGL", "vtkEGLRenderWindow", ("libEGL.so.1", "libEGL.so")),
+    ("OSMesa", "vtkOSOpenGLRenderWindow", ("libOSMesa.so.8", "libOSMesa.so.6", "libOSMesa.so")),
+]
+
+_GL_BACKEND: str | None = None
+
+
+def _loadable(sonames: Sequence[str]) -> bool:
+    for so in sonames:
+        try:
+            ctypes.CDLL(so)
+            return True
+        except OSError:
+            continue
+    return False
+
+
+def check_offscreen_gl() -> str:
+    """Return the usable off-screen GL back-end ("EGL" or "OSMesa"); raise if there is none.
+
+    Uses ctypes only (VTK itself would segfault). Without a display (no ``$DISPLAY``), tells
+    VTK which window class to use (``VTK_DEFAULT_OPENGL_WINDOW``) so it does not try X first.
+    """
+    global _GL_BACKEND
+    for name, window_class, sonames in _GL_CANDIDATES:
+        if _loadable(sonames):
+            if not os.environ.get("DISPLAY"):
+                os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", window_class)
+            _GL_BACKEND = name
+            return name
+    raise SystemLibraryError(
+        "no off-screen OpenGL library for rendering (neither libEGL nor libOSMesa loads); "
+        "install the Debian package libosmesa6 or libegl1 (./dev setup does it)"
+    )
+
+
+def _pyvista():
+    check_offscreen_gl()
+    import pyvista as pv
+
+    pv.OFF_SCREEN = True
+    return pv
+
+
+# --------------------------------------------------------------------------------------------
+# Fields
+# --------------------------------------------------------------------------------------------
+
+
+def mode_vertex_field(result: Any, index: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(points (N, 3) [m], tets (E, 4), displacement (N, 3)) of mode ``index`` at the mesh vertices.
+
+    Uses ``result.model.vertex_displacement(shape)`` when the model offers it (the P2 field at
+    the corner nodes of the straight-sided tets); otherwise the vertex DOFs of the basis.
+    """
+    model = result.model
+    mesh = model.bundle.mesh
+    shape = np.asarray(result.modes[index].shape)
+    if hasattr(model, "vertex_displacement"):
+        u = np.asarray(model.vertex_displacement(shape))
+    else:
+        u = shape[model.basis.nodal_dofs].T
+    u = u.reshape(mesh.p.shape[1], 3) if u.shape != (mesh.p.shape[1], 3) else u
+    return mesh.p.T.copy(), mesh.t.T.copy(), u
+
+
+def _grid(pv, points: np.ndarray, tets: np.ndarray):
+    cells = np.hstack([np.full((tets.shape[0], 1), 4, dtype=np.int64), tets.astype(np.int64)]).ravel()
+    celltypes = np.full(tets.shape[0], pv.CellType.TETRA, dtype=np.uint8)
+    return pv.UnstructuredGrid(cells, celltypes, points)
+
+
+def deformation_scale(points: np.ndarray, u: np.ndarray, family: str, bend_fraction: float = 0.12) -> float:
+    """Factor applied to ``u`` for display (see module docstring)."""
+    umax = float(np.linalg.norm(u, axis=1).max())
+    if umax == 0.0:
+        return 0.0
+    ext = np.ptp(points, axis=0)
+    if family == "torsion":
+        # the section half-size perpendicular to the axis of the body
+        axis = int(np.argmax(ext))
+        half = 0.5 * max(ext[i] for i in range(3) if i != axis)
+        return 0.5 * half / umax
+    return bend_fraction * ext.max() / umax
+
+
+# --------------------------------------------------------------------------------------------
+# Drawing
+# --------------------------------------------------------------------------------------------
+
+_UM = 1e6  # draw in micrometres
+
+
+def _title(result: Any, i: int) -> str:
+    m = result.modes[i]
+    f = float(m.frequency_hz)
+    if f >= 1e6:
+        fs = f"{f / 1e6:.4g} MHz"
+    elif f >= 1e3:
+        fs = f"{f / 1e3:.4g} kHz"
+    else:
+        fs = f"{f:.4g} Hz"
+    return f"Mode {int(m.index)}: {m.family}, {fs}"  # Mode.index is 1-based
+
+
+#: Viewing direction (from the scene towards the camera) per family: a side view shows
+#: flapwise (z) bending, a top view lateral (y) bending, an oblique view from the free end
+#: shows the twisted end section of a torsion mode.
+_VIEW = {
+    "flapwise": (0.30, -1.0, 0.32),
+    "axial": (0.30, -1.0, 0.32),
+    "lateral": (0.30, -0.40, 1.0),
+    "torsion": (1.0, -0.75, 0.55),
+    "other": (0.55, -1.0, 0.62),
+}
+
+
+def _camera(pl, points_um: np.ndarray, family: str, zoom: float) -> None:
+    """Point the camera along the family's view direction and fit the deformed + undeformed body."""
+    lo, hi = points_um.min(axis=0), points_um.max(axis=0)
+    c = 0.5 * (lo + hi)
+    d = np.asarray(_VIEW.get(family, _VIEW["other"]), dtype=float)
+    d /= np.linalg.norm(d)
+    up = (0.0, 0.0, 1.0) if abs(d[2]) < 0.9 else (0.0, 1.0, 0.0)
+    if family == "lateral":
+        up = (0.0, 1.0, 0.0)
+    pl.camera_position = [tuple(c + 3.0 * np.ptp(points_um, axis=0).max() * d), tuple(c), up]
+    pl.reset_camera(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
+    pl.camera.zoom(zoom)
+
+
+def _draw(pl, pv, result: Any, i: int, title: str | None, font_size: int, bar: bool, zoom: float = 1.6) -> None:
+    points, tets, u = mode_vertex_field(result, i)
+    fam = result.modes[i].family
+    s = deformation_scale(points, u, fam)
+    grid = _grid(pv, points * _UM, tets)
+    surf = grid.extract_surface(algorithm="dataset_surface")
+    mag = np.linalg.norm(u, axis=1)
+    mag = mag / (mag.max() or 1.0)
+    ids = surf.point_data["vtkOriginalPointIds"]
+    surf.point_data["|u| / max"] = mag[ids]
+    outline = surf.extract_feature_edges(feature_angle=30, boundary_edges=True, manifold_edges=False,
+                                         non_manifold_edges=False)
+    deformed = surf.copy()
+    deformed.points = surf.points + s * _UM * u[ids]
+    pl.add_mesh(surf, color="#cfcfcf", opacity=0.18, show_edges=False, lighting=False)
+    pl.add_mesh(outline, color="#555555", line_width=1.5)
+    sbar = dict(title="displacement magnitude (normalised)", n_labels=3, fmt="%.1f", vertical=False, height=0.06, width=0.5,
+                position_x=0.25, position_y=0.04, title_font_size=font_size - 2, label_font_size=font_size - 4,
+                color="black")
+    pl.add_mesh(deformed, scalars="|u| / max", cmap="viridis", clim=(0.0, 1.0), smooth_shading=True,
+                split_sharp_edges=True, show_scalar_bar=bar, scalar_bar_args=sbar if bar else None,
+                specular=0.2)
+    pl.add_text(title if title is not None else _title(result, i), position="upper_edge", font_size=font_size,
+                color="black")
+    _camera(pl, np.vstack([surf.points, deformed.points]), fam, zoom)
+    pl.add_axes(line_width=3, labels_off=False, color="black", viewport=(0.0, 0.0, 0.14, 0.22))
+
+
+def render_mode(result: Any, index: int, path: str | Path, window_size: tuple[int, int] = (1400, 700),
+                title: str | None = None) -> Path:
+    """Write a PNG of mode ``index`` (0-based) of ``result``; return the path."""
+    if not 0 <= index < len(result.modes):
+        raise ParameterError(f"mode {index} not in the result (it has {len(result.modes)} modes)")
+    pv = _pyvista()
+    from probedyn.jsonio import atomic_path
+
+    pl = pv.Plotter(off_screen=True, window_size=list(window_size))
+    pl.set_background("white")
+    _draw(pl, pv, result, index, title, 14, True)
+    pl.enable_anti_aliasing("ssaa")
+    with atomic_path(path) as tmp:
+        pl.screenshot(str(tmp))
+    pl.close()
+    return Path(path)
+
+
+def render_modes(result: Any, outdir: str | Path, n: int | None = None, prefix: str = "mode") -> list[Path]:
+    """One PNG per mode for the first ``n`` modes: ``outdir/{prefix}_{k}.png`` (k from 1)."""
+    n = len(result.modes) if n is None else min(n, len(result.modes))
+    return [render_mode(result, i, Path(outdir) / f"{prefix}_{i + 1}.png") for i in range(n)]
+
+
+def render_panel(result: Any, path: str | Path, modes: Sequence[int] = (0, 1, 2, 3),
+                 window_size: tuple[int, int] = (1800, 1000), titles: Sequence[str] | None = None) -> Path:
+    """A 2x2 panel (fewer if fewer modes) of the given modes (0-based) of any ModalResult."""
+    modes = [m for m in modes if 0 <= m < len(result.modes)][:4]
+    if not modes:
+        raise ParameterError("render_panel: no valid mode index")
+    pv = _pyvista()
+    from probedyn.jsonio import atomic_path
+
+    shape = (1, len(modes)) if len(modes) <= 2 else (2, 2)
+    pl = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)
+    for k, m in enumerate(modes):
+        pl.subplot(k // shape[1], k % shape[1])
+        pl.set_background("white")
+        _draw(pl, pv, result, m, titles[k] if titles else None, 12, True)
+    pl.enable_anti_aliasing("ssaa")
+    with atomic_path(path) as tmp:
+        pl.screenshot(str(tmp))
+    pl.close()
+    return Path(path)
