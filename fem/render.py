@@ -12,7 +12,7 @@
 
 The deformation scale is chosen per mode so that the picture is readable: bending and axial
 modes are scaled so the largest displacement is ``bend_fraction`` of the longest dimension of
-the body; torsion so the cross-section turns by about 25 degrees (largest displacement ~0.5 of
+the body; torsion so the cross-section turns by about 33 degrees (largest displacement ~0.65 of
 the largest section half-size). Coordinates are drawn in micrometres.
 """
 
@@ -113,7 +113,7 @@ def deformation_scale(points: np.ndarray, u: np.ndarray, family: str, bend_fract
         # the section half-size perpendicular to the axis of the body
         axis = int(np.argmax(ext))
         half = 0.5 * max(ext[i] for i in range(3) if i != axis)
-        return 0.5 * half / umax
+        return 0.65 * half / umax
     return bend_fraction * ext.max() / umax
 
 
@@ -143,7 +143,7 @@ _VIEW = {
     "flapwise": (0.30, -1.0, 0.32),
     "axial": (0.30, -1.0, 0.32),
     "lateral": (0.30, -0.40, 1.0),
-    "torsion": (1.0, -0.75, 0.55),
+    "torsion": (1.0, -0.55, 0.42),
     "other": (0.55, -1.0, 0.62),
 }
 
@@ -162,7 +162,8 @@ def _camera(pl, points_um: np.ndarray, family: str, zoom: float) -> None:
     pl.camera.zoom(zoom)
 
 
-def _draw(pl, pv, result: Any, i: int, title: str | None, font_size: int, bar: bool, zoom: float = 1.6) -> None:
+def _draw(pl, pv, result: Any, i: int, title: str | None, font_size: int, bar_style: str = "horizontal",
+          zoom: float = 1.6) -> None:
     points, tets, u = mode_vertex_field(result, i)
     fam = result.modes[i].family
     s = deformation_scale(points, u, fam)
@@ -176,11 +177,16 @@ def _draw(pl, pv, result: Any, i: int, title: str | None, font_size: int, bar: b
                                          non_manifold_edges=False)
     deformed = surf.copy()
     deformed.points = surf.points + s * _UM * u[ids]
-    pl.add_mesh(surf, color="#cfcfcf", opacity=0.18, show_edges=False, lighting=False)
     pl.add_mesh(outline, color="#555555", line_width=1.5)
-    sbar = dict(title="displacement magnitude (normalised)", n_labels=3, fmt="%.1f", vertical=False, height=0.06, width=0.5,
-                position_x=0.25, position_y=0.04, title_font_size=font_size - 2, label_font_size=font_size - 4,
-                color="black")
+    if bar_style == "vertical":  # small, one per panel (scalar-bar titles must be unique per plotter)
+        sbar = dict(title="|u|/max" + " " * i, n_labels=2, fmt="%.0f", vertical=True, height=0.45, width=0.035,
+                    position_x=0.93, position_y=0.12, title_font_size=font_size - 2,
+                    label_font_size=font_size - 2, color="black")
+    else:
+        sbar = dict(title="displacement magnitude / maximum", n_labels=2, fmt="%.1f", vertical=False,
+                    height=0.06, width=0.5, position_x=0.25, position_y=0.04, title_font_size=font_size - 2,
+                    label_font_size=font_size - 4, color="black")
+    bar = bar_style != "none"
     pl.add_mesh(deformed, scalars="|u| / max", cmap="viridis", clim=(0.0, 1.0), smooth_shading=True,
                 split_sharp_edges=True, show_scalar_bar=bar, scalar_bar_args=sbar if bar else None,
                 specular=0.2)
@@ -200,7 +206,7 @@ def render_mode(result: Any, index: int, path: str | Path, window_size: tuple[in
 
     pl = pv.Plotter(off_screen=True, window_size=list(window_size))
     pl.set_background("white")
-    _draw(pl, pv, result, index, title, 14, True)
+    _draw(pl, pv, result, index, title, 16, "horizontal")
     pl.enable_anti_aliasing("ssaa")
     with atomic_path(path) as tmp:
         pl.screenshot(str(tmp))
@@ -228,7 +234,7 @@ def render_panel(result: Any, path: str | Path, modes: Sequence[int] = (0, 1, 2,
     for k, m in enumerate(modes):
         pl.subplot(k // shape[1], k % shape[1])
         pl.set_background("white")
-        _draw(pl, pv, result, m, titles[k] if titles else None, 12, True)
+        _draw(pl, pv, result, m, titles[k] if titles else None, 13, "vertical", zoom=1.45)
     pl.enable_anti_aliasing("ssaa")
     with atomic_path(path) as tmp:
         pl.screenshot(str(tmp))
