@@ -61,7 +61,9 @@ def modes_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mod
 
 
 def compare_rows(p, values, result) -> list[dict[str, Any]]:
-    return p.references(values, result)
+    from probedyn.fem.compare import comparison_rows
+
+    return comparison_rows(p, values, result)
 
 
 @app.command("compare")
@@ -189,7 +191,7 @@ def report_section(outdir: Path, quick: bool) -> str:
         values = p.resolve(over)
         model = p.build(values)
         result = model.modes(8)
-        rows = [{**r, "rel_pct": 100 * r["rel_diff"]} for r in p.references(values, result)]
+        rows = [{**r, "rel_pct": 100 * r["rel_diff"]} for r in compare_rows(p, values, result)]
         nu_txt = "0" if nu == 0 else f"{p.material(values).isotropic_constants()[1]:g} (material)"
         parts += [f"### FEM vs beam theory, L = 300 um, w = 30 um, t = 10 um, E = 169 GPa, nu = {nu_txt}", "",
                   f"{result.dofs} DOFs, P2 tetrahedra, assembly {result.timings.get('assemble_s', float('nan')):.1f} s, "
