@@ -179,7 +179,7 @@ def _draw(pl, pv, result: Any, i: int, title: str | None, font_size: int, bar_st
     deformed.points = surf.points + s * _UM * u[ids]
     pl.add_mesh(outline, color="#555555", line_width=1.5)
     if bar_style == "vertical":  # small, one per panel (scalar-bar titles must be unique per plotter)
-        sbar = dict(title="|u|/max" + " " * i, n_labels=2, fmt="%.0f", vertical=True, height=0.45, width=0.035,
+        sbar = dict(title="disp/max" + " " * i, n_labels=2, fmt="%.0f", vertical=True, height=0.45, width=0.035,
                     position_x=0.93, position_y=0.12, title_font_size=font_size - 2,
                     label_font_size=font_size - 2, color="black")
     else:
