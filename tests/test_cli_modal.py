@@ -89,3 +89,15 @@ def test_mesh_too_coarse_for_requested_modes(capsys):
     assert main(["modes", "cantilever", "--n-modes", "100", "--set", "elements_through_thickness=1"]) == 2
     err = capsys.readouterr().err
     assert "probedyn: error:" in err and "coarse" in err
+
+
+def test_bad_input_through_the_installed_entry_point():
+    # once through a real process: exit code 2, one stderr line, no traceback
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "probedyn.cli", "modes", "cantilever", "--set", "length=300"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("probedyn: error:") and "Traceback" not in proc.stderr
