@@ -2,7 +2,7 @@
 
 :func:`comparison_rows` joins the probe's own references (beam formulas per mode family, see
 ``Probe.references``) with the Rayleigh quotient (2.46) evaluated on the FEM mode itself:
-the centreline deflection of each flapwise or lateral bending mode is sampled along the beam and
+the cross-section-averaged deflection of each flapwise or lateral bending mode is sampled along the beam and
 put into ``omega^2 = int EI (w'')^2 dx / int rho A w^2 dx``. On an exact Euler–Bernoulli mode it
 returns the Euler–Bernoulli frequency, so the row separates what the 3D FEM adds (shear, rotary
 inertia, Poisson clamping) from a difference in the mode *shape*.
@@ -39,7 +39,14 @@ def rayleigh_rows(probe: Any, values: dict[str, Any], result: Any) -> list[dict[
         comp = 2 if m.family == "flapwise" else 1
         EI = b.E * (b.w * b.t**3 if comp == 2 else b.t * b.w**3) / 12.0
         rhoA = b.rho * b.w * b.t
-        w = np.array([model.displacement_at(m.shape, (xi, 0.0, 0.0))[comp] for xi in x])
+        # cross-section average on a 3x3 Gauss grid (the centreline alone carries the 3D
+        # anticlastic / Poisson deformation of the section, which is not beam deflection)
+        g3 = np.array([-np.sqrt(0.6), 0.0, np.sqrt(0.6)]) / 2.0
+        w3 = np.array([5.0, 8.0, 5.0]) / 18.0
+        w = np.zeros_like(x)
+        for gy, wy in zip(g3, w3):
+            for gz, wz in zip(g3, w3):
+                w += wy * wz * np.array([model.displacement_at(m.shape, (xi, gy * b.w, gz * b.t))[comp] for xi in x])
         if tip_mass > 0:
             # point mass at x = L: add m w(L)^2 to the kinetic integral via an equivalent
             # distributed term would bias the spline; evaluate the two parts separately instead
