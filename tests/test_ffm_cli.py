@@ -16,8 +16,17 @@ def test_json_has_the_required_fields(capsys):
     d = _json(["--preset", "mica"], capsys)
     for key in ("static_friction_n", "kinetic_friction_n", "period_m", "regime"):
         assert key in d
-    # the source's 10 nm scan never reaches F_s / k_x = 65 nm: no slip (SOURCE-NOTES 12)
-    assert d["regime"] == "presliding"
+    # the source's 10 nm scan never reaches F_s / k_x = 65 nm: no slip (SOURCE-NOTES 12);
+    # the command says so and extends the scan to measure the regular stick-slip
+    assert d["preset_scan"]["regime"] == "presliding" and d["preset_scan"]["n_slips"] == 0
+    assert d["preset_scan"]["scan_length_m"] == pytest.approx(10e-9)
+    assert d["regime"] == "regular"
+    F_s, F_c, k = 12.95e-9, 12.45e-9, 0.2  # Table 2.1
+    # quasi-static sawtooth: peaks at F_s, valleys near F_c, period (F_s - F_c)/k_x;
+    # overdamped slips stop within a few % of the sawtooth amplitude of F_c
+    assert d["static_friction_n"] == pytest.approx(F_s, rel=1e-3)
+    assert abs(d["kinetic_friction_n"] - F_c) < 0.05 * (F_s - F_c)
+    assert d["period_m"] == pytest.approx((F_s - F_c) / k, rel=0.05)
     assert d["first_slip_estimate_m"] == pytest.approx(12.95e-9 / 0.2)
 
 

@@ -55,6 +55,7 @@ def _human(d: dict) -> str:
         f"quasi-static estimates: first slip F_s/k_x = {nn(d['first_slip_estimate_m'], 1e9, 'nm')}, "
         f"period (F_s-F_c)/k_x = {nn(d['period_estimate_m'], 1e9, 'nm')}",
         f"max lateral force {nn(d['max_force_n'])}",
+        *([f"note: {d['preset_scan']['note']}"] if d.get("preset_scan") else []),
     ])
 
 
@@ -62,7 +63,11 @@ def _human(d: dict) -> str:
 def ffm_cmd(
     preset: str = typer.Option("mica", "--preset", help="mica (Table 2.1) or vamwcnt (Table 2.2)."),
     model: str = typer.Option("bristle", "--model", help="Friction model: bristle, lugre or pt."),
-    length: Optional[float] = typer.Option(None, "--length", help="Scan length in m (default: the preset's scan range, 10 nm for mica)."),
+    length: Optional[float] = typer.Option(
+        None, "--length",
+        help="Scan length in m. Default: the preset's scan range (10 nm for mica), extended when "
+             "needed to the first slip plus four periods (F_s/k_x + 4 (F_s-F_c)/k_x), so that the "
+             "stick-slip regime can be measured; the result for the preset's own range is reported too."),
     sets: Optional[list[str]] = SET_OPT,
     out: Optional[Path] = OUT_OPT,
     as_json: bool = JSON_OPT,
@@ -73,6 +78,18 @@ def ffm_cmd(
 
     ov = parse_sets(sets)
     res, summary = F.run_ffm(preset, model, ov, length=length)
+    if length is None and summary["regime"] == "presliding" and summary.get("first_slip_estimate_m"):
+        # SOURCE-NOTES item 12: the source's scan range ends before the first slip. Report that
+        # finding, then scan far enough to measure the stick-slip the preset's parameters give.
+        source = {k: summary[k] for k in ("scan_length_m", "regime", "max_force_n", "n_slips")}
+        auto = 1.05 * summary["first_slip_estimate_m"] + 4.0 * (summary["period_estimate_m"] or 0.0)
+        res, summary = F.run_ffm(preset, model, ov, length=max(auto, summary["scan_length_m"]))
+        summary["preset_scan"] = {
+            **source,
+            "note": f"no slip within the preset's {source['scan_length_m'] * 1e9:.3g} nm scan: the first slip "
+                    f"needs F_s/k_x = {summary['first_slip_estimate_m'] * 1e9:.4g} nm of base travel "
+                    "(SOURCE-NOTES item 12); the scan was extended to measure the stick-slip",
+        }
     if out is not None:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
