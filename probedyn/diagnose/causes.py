@@ -54,8 +54,11 @@ class Cause:
     needs: ClassVar[str] = ""  # what data the cause needs to be identifiable
     source: ClassVar[str] = ""
 
-    def apply(self, values: dict[str, float], state: dict[str, Any]) -> None:  # pragma: no cover
-        raise NotImplementedError
+    def apply(self, values: dict[str, float], state: dict[str, Any]) -> None:
+        """Put the cause's parameters into the model state. Default: each parameter under its
+        own name (the model reads ``state[name]``); causes that combine or accumulate override it."""
+        for p in self.params:
+            state[p.name] = values[p.name]
 
     def derived(self, values: dict[str, float], problem: Any) -> dict[str, float]:
         """Physical quantities derived from the fitted parameters (for the report)."""

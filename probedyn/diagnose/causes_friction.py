@@ -24,9 +24,6 @@ class VelocityLog(Cause):
     source = "thermally activated Prandtl-Tomlinson (Gnecco et al. 2000; Sang et al. 2001); source section 2.1.4"
     params = (CauseParam("slip_b", "1 per e-fold", 0.0, 0.5, (0.05,), "slip advance per e-fold of speed", neutral=0.0),)
 
-    def apply(self, v, s):
-        s["slip_b"] = v["slip_b"]
-
 
 @register
 class ScannerNonlinearity(Cause):
@@ -38,9 +35,6 @@ class ScannerNonlinearity(Cause):
     needs = "a trace with several lattice periods"
     source = "quadratic piezo nonlinearity"
     params = (CauseParam("bow", "1", -0.4, 0.4, (0.0,), "bow coefficient c (max error c L / 4 mid-scan)", neutral=0.0),)
-
-    def apply(self, v, s):
-        s["bow"] = v["bow"]
 
 
 @register
@@ -57,10 +51,6 @@ class ForceDrift(Cause):
         CauseParam("drift", "k_x a per scan", -5.0, 5.0, (0.0,), "drift over one scan / (k_x a)", neutral=0.0),
     )
 
-    def apply(self, v, s):
-        s["offset"] = v["offset"]
-        s["drift"] = v["drift"]
-
 
 @register
 class LatticeMisalignment(Cause):
@@ -75,9 +65,6 @@ class LatticeMisalignment(Cause):
     source = "2D stick-slip, source section 2.1.4.1 (Fig 2.7, angle gamma) and 4.1.1 (zigzag pushing)"
     params = (CauseParam("theta", "deg", 0.0, 45.0, (8.0, 20.0, 35.0), "scan angle to the lattice axis", neutral=0.0),)
 
-    def apply(self, v, s):
-        s["theta"] = v["theta"]
-
 
 @register
 class ViscousFriction(Cause):
@@ -89,9 +76,6 @@ class ViscousFriction(Cause):
     needs = "scans at two or more speeds"
     source = "eqs 2.7 and 2.10 (viscous coefficient F_nu, N s/m; SOURCE-NOTES item 9)"
     params = (CauseParam("visc", "k_x a at v_max", 0.0, 10.0, (0.05,), "viscous force at the fastest scan / (k_x a)", neutral=0.0),)
-
-    def apply(self, v, s):
-        s["visc"] = v["visc"]
 
 
 @register
@@ -105,5 +89,3 @@ class AdhesionLoad(Cause):
     source = "section 2.2.4 (adhesion-friction coupling)"
     params = (CauseParam("n_adh", "mean load", -0.9, 20.0, (0.3,), "adhesion load / mean normal load", neutral=0.0),)
 
-    def apply(self, v, s):
-        s["n_adh"] = v["n_adh"]

@@ -136,10 +136,6 @@ class FluidLoading(Cause):
         CauseParam("eta_f", "Pa s", 3e-6, 1e-2, (1.8e-5, 1e-3), "fluid dynamic viscosity", scale="log", neutral=1.8e-5, secondary=True, hold=1.8e-5),
     )
 
-    def apply(self, v, s):
-        s["rho_f"] = v["rho_f"]
-        s["eta_f"] = v["eta_f"]
-
 
 @register
 class AxialPrestress(Cause):
@@ -152,8 +148,6 @@ class AxialPrestress(Cause):
     source = "EI w'''' - P w'' = rho A omega^2 w"
     params = (CauseParam("p", "1 (P L^2/EI)", -2.2, 30.0, (0.0,), "axial force P L_nom^2 / EI_flap", neutral=0.0),)
 
-    def apply(self, v, s):
-        s["p"] = v["p"]
 
     def derived(self, v, problem):
         return {"axial_force_N": v["p"] * problem.nominal_EI_flap / problem.props.length**2}
