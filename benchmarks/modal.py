@@ -163,7 +163,7 @@ def main() -> None:
         f"vectorised {asm['assemble_K_s']:.2f} s -> ratio {asm['skfem_assemble_K_s'] / asm['assemble_K_s']:.1f}x "
         f"(max relative entry difference {asm['skfem_vs_fast_max_rel']:.1e})")
     if a.out:
-        from probedyn.jsonio import write_text
+        from probedyn.core.io import write_text
 
         write_text(a.out, "\n".join(lines) + "\n")
 

@@ -24,7 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from probedyn.errors import SolverError
+from probedyn.core.errors import SolverError
 
 SOLVERS = ("auto", "pardiso", "superlu")
 

@@ -35,7 +35,7 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from probedyn.errors import MaterialError
+from probedyn.core.errors import MaterialError
 
 STIFFNESS_INTORDER = 2
 MASS_INTORDER = 4
@@ -283,7 +283,7 @@ def _scalar_probes(basis, x: np.ndarray) -> sp.csr_matrix:
     1e-9 of the mesh extent, e.g. a tip apex that is a mesh vertex) takes that node's value
     exactly (Lagrange property), which avoids the element finder's round-off failures on
     vertices and edges; other points must lie inside the mesh."""
-    from probedyn.errors import GeometryError
+    from probedyn.core.errors import GeometryError
 
     locs = basis.doflocs
     ext = float(np.ptp(locs, axis=1).max())

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 
 # VTK tetra10 edge order as vertex pairs
 _VTK_EDGES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))
@@ -39,7 +39,7 @@ def write_modes_vtu(result, path: str | Path) -> Path:
     """Write the mesh and every mode's displacement field to ``path`` (.vtu) atomically."""
     import meshio
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     model = result.model
     if model is None:
@@ -79,6 +79,6 @@ def read_modes_vtu(path: str | Path):
 def write_modes_json(result, path: str | Path) -> Path:
     """JSON summary (frequencies, families, effective masses, participation, energy shares,
     DOFs, timings) written atomically."""
-    from probedyn.jsonio import write_json
+    from probedyn.core.io import write_json
 
     return write_json(path, result.to_dict())

@@ -35,7 +35,7 @@ from typing import Callable, Union
 
 import numpy as np
 
-from probedyn.errors import MaterialError
+from probedyn.core.errors import MaterialError
 
 #: Voigt index pairs in the order used throughout probedyn.
 VOIGT_PAIRS = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))

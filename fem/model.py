@@ -27,7 +27,7 @@ from typing import Any, Mapping, Sequence, Union
 import numpy as np
 import scipy.sparse as sp
 
-from probedyn.errors import GeometryError, MaterialError, ParameterError, SolverError
+from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes

@@ -2,7 +2,7 @@
 
 * :func:`check_offscreen_gl` makes sure an off-screen OpenGL library (OSMesa or EGL) can be
   loaded *before* VTK is imported: without one, VTK does not raise but kills the process.
-  A missing library gives :class:`probedyn.errors.SystemLibraryError` naming the Debian
+  A missing library gives :class:`probedyn.core.errors.SystemLibraryError` naming the Debian
   packages ``libosmesa6`` / ``libegl1``.
 * :func:`render_mode` writes one PNG per mode: the deformed shape coloured by the displacement
   magnitude (normalised to its maximum: a mode's amplitude is arbitrary), the undeformed
@@ -27,7 +27,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from probedyn.errors import ParameterError, SystemLibraryError
+from probedyn.core.errors import ParameterError, SystemLibraryError
 
 #: Off-screen GL back-ends VTK can use without a display: (name, VTK window class, sonames).
 _GL_CANDIDATES: list[tuple[str, str, tuple[str, ...]]] = [
@@ -202,7 +202,7 @@ def render_mode(result: Any, index: int, path: str | Path, window_size: tuple[in
     if not 0 <= index < len(result.modes):
         raise ParameterError(f"mode {index} not in the result (it has {len(result.modes)} modes)")
     pv = _pyvista()
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     pl = pv.Plotter(off_screen=True, window_size=list(window_size))
     pl.set_background("white")
@@ -227,7 +227,7 @@ def render_panel(result: Any, path: str | Path, modes: Sequence[int] = (0, 1, 2,
     if not modes:
         raise ParameterError("render_panel: no valid mode index")
     pv = _pyvista()
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     shape = (1, len(modes)) if len(modes) <= 2 else (2, 2)
     pl = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)

@@ -35,7 +35,7 @@ from scipy.interpolate import make_interp_spline
 from scipy.linalg import expm
 from scipy.optimize import brentq
 
-from probedyn.errors import ParameterError, SolverError
+from probedyn.core.errors import ParameterError, SolverError
 
 Direction = Literal["flapwise", "lateral"]
 TipMassForm = Literal["standard", "printed"]

@@ -34,7 +34,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 
 DIRECTION_OF_FAMILY = {"flapwise": "z", "lateral": "y", "axial": "x"}
 _AXES = "xyz"

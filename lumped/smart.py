@@ -45,7 +45,7 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.linalg import eigh
 
-from probedyn.errors import ParameterError, SolverError
+from probedyn.core.errors import ParameterError, SolverError
 
 AX = {"x": 0, "y": 1, "z": 2}
 FAMILY_DIR = {"axial": "x", "lateral": "y", "flapwise": "z"}

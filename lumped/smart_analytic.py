@@ -34,7 +34,7 @@ from typing import Literal
 import numpy as np
 from scipy.optimize import brentq
 
-from probedyn.errors import GeometryError, ParameterError
+from probedyn.core.errors import GeometryError, ParameterError
 from probedyn.lumped.beam import tip_mass_roots
 
 Form = Literal["standard", "printed"]

@@ -29,7 +29,7 @@ from typing import Iterator
 
 import numpy as np
 
-from probedyn.errors import GeometryError
+from probedyn.core.errors import GeometryError
 
 _LOCK = threading.RLock()
 
@@ -190,7 +190,7 @@ def export_meshio(mesh, path: str | Path, file_format: str | None = None) -> Pat
     names) through meshio, in any format meshio knows (by suffix: .vtu, .msh, .xdmf, ...)."""
     import meshio
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     path = Path(path)
     region = np.full(mesh.t.shape[1], -1, dtype=np.int32)

@@ -37,7 +37,7 @@ class MeshOptions:
     optimize: bool = True
 
     def size_for(self, thinnest: float) -> float:
-        from probedyn.errors import ParameterError
+        from probedyn.core.errors import ParameterError
 
         if self.elements_through_thickness < 1:
             raise ParameterError("elements_through_thickness must be at least 1")
@@ -95,7 +95,7 @@ class MeshBundle:
 
     # ---- persistence -------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
-        from probedyn.jsonio import atomic_path
+        from probedyn.core.io import atomic_path
 
         path = Path(path)
         arrays: dict[str, np.ndarray] = {"p": self.mesh.p, "t": self.mesh.t}
@@ -105,7 +105,7 @@ class MeshBundle:
             arrays[f"bnd::{name}"] = np.asarray(idx)
         for name, x in self.points.items():
             arrays[f"pt::{name}"] = np.asarray(x, dtype=float)
-        from probedyn.jsonio import to_jsonable
+        from probedyn.core.io import to_jsonable
 
         arrays["meta"] = np.array(json.dumps(to_jsonable({"key": self.key, "meta": self.meta, "version": CACHE_VERSION})))
         with atomic_path(path) as tmp:
@@ -117,7 +117,7 @@ class MeshBundle:
     def load(cls, path: str | Path) -> "MeshBundle":
         from skfem import MeshTet
 
-        from probedyn.errors import DataFormatError
+        from probedyn.core.errors import DataFormatError
 
         path = Path(path)
         try:
@@ -145,7 +145,7 @@ def cache_dir() -> Path:
 
 def params_key(builder_name: str, params: dict[str, Any]) -> str:
     """Stable hash of a builder name and its (JSON-able) parameters."""
-    from probedyn.jsonio import to_jsonable
+    from probedyn.core.io import to_jsonable
 
     blob = json.dumps(
         {"builder": builder_name, "params": to_jsonable(params), "v": CACHE_VERSION},

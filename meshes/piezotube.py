@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.errors import GeometryError
+from probedyn.core.errors import GeometryError
 from probedyn.meshes._gmsh import RawMesh, entities_in_box, extract_tet_mesh, gmsh_session
 from probedyn.meshes.cache import MeshBundle, MeshOptions, cached_mesh
 

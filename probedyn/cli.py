@@ -1,6 +1,6 @@
 """The ``probedyn`` command line: a thin layer over the library.
 
-Errors caused by input (:class:`probedyn.errors.ProbedynError`) are printed on one line and
+Errors caused by input (:class:`probedyn.core.errors.ProbedynError`) are printed on one line and
 exit non-zero without a traceback; anything else is a bug and keeps its traceback.
 """
 
@@ -11,7 +11,7 @@ import sys
 
 from probedyn.commands import COMMAND_MODULES
 from probedyn.commands._apps import app
-from probedyn.errors import ProbedynError
+from probedyn.core.errors import ProbedynError
 
 for _name in COMMAND_MODULES:
     # Each module attaches its commands to the Typer apps. A module that does not exist (yet)

@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from probedyn import __version__
-from probedyn.jsonio import write_text
+from probedyn.core.io import write_text
 
 SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.commands.modal:report_section"),

@@ -44,7 +44,7 @@ from typing import Any, Callable, Literal, Sequence
 
 import numpy as np
 
-from probedyn.errors import ParameterError, SolverError
+from probedyn.core.errors import ParameterError, SolverError
 
 Law = Literal["area", "load"]
 
@@ -369,7 +369,7 @@ def plot_traces(res: dict[str, Any], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
     cmap = plt.get_cmap("plasma")

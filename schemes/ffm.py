@@ -39,8 +39,8 @@ from typing import Any, Mapping
 import numpy as np
 from numba import njit
 
-from probedyn.errors import ParameterError, SolverError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError, SolverError
+from probedyn.core.params import Param, ParamSet
 from probedyn.schemes.friction import FrictionModel, model_class
 from probedyn.schemes.friction.bristle import bristle2d_eval, bristle_kernel
 from probedyn.schemes.friction.lugre import lugre_kernel

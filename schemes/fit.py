@@ -27,7 +27,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from probedyn.errors import DataFormatError, ParameterError
+from probedyn.core.errors import DataFormatError, ParameterError
 
 REQUIRED_META = ("speed", "k_x")
 
@@ -113,7 +113,7 @@ def read_trace(path: str | Path) -> Trace:
 def write_trace(path: str | Path, base: np.ndarray, force: np.ndarray, speed: float, k_x: float,
                 **meta: Any) -> Path:
     """Write a trace CSV in the format read by :func:`read_trace` (atomically)."""
-    from probedyn.jsonio import write_text
+    from probedyn.core.io import write_text
 
     head = [f"# speed = {speed!r}", f"# k_x = {k_x!r}"] + [f"# {k} = {v}" for k, v in meta.items()]
     body = "\n".join(f"{b:.9e},{f:.9e}" for b, f in zip(base, force))

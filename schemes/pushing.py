@@ -63,8 +63,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from probedyn.errors import ParameterError, SolverError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError, SolverError
+from probedyn.core.params import Param, ParamSet
 
 # --------------------------------------------------------------------------------------------
 # Substrates (Table 4.2)

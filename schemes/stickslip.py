@@ -47,8 +47,8 @@ from typing import Any
 import numba
 import numpy as np
 
-from probedyn.errors import ParameterError, SolverError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError, SolverError
+from probedyn.core.params import Param, ParamSet
 
 # --------------------------------------------------------------------------------------
 # Parameters (Table 4.3)

@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 
 
 def noise_sigma(force: np.ndarray) -> float:

@@ -47,8 +47,8 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from probedyn.errors import ParameterError, ProbedynError, SolverError
-from probedyn.jsonio import atomic_path, write_json
+from probedyn.core.errors import ParameterError, ProbedynError, SolverError
+from probedyn.core.io import atomic_path, write_json
 
 __all__ = [
     "GridError",
@@ -393,7 +393,7 @@ def run_sweep(
     ``out``: NetCDF file (written atomically); its finished chunks persist in ``out.parts/``
     so an interrupted run resumes.  ``restart=True`` discards them.  Errors: :class:`GridError`
     for bad grids, :class:`SchedulerError` for a bad/unreachable scheduler, the scheme's own
-    :class:`~probedyn.errors.ProbedynError` if it raises one, else :class:`SolverError`.
+    :class:`~probedyn.core.errors.ProbedynError` if it raises one, else :class:`SolverError`.
     """
     import xarray as xr
 
@@ -544,6 +544,6 @@ def open_sweep(path: str | Path):
     try:
         return _read_nc(path)
     except Exception as exc:  # malformed / not NetCDF
-        from probedyn.errors import DataFormatError
+        from probedyn.core.errors import DataFormatError
 
         raise DataFormatError(f"{path}: not a readable NetCDF sweep file ({type(exc).__name__}: {exc})") from None

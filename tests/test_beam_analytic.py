@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.lumped import beam as B
 
 SI = dict(E=169e9, nu=0.0, rho=2330.0)

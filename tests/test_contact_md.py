@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes.contact import MaugisDugdale, get_contact_model
 from probedyn.schemes.contact.maugis_dugdale import endpoint, g_functions, md_curve, solve_s
 

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes.contact import COMMON_PARAMS, get_contact_model, list_models
 
 

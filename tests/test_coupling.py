@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes.coupling import CouplingSetup, contact_at, scan_metrics
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from probedyn.diagnose.formats import read_measurement
 from probedyn.diagnose.spectrum import fit_peaks, sho_psd
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 
 EX = Path(__file__).resolve().parents[1] / "examples" / "measurements"
 SIDE = """[measurement]

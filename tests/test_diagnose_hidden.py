@@ -64,7 +64,7 @@ def test_modal_hidden_effect_named_first(effect, tmp_path):
     path, truth = make_modal_case(tmp_path, effect, seed, strength=0.5)
     res = diagnose(path)
     _check_found(res, effect, truth)
-    from probedyn.jsonio import dumps
+    from probedyn.core.io import dumps
 
     json.loads(dumps(res))  # JSON-able through the project encoder
 

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from probedyn.errors import GeometryError, SolverError
+from probedyn.core.errors import GeometryError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.eigen import have_pardiso
 from probedyn.fem.materials import Material, get_material, radial_poling, rotation_about
@@ -146,7 +146,7 @@ def test_solver_errors(coarse):
         model.static_stiffness("nowhere")
     with pytest.raises(SolverError, match="floats freely"):
         ElasticModel(coarse, {"body": NU0}).static_displacement({"tip": (0, 0, 1)})
-    from probedyn.errors import MaterialError
+    from probedyn.core.errors import MaterialError
 
     with pytest.raises(MaterialError, match="not a mesh subdomain"):
         ElasticModel(coarse, {"beam": NU0})
@@ -168,7 +168,7 @@ def test_energy_shares_two_regions(tipped):
 
 
 def test_probe_from_toml(tmp_path):
-    from probedyn.errors import DataFormatError, ParameterError
+    from probedyn.core.errors import DataFormatError, ParameterError
     from probedyn.probes import get_probe
 
     f = tmp_path / "p.toml"

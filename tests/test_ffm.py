@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes import ffm as F
 from probedyn.schemes.stickslip_analysis import analyze
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from probedyn.cli import main
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 from probedyn.schemes import ffm as F
 from probedyn.schemes import fit as FT
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes.friction import get_friction_model, list_models, register
 from probedyn.schemes.friction.bristle import bristle2d_eval
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes import ffm as F
 from probedyn.schemes.friction.prandtl_tomlinson import (MICA_LATTICE, PrandtlTomlinson, lattice_sites,
                                                          pt2d_scan)

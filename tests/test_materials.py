@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from probedyn.errors import MaterialError
+from probedyn.core.errors import MaterialError
 from probedyn.fem.materials import (
     PZT5H_SE, Material, get_material, mandel, material_names, radial_poling, rotate_voigt,
     rotation_about, tensor_to_voigt, voigt_to_tensor,

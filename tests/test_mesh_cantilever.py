@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import GeometryError, ParameterError
+from probedyn.core.errors import GeometryError, ParameterError
 from probedyn.meshes._gmsh import element_volumes
 from probedyn.meshes.cache import MeshBundle, MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh

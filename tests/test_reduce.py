@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.lumped import beam as bm
 from probedyn.lumped.reduce import reduce_mode, reduce_modes
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from probedyn.errors import SystemLibraryError
+from probedyn.core.errors import SystemLibraryError
 from probedyn.fem import render
 
 

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import GeometryError
+from probedyn.core.errors import GeometryError
 from probedyn.lumped.beam import tip_mass_roots
 from probedyn.lumped.smart_analytic import (
     DuoBimorphBeam, EccentricSection, Piezotube, end_body_frequencies, rayleigh_end_mass_frequency,

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import GeometryError, ParameterError
+from probedyn.core.errors import GeometryError, ParameterError
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.duo_bimorph import duo_bimorph_mesh
 from probedyn.meshes.piezotube import piezotube_mesh

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.schemes import stickslip as ss
 
 M = ss.DEFAULT_MODEL

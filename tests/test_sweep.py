@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from probedyn.errors import ParameterError, ProbedynError, SolverError
+from probedyn.core.errors import ParameterError, ProbedynError, SolverError
 from probedyn.schemes import stickslip as ss
 from probedyn.schemes import sweep as sw
 

@@ -8,7 +8,7 @@ from typing import Any, Callable
 
 import typer
 
-from probedyn.jsonio import dumps, write_json
+from probedyn.core.io import dumps, write_json
 
 JSON_OPT = typer.Option(False, "--json", help="Print machine-readable JSON on stdout.")
 OUT_OPT = typer.Option(None, "--out", help="Output folder for files (JSON, plots, VTU).")

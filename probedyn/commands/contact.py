@@ -99,7 +99,7 @@ def plot_load_penetration(res: dict[str, Any], path: Path) -> Path:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     c = res["curve"]
     D = np.asarray(c["penetration_normalized"], float)
@@ -132,7 +132,7 @@ def plot_fig_2_19(path: Path, lams=FIG_2_19_LAMBDAS, D_range=(-2.2, 3.0)) -> Pat
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
     from probedyn.schemes.contact import JKR, MaugisDugdale
 
     fig, ax = plt.subplots(figsize=(7, 5))
@@ -189,11 +189,11 @@ def contact(
     out: Optional[Path] = OUT_OPT,
 ) -> None:
     """Tip-sample contact: pull-off force and normalised load-penetration curve (Fig 2.19)."""
-    from probedyn.params import parse_sets
+    from probedyn.core.params import parse_sets
 
     res = contact_result(model, lam, parse_sets(sets))
     if out is not None:
-        from probedyn.jsonio import write_json
+        from probedyn.core.io import write_json
 
         out = Path(out)
         write_json(out / "contact.json", res)

@@ -32,7 +32,7 @@ def diagnose_cmd(
     out: Optional[Path] = OUT_OPT,
 ) -> None:
     """Calibrate the baseline, analyse residuals, rank catalog causes out of sample, extend, report the gain."""
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
 
     if list_causes:
         from probedyn.diagnose.causes import catalog_table
@@ -47,7 +47,7 @@ def diagnose_cmd(
     res = diagnose(problem)
     if out is not None:
         from probedyn.diagnose.report import markdown, plot_evidence, plot_residuals
-        from probedyn.jsonio import write_json, write_text
+        from probedyn.core.io import write_json, write_text
 
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)

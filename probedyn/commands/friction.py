@@ -15,7 +15,7 @@ from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, markdown
 def _savefig(fig, path: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format=path.suffix.lstrip("."))
@@ -73,7 +73,7 @@ def ffm_cmd(
     as_json: bool = JSON_OPT,
 ) -> None:
     """Simulate one FFM line scan (eqs 2.13-2.16); report static/kinetic friction, period, regime."""
-    from probedyn.params import parse_sets
+    from probedyn.core.params import parse_sets
     from probedyn.schemes import ffm as F
 
     ov = parse_sets(sets)

@@ -14,7 +14,7 @@ import typer
 
 from probedyn.commands._apps import app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_table, markdown_table, save
-from probedyn.params import parse_sets
+from probedyn.core.params import parse_sets
 
 PROBE_ARG = typer.Argument(..., help="Probe name (cantilever, duo-bimorph, piezotube) or a TOML probe file.")
 NMODES_OPT = typer.Option(8, "--n-modes", min=1, max=200, help="Number of lowest modes.")
@@ -119,7 +119,7 @@ def reduce_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mo
 def _mass_per_length(p, values, model) -> float:
     L = values.get("length")
     if not L:
-        from probedyn.errors import ParameterError
+        from probedyn.core.errors import ParameterError
 
         raise ParameterError(f"--mu needs a beam length; probe '{p.name}' has none, use --q")
     return (model.total_mass() - (values.get("tip_mass") or 0.0)) / L

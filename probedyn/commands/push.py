@@ -17,7 +17,7 @@ def _plot_push(res, r, path: Path, title: str) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     F = res.friction()
     xy = res.sample_xy
@@ -56,7 +56,7 @@ def push_cmd(
     as_json: bool = JSON_OPT,
 ) -> None:
     """Push a sphere with the probe tip; report step length vs lattice constant and the regime."""
-    from probedyn.params import parse_sets
+    from probedyn.core.params import parse_sets
     from probedyn.schemes import pushing as P
 
     ov: dict = parse_sets(sets)
@@ -93,7 +93,7 @@ def report_section(outdir: Path, quick: bool) -> str:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
     from probedyn.schemes import pushing as P
 
     outdir = Path(outdir)

@@ -36,7 +36,7 @@ def _mpl():
 
 
 def _floats(spec: str, name: str) -> list[float]:
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
 
     try:
         vals = [float(s) for s in spec.split(",") if s.strip()]
@@ -48,7 +48,7 @@ def _floats(spec: str, name: str) -> list[float]:
 
 
 def _sets(items) -> dict[str, str]:
-    from probedyn.params import parse_sets
+    from probedyn.core.params import parse_sets
 
     return parse_sets(items)
 
@@ -83,7 +83,7 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
     """Energy shares of modes 1-2 vs holder stiffness, and FEM vs lumped frequencies."""
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     plt = _mpl()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -118,7 +118,7 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
 
 
 def plot_eccentricity(rows: list[dict], path: Path) -> Path:
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     plt = _mpl()
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -189,7 +189,7 @@ def cmd_eccentricity(probe: str = typer.Argument("piezotube", help="piezotube (o
                      angle: float = typer.Option(45.0, "--angle", help="Direction of the offset, degrees from +y to +z."),
                      set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT, out: Optional[Path] = OUT_OPT) -> None:
     """Eccentric piezotube: split and tilt of the lateral pair (FEM counterpart of Gamma, 3.38-3.44)."""
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
     from probedyn.lumped.smart import study_eccentricity
 
     if probe != "piezotube" and not probe.endswith(".toml"):
@@ -256,7 +256,7 @@ def _panel(probe: str, outdir: Path, ov: dict) -> tuple[str, Any]:
 def report_section(outdir: Path, quick: bool = False) -> str:
     """Per probe: Fig 3.15 panel, analytic comparison, lumped vs FEM, localisation table and
     plot; the piezotube eccentricity table; isotropic vs anisotropic PZT."""
-    from probedyn.jsonio import write_json
+    from probedyn.core.io import write_json
     from probedyn.lumped import smart as S
     from probedyn.probes import get_probe
 

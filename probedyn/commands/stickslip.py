@@ -48,7 +48,7 @@ def plot_basins(ds, path: Path, title: str = "") -> Path:
     """Basin map of a ``sweep basins`` Dataset (Fig 4.9) with the nodes marked."""
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     plt = _mpl()
     lab = ds["label"].values
@@ -88,7 +88,7 @@ def run_basins(u0: float, psi: float, grid: int, out: Path, workers: int = 2, sc
     """``sweep basins``: the basin map on the sweep engine, NetCDF + PNG next to it."""
     import numpy as np
 
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
     from probedyn.schemes.stickslip import basin_cell, default_basin_window, equilibria
     from probedyn.schemes.sweep import GridError, axis, run_sweep
 
@@ -164,7 +164,7 @@ def bisected_boundaries(v_values, u0_values, n_u: int = 6) -> dict[str, Any]:
     lowest speed of the map (-> 1, the fold criterion, as v -> 0)."""
     import numpy as np
 
-    from probedyn.errors import SolverError
+    from probedyn.core.errors import SolverError
     from probedyn.schemes.stickslip import DEFAULT_MODEL, stick_boundary
 
     vmin, vmax = float(np.min(v_values)), float(np.max(v_values))
@@ -214,7 +214,7 @@ def plot_regime_map(ds, path: Path, bis: dict[str, Any] | None = None) -> Path:
     import numpy as np
     from matplotlib.colors import ListedColormap
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
     from probedyn.schemes.stickslip import REGIMES
 
     plt = _mpl()
@@ -247,7 +247,7 @@ def plot_regime_map(ds, path: Path, bis: dict[str, Any] | None = None) -> Path:
 def plot_limit_cycles(lc: dict[str, Any], u0: float, path: Path) -> Path:
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     plt = _mpl()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -287,7 +287,7 @@ def limit_cycles_result(u0: float, v_values) -> dict[str, Any]:
 def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
     from probedyn.schemes.stickslip import equilibria, phase_portrait
 
     plt = _mpl()
@@ -325,7 +325,7 @@ def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
 def plot_branches(qs: dict[str, Any], fast: dict[str, Any], path: Path, qs2: dict[str, Any] | None = None) -> Path:
     import numpy as np
 
-    from probedyn.jsonio import atomic_path
+    from probedyn.core.io import atomic_path
 
     plt = _mpl()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
@@ -398,7 +398,7 @@ def cmd_limit_cycles(
     as_json: bool = JSON_OPT,
 ) -> None:
     """Limit cycles as the speed rises: amplitude and centre vs v (Figs 4.10-4.11)."""
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
 
     vv = _parse_values(v, "v")
     if (vv <= 0).any():
@@ -491,7 +491,7 @@ def _load_target(target: str):
     """``package.module:function`` -> the function (a clear error if it does not exist)."""
     import importlib
 
-    from probedyn.errors import ParameterError
+    from probedyn.core.errors import ParameterError
 
     if ":" not in target:
         raise ParameterError(f"sweep target {target!r}: expected MODULE:FUNCTION, e.g. probedyn.schemes.stickslip:regime_cell")
@@ -507,7 +507,7 @@ def _load_target(target: str):
 
 
 def _parse_fixed(items: list[str] | None) -> dict[str, Any]:
-    from probedyn.params import parse_sets
+    from probedyn.core.params import parse_sets
 
     out: dict[str, Any] = {}
     for k, val in parse_sets(items).items():

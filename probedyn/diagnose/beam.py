@@ -47,7 +47,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.special import kve
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 
 __all__ = ["BeamFE", "BeamProps", "sader_gamma", "torsion_constant", "solve_family"]
 

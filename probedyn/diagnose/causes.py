@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 
 __all__ = ["CauseParam", "Cause", "register", "CATALOG", "catalog", "get_cause", "catalog_table"]
 

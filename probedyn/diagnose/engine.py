@@ -40,7 +40,7 @@ from scipy.optimize import least_squares
 from scipy.stats import chi2 as chi2_dist
 
 from probedyn.diagnose.causes import Cause, CauseParam
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 
 __all__ = ["diagnose", "make_problem", "FitResult"]
 

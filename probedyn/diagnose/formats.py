@@ -22,7 +22,7 @@ Sections shared by all kinds: ``[probe]`` (``length``, ``width``, ``thickness``,
 ``density``, ``viscosity``, ``temperature``), ``[noise]`` (``frequency_rel``, ``Q_rel``, ``force``),
 ``[baseline] free`` (probe quantities calibrated in the baseline: ``E``, ``thickness``, ...).
 
-Malformed input raises :class:`probedyn.errors.DataFormatError` whose message names the
+Malformed input raises :class:`probedyn.core.errors.DataFormatError` whose message names the
 file, the line and the column.
 """
 
@@ -36,8 +36,8 @@ from typing import Any
 import numpy as np
 
 from probedyn.diagnose.beam import BeamProps
-from probedyn.errors import DataFormatError
-from probedyn.params import load_toml
+from probedyn.core.errors import DataFormatError
+from probedyn.core.params import load_toml
 
 __all__ = ["read_measurement", "read_csv", "ModalData", "FrictionData", "SpectrumData", "Measurement"]
 

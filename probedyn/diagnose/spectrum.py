@@ -21,7 +21,7 @@ from scipy.optimize import least_squares
 from scipy.signal import find_peaks
 
 from probedyn.diagnose.formats import ModalData, SpectrumData, _medium, _noise, _num, _props
-from probedyn.errors import DataFormatError
+from probedyn.core.errors import DataFormatError
 
 __all__ = ["fit_peaks", "spectrum_to_modal", "sho_psd"]
 

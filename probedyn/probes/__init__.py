@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.errors import DataFormatError, ParameterError
-from probedyn.params import ParamSet, load_toml
+from probedyn.core.errors import DataFormatError, ParameterError
+from probedyn.core.params import ParamSet, load_toml
 
 _REGISTRY: dict[str, type["Probe"]] = {}
 _DISCOVERED = False
@@ -30,7 +30,7 @@ _DISCOVERED = False
 
 class Probe:
     """Base class.  Subclasses set ``name``, ``description`` and ``params`` (a
-    :class:`~probedyn.params.ParamSet` of geometry, material and mesh parameters in SI units)
+    :class:`~probedyn.core.params.ParamSet` of geometry, material and mesh parameters in SI units)
     and implement :meth:`build` (and usually :meth:`references`)."""
 
     name: str = ""

@@ -25,7 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 from probedyn.fem.model import ElasticModel
 
 DIRS = ("x", "y", "z")

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.errors import GeometryError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import GeometryError
+from probedyn.core.params import Param, ParamSet
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([

@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.errors import GeometryError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import GeometryError
+from probedyn.core.params import Param, ParamSet
 from probedyn.probes import Probe, register_probe
 
 PZT_CHOICES = ("pzt-5h", "pzt-5h-iso")

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.params import Param, ParamSet
+from probedyn.core.params import Param, ParamSet
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([

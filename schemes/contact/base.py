@@ -60,8 +60,8 @@ from typing import Any, ClassVar, Literal, Mapping
 
 import numpy as np
 
-from probedyn.errors import ParameterError, SolverError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError, SolverError
+from probedyn.core.params import Param, ParamSet
 
 Branch = Literal["loading", "unloading", "stable", "unstable"]
 

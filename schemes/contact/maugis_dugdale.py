@@ -40,7 +40,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from probedyn.errors import SolverError
+from probedyn.core.errors import SolverError
 
 from .base import ContactModel
 

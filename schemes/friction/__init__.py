@@ -16,7 +16,7 @@ name         model                                                 source
 
 from __future__ import annotations
 
-from probedyn.errors import ParameterError
+from probedyn.core.errors import ParameterError
 
 from .base import FrictionModel
 from .bristle import GeneralisedBristle

@@ -33,8 +33,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from probedyn.errors import ParameterError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError
+from probedyn.core.params import Param, ParamSet
 
 
 class FrictionModel:

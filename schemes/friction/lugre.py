@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from probedyn.params import Param, ParamSet
+from probedyn.core.params import Param, ParamSet
 
 from .base import FrictionModel, positive_param
 

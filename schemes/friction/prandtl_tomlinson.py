@@ -32,8 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from probedyn.errors import ParameterError
-from probedyn.params import Param, ParamSet
+from probedyn.core.errors import ParameterError
+from probedyn.core.params import Param, ParamSet
 
 from .base import FrictionModel, positive_param
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from probedyn.errors import DataFormatError, ParameterError
+from probedyn.core.errors import DataFormatError, ParameterError
 
 
 @dataclass(frozen=True)
