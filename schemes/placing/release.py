@@ -19,8 +19,11 @@ and the substrate's attraction ``S = H_ss R_s / 6`` (Derjaguin sphere-flat, as 4
 
 The drive amplitude is given as the tip's steady amplitude ``A`` (free probe; the sample's
 2e-18 kg does not change it measurably): ``F0 = A / |H(omega)|`` with the retained modes'
-compliance ``H``. The run starts in the periodic steady state with the tip at its mean
-position moving down and the sample at rest relative to it at its static contact equilibrium.
+compliance ``H``. The run starts in the periodic steady state: the tip at its mean position
+moving down, the sample at its static contact equilibrium plus the linear steady-state
+motion of the base-excited contact oscillator relative to the tip (above ``omega_c`` the
+sample stays nearly still; starting it with the tip's velocity would kick the contact
+oscillator and break the contact spuriously).
 
 Outcomes (Fig 4.22): **attached** (the contact never breaks within ``n_periods``), **recaptured**
 (it breaks, and contact re-forms: the sample falls back into the tip's attraction or the
@@ -101,7 +104,27 @@ class ContactTables:
     dPn: np.ndarray
     k1_bar: float  # stiffness at zero load (scaled)
     P_pull_off_bar: float
+    d_zero_bar: float  # penetration at zero load (scaled)
     contact: Any = field(repr=False, default=None)
+
+    @property
+    def pull_off_force(self) -> float:
+        return self.P_pull_off_bar * self.P
+
+    def penetration_at(self, P_bar: float) -> float:
+        """Scaled penetration on the stable branch at the scaled load ``P_bar`` (Newton on the
+        kernel's own force table, from the zero-load point; loads above the pull-off load)."""
+        if not P_bar > self.P_pull_off_bar:
+            raise ParameterError("load below the pull-off force: no contact exists")
+        d = self.d_zero_bar
+        for _ in range(100):
+            f, k = self.force(d, 1)
+            step = (float(f[0]) - P_bar) / float(k[0])
+            d_new = max(d - step, self.Dmin + 1e-12)
+            if abs(d_new - d) < 1e-13 * (1 + abs(d)):
+                return d_new
+            d = d_new
+        raise SolverError("contact equilibrium: Newton did not converge")
 
     @classmethod
     def build(cls, contact, n: int = 1200, D_max: float = 40.0) -> "ContactTables":
@@ -127,9 +150,10 @@ class ContactTables:
         dP[0] = 3 * dP[1] - 3 * dP[2] + dP[3]
         if not (np.all(np.isfinite(P)) and np.all(np.isfinite(dP))):
             raise SolverError("MD stable-branch table has non-finite entries")
-        k1 = float(contact.at_load(0.0)["stiffness"]) * s.d_unit / s.P_unit
+        z = contact.at_load(0.0)
+        k1 = float(z["stiffness"]) * s.d_unit / s.P_unit
         return cls(s.d_unit, s.P_unit, Dmin, float(D0), 2.0 * zb * zb, d0 + float(D0), float(u[1] - u[0]),
-                   P, dP, k1, float(contact.nd_pull_off()["P_pull_off"]), contact)
+                   P, dP, k1, float(contact.nd_pull_off()["P_pull_off"]), float(z["penetration"]) / s.d_unit, contact)
 
     def force(self, delta_bar, s: int) -> tuple[np.ndarray, np.ndarray]:
         """Scaled force and stiffness from the kernel's tables (for tests and plots)."""
@@ -243,15 +267,20 @@ def setup_release(probe: PlacingProbe, M: float | None = None, A: float | None =
     # static contact equilibrium: P = -M g + F_sub(y0)  (tension), y0 ~ D
     F_sub = -S / (D - float(TABLE["zeta0"])) ** 2
     P_eq = -M * g + F_sub
-    contact = tables.contact
-    if P_eq <= contact.pull_off_force():
+    F_po = tables.pull_off_force
+    if P_eq <= F_po:
         raise ParameterError(f"the sample's weight and the substrate's pull ({-P_eq:.3g} N) exceed the pull-off force")
-    d_eq = float(contact.at_load(P_eq)["penetration"]) / l
+    d_eq = tables.penetration_at(P_eq / P)
     q_stat = P_eq / kn  # static share of the contact load (tiny)
     E = F0 * cmath.exp(1j * phase)
     q0 = np.array([(Hn[i] * E).imag for i in range(N)]) / l + q_stat / l
     v0 = np.array([(1j * omega * Hn[i] * E).imag for i in range(N)]) * tau / l
-    z0 = np.concatenate([q0, [d_eq], v0, [0.0]])
+    # the sample's linear steady state relative to the tip (base-excited contact oscillator):
+    # delta' = M w^2 h / (k1 - M w^2 + i c_c w), h the tip's complex amplitude
+    k1 = tables.k1_bar * P / l
+    c_c = 2.0 * zeta_c * math.sqrt(k1 * M)
+    Dc = M * omega**2 * (H * E) / (k1 - M * omega**2 + 1j * c_c * omega)
+    z0 = np.concatenate([q0, [d_eq + Dc.imag / l], v0, [(1j * omega * Dc).imag * tau / l]])
     # scaled parameters
     Db = D / l
     zeta0_b = float(TABLE["zeta0"]) / l
@@ -268,10 +297,10 @@ def setup_release(probe: PlacingProbe, M: float | None = None, A: float | None =
     par[15], par[16] = Vb, yb
     Tw = 2 * math.pi / (omega * tau)
     par[17], par[18] = n_periods * Tw, n_fly * Tw
-    meta = {"F_pull_off_n": contact.pull_off_force(), "k1_n_per_m": tables.k1_bar * P / l,
+    meta = {"F_pull_off_n": F_po, "k1_n_per_m": tables.k1_bar * P / l,
             "omega_c_rad_s": math.sqrt(tables.k1_bar * P / l / M), "inertial_force_n": M * omega**2 * A,
             "barrier_height_m": yb * l, "tip_lowest_m": hlow * l, "l_m": l, "P_n": P, "tau_s": tau,
-            "A_threshold_linear_m": float(threshold_amplitude(M, omega, contact.pull_off_force() - P_eq,
+            "A_threshold_linear_m": float(threshold_amplitude(M, omega, F_po - P_eq,
                                                               tables.k1_bar * P / l, zeta_c))}
     return ReleaseSetup(probe, M, A, omega, D, F0, phase, zeta_c, H_ss, R_s, g, n_periods, n_fly, tables, par,
                         mn / M, kn * l / P, cn * l / (tau * P), z0, tau, meta)
