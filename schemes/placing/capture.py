@@ -87,42 +87,45 @@ def end_stiffness(x: float, K: float, mu: float, end: End = "grounded", form: Fo
     raise ParameterError(f"unknown end condition {end!r} (grounded, hanging)")
 
 
-def frequency_function(x: float, K: float, mu: float, end: End = "grounded", form: Form = "corrected") -> float:
+def frequency_function(x, K: float, mu: float, end: End = "grounded", form: Form = "corrected"):
     """(4.38) divided by ``cosh x`` (and, for the hanging end, multiplied by ``K - mu x^4`` so it
-    has no pole): a smooth function whose positive roots are ``b_n L``."""
-    c, s = math.cos(x), math.sin(x)
-    th = math.tanh(x)
-    lhs = x**3 * (1.0 / math.cosh(x) + c)
+    has no pole): a smooth function whose positive roots are ``b_n L``. Vectorised in ``x``."""
+    x = np.asarray(x, dtype=float)
+    c, s = np.cos(x), np.sin(x)
+    th = np.tanh(x)
+    lhs = x**3 * (1.0 / np.cosh(np.minimum(x, 700.0)) + c)
     g = c * th - s
     if end == "hanging":
         if K == math.inf:
-            return lhs - (-mu * x**4) * g
+            return lhs + mu * x**4 * g
         return lhs * (K - mu * x**4) + mu * x**4 * K * g
     if K == math.inf:  # clamped-pinned: divide by K
         return -g
-    return lhs - end_stiffness(x, K, mu, end, form) * g
+    if end != "grounded":
+        raise ParameterError(f"unknown end condition {end!r} (grounded, hanging)")
+    beta = K - mu * x**4 if form == "corrected" else K + mu * x**4
+    if form not in ("corrected", "printed"):
+        raise ParameterError(f"unknown form {form!r} (corrected, printed)")
+    return lhs - beta * g
 
 
 def capture_roots(K: float, mu: float, n: int = 3, end: End = "grounded", form: Form = "corrected") -> np.ndarray:
-    """First ``n`` positive roots ``b_n L`` of (4.38). Scan (step 0.005, roots are >= ~0.3 apart
-    in every case here) from 1e-3 with a logarithmic pre-scan below it, then Brent's method."""
+    """First ``n`` positive roots ``b_n L`` of (4.38): the function on a grid (logarithmic below
+    1e-3, step 0.005 above; consecutive roots are at least ~0.3 apart in every case here),
+    then Brent's method on the first ``n`` sign changes."""
     if not (K >= 0 and mu >= 0) or math.isnan(K) or math.isnan(mu):
         raise ParameterError(f"capture: K = k1 L^3/EI and mu = M/(rho A L) must be >= 0 (got {K}, {mu})")
     if end not in ENDS:
         raise ParameterError(f"unknown end condition {end!r} (grounded, hanging)")
-    f = lambda x: frequency_function(x, K, mu, end, form)  # noqa: E731
-    roots: list[float] = []
-    grid = np.concatenate([np.geomspace(1e-6, 1e-3, 200), np.arange(1e-3 + 0.005, 40.0 + 4 * n, 0.005)])
-    fa = f(grid[0])
-    for xa, xb in zip(grid[:-1], grid[1:]):
-        fb = f(xb)
-        if fa == 0.0:
-            roots.append(float(xa))
-        elif fa * fb < 0:
-            roots.append(brentq(f, xa, xb, xtol=1e-15, rtol=1e-15))
-        if len(roots) >= n:
-            break
-        fa = fb
+    f = lambda x: float(frequency_function(x, K, mu, end, form))  # noqa: E731
+    x_hi = (n + 2.5) * math.pi + (2.0 if end == "hanging" else 0.0) * math.pi
+    grid = np.concatenate([np.geomspace(1e-6, 1e-3, 200), np.arange(1e-3 + 0.005, x_hi, 0.005)])
+    v = frequency_function(grid, K, mu, end, form)
+    idx = np.nonzero(np.sign(v[:-1]) * np.sign(v[1:]) < 0)[0]
+    roots = [float(grid[i]) for i in np.nonzero(v == 0.0)[0]]
+    for i in idx:
+        roots.append(brentq(f, grid[i], grid[i + 1], xtol=1e-15, rtol=1e-15))
+    roots = sorted(roots)
     if len(roots) < n:
         raise SolverError(f"capture: only {len(roots)} of {n} roots found (K={K:g}, mu={mu:g})")
     return np.asarray(roots[:n])
@@ -334,32 +337,38 @@ def md_linearisation(contact, load: float = 0.0) -> dict[str, float]:
             "k1_n_per_m": k1, "k0_n": float(load) - k1 * d, "pull_off_n": contact.pull_off_force()}
 
 
-def piecewise_linear_error(contact, n_segments: int, spacing: str = "uniform", delta_max: float | None = None,
-                           n_eval: int = 4001) -> dict[str, Any]:
-    """Piecewise-linear interpolation (4.29 on ``n_segments`` pieces) of the unloading (stable)
-    branch from the jump-out point ``delta_min`` to ``delta_max`` (default: the penetration at a
-    load of ``+3 |pull-off|``); errors against the exact MD force on ``n_eval`` points.
-
-    ``spacing="uniform"``: nodes uniform in delta; ``"sqrt"``: uniform in ``sqrt(delta - delta_min)``."""
-    if int(n_segments) < 1:
-        raise ParameterError(f"n_segments must be >= 1, got {n_segments}")
-    if spacing not in ("uniform", "sqrt"):
-        raise ParameterError(f"spacing must be 'uniform' or 'sqrt', got {spacing!r}")
+def _pl_reference(contact, delta_max: float | None, n_eval: int) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """The exact unloading branch on ``n_eval`` points from the jump-out point (dense near it)."""
     s = contact.scales
     d_min = float(contact._table()["D_min"]) * s.d_unit
     if delta_max is None:
         delta_max = float(contact.at_load(-3.0 * contact.pull_off_force())["penetration"])
     if not delta_max > d_min:
         raise ParameterError("delta_max must exceed the jump-out penetration")
+    ue = np.linspace(0.0, 1.0, n_eval)
+    de = d_min + (delta_max - d_min) * ue**2
+    Pe = contact.force(de + np.r_[1e-12 * s.d_unit, np.zeros(n_eval - 1)], "unloading")
+    return d_min, float(delta_max), de, np.asarray(Pe, float)
+
+
+def piecewise_linear_error(contact, n_segments: int, spacing: str = "uniform", delta_max: float | None = None,
+                           n_eval: int = 2001, reference=None) -> dict[str, Any]:
+    """Piecewise-linear interpolation (4.29 on ``n_segments`` pieces) of the unloading (stable)
+    branch from the jump-out point ``delta_min`` to ``delta_max`` (default: the penetration at a
+    load of ``+3 |pull-off|``); errors against the exact MD force on ``n_eval`` points (or a
+    precomputed ``reference`` from :func:`_pl_reference`).
+
+    ``spacing="uniform"``: nodes uniform in delta; ``"sqrt"``: uniform in ``sqrt(delta - delta_min)``."""
+    if int(n_segments) < 1:
+        raise ParameterError(f"n_segments must be >= 1, got {n_segments}")
+    if spacing not in ("uniform", "sqrt"):
+        raise ParameterError(f"spacing must be 'uniform' or 'sqrt', got {spacing!r}")
+    d_min, delta_max, de, Pe = reference if reference is not None else _pl_reference(contact, delta_max, n_eval)
+    s = contact.scales
     u = np.linspace(0.0, 1.0, int(n_segments) + 1)
     nodes = d_min + (delta_max - d_min) * (u if spacing == "uniform" else u**2)
-    nodes[0] = d_min * (1 - 1e-12) if d_min < 0 else d_min * (1 + 1e-12)
-    nodes[0] = max(nodes[0], d_min)
-    Pn = contact.force(nodes + np.r_[1e-16 * s.d_unit, np.zeros(len(nodes) - 1)], "unloading")
-    ue = np.linspace(0.0, 1.0, n_eval)
-    de = d_min + (delta_max - d_min) * ue**2  # dense near the singular end
-    de[0] = nodes[0]
-    Pe = contact.force(de + np.r_[1e-16 * s.d_unit, np.zeros(n_eval - 1)], "unloading")
+    Pn = np.asarray(contact.force(nodes + np.r_[1e-12 * s.d_unit, np.zeros(len(nodes) - 1)], "unloading"), float)
+    # exact values at the evaluation points, with the nodes merged in (the interpolant is exact there)
     Pl = np.interp(de, nodes, Pn)
     err = np.abs(Pl - Pe)
     w = np.gradient(de)
@@ -377,4 +386,4 @@ def convergence_order(ns: Sequence[int], errors: Sequence[float]) -> float:
 
 __all__ = ["Capture", "capture_roots", "frequency_function", "end_stiffness", "mode_shape",
            "fem_capture_frequencies", "capture_check", "centreline_shapes", "md_linearisation",
-           "piecewise_linear_error", "convergence_order", "CLAMPED_PINNED", "ENDS"]
+           "piecewise_linear_error", "_pl_reference", "convergence_order", "CLAMPED_PINNED", "ENDS"]

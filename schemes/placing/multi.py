@@ -46,7 +46,6 @@ from typing import Any, Sequence
 
 import numpy as np
 import scipy.linalg as sla
-from numpy.polynomial import legendre as npleg
 from scipy.linalg import expm
 from scipy.optimize import brentq, least_squares
 
@@ -75,6 +74,9 @@ def _check_masses(masses: Sequence[tuple[float, float]], L: float) -> list[tuple
 # ------------------------------------------------------------------------------------------
 
 
+_BASE_CACHE: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+
+
 @dataclass(frozen=True)
 class PolynomialRitz:
     """Rayleigh-Ritz with ``n`` polynomial shape functions on a uniform cantilever."""
@@ -96,44 +98,51 @@ class PolynomialRitz:
     def from_probe(cls, probe: PlacingProbe, n: int) -> "PolynomialRitz":
         return cls(probe.L, probe.EI, probe.rhoA, int(n))
 
-    def _leg(self, i: int):
-        c = np.zeros(i)
-        c[-1] = 1.0
-        return c  # Legendre coefficients of P_{i-1}
-
     def psi(self, xi, d: int = 0) -> np.ndarray:
-        """(n, len(xi)) ``d``-th derivative with respect to ``xi`` of the shape functions."""
+        """(n, len(xi)) ``d``-th derivative (0..3) with respect to ``xi`` of the shape functions
+        ``xi^2 P_{i-1}(t)``, ``t = 2 xi - 1``; Legendre values and derivatives by the three-term
+        recurrences ``(k+1) P_{k+1} = (2k+1) t P_k - k P_{k-1}``,
+        ``P^(j)_{k+1} = P^(j)_{k-1} + (2k+1) P^(j-1)_k``."""
+        if d not in (0, 1, 2, 3):
+            raise ParameterError("derivative order must be 0..3")
         xi = np.atleast_1d(np.asarray(xi, dtype=float))
-        out = np.empty((self.n, xi.size))
         t = 2.0 * xi - 1.0
-        for i in range(1, self.n + 1):
-            c = self._leg(i)
-            P = npleg.legval(t, c)
-            P1 = 2.0 * npleg.legval(t, npleg.legder(c, 1)) if i > 1 else np.zeros_like(t)
-            P2 = 4.0 * npleg.legval(t, npleg.legder(c, 2)) if i > 2 else np.zeros_like(t)
-            P3 = 8.0 * npleg.legval(t, npleg.legder(c, 3)) if i > 3 else np.zeros_like(t)
-            if d == 0:
-                out[i - 1] = xi**2 * P
-            elif d == 1:
-                out[i - 1] = 2 * xi * P + xi**2 * P1
-            elif d == 2:
-                out[i - 1] = 2 * P + 4 * xi * P1 + xi**2 * P2
-            elif d == 3:
-                out[i - 1] = 6 * P1 + 6 * xi * P2 + xi**2 * P3
-            else:
-                raise ParameterError("derivative order must be 0..3")
-        return out
+        n = self.n
+        P = np.zeros((4, n + 1, xi.size))  # P[j, k] = d^j P_k / dt^j
+        P[0, 0] = 1.0
+        if n >= 1:
+            P[0, 1] = t
+            P[1, 1] = 1.0
+        for k in range(1, n):
+            P[0, k + 1] = ((2 * k + 1) * t * P[0, k] - k * P[0, k - 1]) / (k + 1)
+            for j in (1, 2, 3):
+                P[j, k + 1] = P[j, k - 1] + (2 * k + 1) * P[j - 1, k]
+        # derivatives with respect to xi: d/dxi = 2 d/dt
+        L0, L1, L2, L3 = P[0, :n], 2.0 * P[1, :n], 4.0 * P[2, :n], 8.0 * P[3, :n]
+        if d == 0:
+            return xi**2 * L0
+        if d == 1:
+            return 2 * xi * L0 + xi**2 * L1
+        if d == 2:
+            return 2 * L0 + 4 * xi * L1 + xi**2 * L2
+        return 6 * L1 + 6 * xi * L2 + xi**2 * L3
 
     def base_matrices(self) -> tuple[np.ndarray, np.ndarray]:
-        """``K``, ``M`` of the bare beam (Gauss-Legendre, exact for these polynomials)."""
-        xg, wg = np.polynomial.legendre.leggauss(self.n + 4)
-        xi = 0.5 * (xg + 1.0)
-        w = 0.5 * wg
-        P0 = self.psi(xi, 0)
-        P2 = self.psi(xi, 2)
-        K = self.EI / self.L**3 * (P2 * w) @ P2.T
-        M = self.rhoS * self.L * (P0 * w) @ P0.T
-        return K, M
+        """``K``, ``M`` of the bare beam (Gauss-Legendre, exact for these polynomials; cached)."""
+        key = (self.L, self.EI, self.rhoS, self.n)
+        if key not in _BASE_CACHE:
+            xg, wg = np.polynomial.legendre.leggauss(self.n + 4)
+            xi = 0.5 * (xg + 1.0)
+            w = 0.5 * wg
+            P0 = self.psi(xi, 0)
+            P2 = self.psi(xi, 2)
+            K = self.EI / self.L**3 * (P2 * w) @ P2.T
+            M = self.rhoS * self.L * (P0 * w) @ P0.T
+            if len(_BASE_CACHE) > 64:
+                _BASE_CACHE.clear()
+            _BASE_CACHE[key] = (K, M)
+        K, M = _BASE_CACHE[key]
+        return K.copy(), M.copy()
 
     def matrices(self, masses: Sequence[tuple[float, float]] = ()) -> tuple[np.ndarray, np.ndarray]:
         """(4.50)-(4.51) with the samples ``[(l_k, M_k)]``."""
@@ -265,14 +274,24 @@ def ritz_basis(model, n_modes: int, positions: Sequence[float] = (), static: boo
     return RitzBasis.from_model(model, int(n_modes), attachments=att)
 
 
+def flapwise_indices(sol, model) -> list[int]:
+    """Indices of the flapwise modes of a Ritz solution: displacement along the centroid line
+    (at 1/4, 1/2, 3/4 and 1 of the length) mostly along z and not negligible (torsion modes do
+    not move the centroid line, lateral and axial modes move it along y and x)."""
+    L = float(np.ptp(model.bundle.mesh.p[0]))
+    U = np.stack([sol.at(sample_point(model, f * L)) for f in (0.25, 0.5, 0.75, 1.0)])  # (4, 3, k)
+    Ez = (U[:, 2, :] ** 2).sum(axis=0)
+    E = (U**2).sum(axis=(0, 1))
+    big = E > 1e-6 * E.max()
+    return [i for i in range(U.shape[2]) if big[i] and Ez[i] > 0.9 * E[i]]
+
+
 def ritz_flapwise(basis, masses: Sequence[tuple[float, float]], n: int = 4, model=None) -> np.ndarray:
-    """Flapwise frequencies [rad/s] of the FEM-mode Ritz model with point masses: the modes whose
-    displacement at the free end is mostly along z."""
+    """Flapwise frequencies [rad/s] of the FEM-mode Ritz model with point masses."""
     mdl = model if model is not None else basis.model
     pms = [(sample_point(mdl, l), m) for l, m in masses if m > 0]
     sol = basis.solve(point_masses=pms)
-    U = sol.at("free_end")  # (3, k)
-    flap = [i for i in range(U.shape[1]) if abs(U[2, i]) > 0.9 * np.linalg.norm(U[:, i])]
+    flap = flapwise_indices(sol, mdl)
     if len(flap) < n:
         raise SolverError(f"Ritz: only {len(flap)} flapwise modes in a basis of {basis.r}")
     return sol.omega[flap[:n]]
@@ -399,7 +418,18 @@ def solve_inverse(probe: PlacingProbe, measured: np.ndarray, unknowns: Sequence[
             sols.append({"estimate": est, "sd": err, "chi2": chi2})
     sols.sort(key=lambda s: s["chi2"])
     acceptable = [s for s in sols if s["chi2"] <= sols[0]["chi2"] + max(len(measured), 1) * 4.0]
-    return {"solutions": sols, "acceptable": acceptable, "unique": len(acceptable) == 1}
+    # two samples of equal (known) mass are interchangeable: a solution and its swap are one
+    swap_equal = ("l1" in unknowns and "l2" in unknowns and "M1" not in unknowns and "M2" not in unknowns
+                  and abs(known.get("M1", 0) - known.get("M2", 0)) <= 1e-12 * max(known.get("M1", 0), 1e-300))
+    distinct = []
+    for s_ in acceptable:
+        e = s_["estimate"]
+        if swap_equal and any(abs(e["l1"] - d["estimate"]["l2"]) <= 1e-6 * probe.L
+                              and abs(e["l2"] - d["estimate"]["l1"]) <= 1e-6 * probe.L for d in distinct):
+            continue
+        distinct.append(s_)
+    return {"solutions": sols, "acceptable": acceptable, "distinct": distinct, "unique": len(distinct) == 1,
+            "swap_symmetric": swap_equal}
 
 
 # ------------------------------------------------------------------------------------------
@@ -477,5 +507,5 @@ def release_thresholds(probe: PlacingProbe, masses: Sequence[tuple[float, float]
 
 
 __all__ = ["PolynomialRitz", "printed_matrices", "matrices_frequencies", "exact_frequencies", "fem_frequencies",
-           "ritz_basis", "ritz_flapwise", "identifiability", "solve_inverse", "local_response", "probe_at",
+           "ritz_basis", "ritz_flapwise", "flapwise_indices", "identifiability", "solve_inverse", "local_response", "probe_at",
            "release_thresholds", "sample_point", "UNKNOWN_SETS"]

@@ -111,6 +111,7 @@ class PlacingProbe:
     provenance: dict[str, Any] = field(default_factory=dict, compare=False)
     model: Any = field(default=None, compare=False, repr=False)
     modal: Any = field(default=None, compare=False, repr=False)
+    ritz: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if self.mass_source not in MASS_SOURCES:
@@ -174,6 +175,8 @@ class PlacingProbe:
         if mass_source == self.mass_source:
             return self
         m_geo = self.provenance.get("m_equivalent_geometric", self.m)
+        if m_geo is None:
+            raise ParameterError("Table 4.4 alone gives no geometry, so no geometric mass: use a FEM or beam probe")
         target = float(TABLE["m"]) if mass_source == "table" else m_geo
         s = target / self.m  # mass factor
         prov = dict(self.provenance)
@@ -271,29 +274,71 @@ class PlacingProbe:
         return probe.with_mass_source(mass_source)
 
     @classmethod
+    def from_ritz(cls, basis, n_modes: int = 4, zeta: float | None = None, mass_source: MassSource = "geometric",
+                  face: str = "free_end") -> "PlacingProbe":
+        """From a :class:`probedyn.lumped.ritz.RitzBasis` of a clamped cantilever along x whose
+        static shapes include ``face`` along z: the static stiffness ``1 / C_zz`` of the face
+        (exact: the static shapes make the reduced static compliance the FEM's), the first
+        ``n_modes`` flapwise FEM modes (the basis's leading columns) with their tip-normalised
+        modal masses ``1 / phi_z(face)^2``; ``EI = k L^3 / 3``, ``rho A`` = FE mass / L. The basis
+        is kept (``.ritz``) for the capture and multi-sample models."""
+        from .multi import flapwise_indices
+
+        zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
+        model = basis.model
+        if model is None:
+            raise ParameterError("the Ritz basis has no FE model attached")
+        C = basis.static_compliance(face)
+        k = float(1.0 / C[2, 2])
+        sol = basis.solve()
+        flap = [i for i in flapwise_indices(sol, model) if basis.kinds[i] == "mode"][: int(n_modes)]
+        if not flap:
+            raise SolverError("Ritz probe: no flapwise mode among the retained FEM modes")
+        U = sol.at(face)
+        omegas = tuple(float(sol.omega[i]) for i in flap)
+        masses = tuple(float(1.0 / U[2, i] ** 2) for i in flap)
+        L = float(np.ptp(model.bundle.mesh.p[0]))
+        EI = k * L**3 / 3.0
+        rhoA = model.total_mass() / L
+        prov = {"model": model.name, "dofs": model.dofs, "face": face, "ritz_modes": basis.n_modes, "ritz_r": basis.r,
+                "m_equivalent_geometric": k / omegas[0] ** 2, "beam_mass_geometric": rhoA * L,
+                "m_table": float(TABLE["m"]), "mass_scale": 1.0}
+        probe = cls(k, omegas, masses, zeta, L, EI, rhoA, "geometric", "FEM", prov, model, None, basis)
+        return probe.with_mass_source(mass_source)
+
+    @classmethod
     def from_reduced(cls, reduced, zeta: float | None = None, mass_source: MassSource = "geometric",
-                     direction: str = "normal") -> "PlacingProbe":
-        """From a reduced probe of ``lumped/reduced.py`` (issue 10): its static stiffness and the
-        retained modes along ``direction`` (frequency, modal mass at the point), its beam length
-        from the provenance. Duck-typed so that nano-placing does not depend on its internals:
-        ``reduced.static_stiffness[direction]``, ``reduced.modes[direction]`` with
-        ``omega``/``modal_mass`` (or ``mass``), ``reduced.provenance``."""
+                     direction: str = "normal", length: float | None = None) -> "PlacingProbe":
+        """From a :class:`probedyn.lumped.reduced.ReducedProbe` (issue 10): the FEM static
+        stiffness along ``direction`` and the retained modes that move the point along it
+        (:meth:`~probedyn.lumped.reduced.ReducedProbe.direction_modes`: modal mass ``1/phi^2``,
+        frequency). ``L`` from the probe parameters (``length``) unless given; ``EI = k L^3/3``;
+        ``rho A = m_1 / (0.2427 L)`` with ``m_1 = k / omega_1^2`` (exact for a uniform beam).
+        ``zeta``: the table's 0.1 unless given (the reduced probe's own damping ratios are
+        kept in the provenance)."""
         zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
         try:
-            ks = reduced.static_stiffness
-            k = float(ks[direction] if isinstance(ks, dict) else ks)
-            modes = reduced.modes[direction] if isinstance(reduced.modes, dict) else reduced.modes
-            omegas = tuple(float(getattr(md, "omega")) for md in modes)
-            masses = tuple(float(getattr(md, "modal_mass", getattr(md, "mass", math.nan))) for md in modes)
+            k = float(reduced.static_stiffness(direction))
+            osc = sorted(reduced.direction_modes(direction), key=lambda o: o.frequency_hz)
             prov = dict(getattr(reduced, "provenance", {}) or {})
-            L = float(prov.get("length", prov.get("L")))
-            mass_total = float(prov.get("mass", prov.get("total_mass", math.nan)))
         except (AttributeError, KeyError, TypeError, ValueError) as exc:
             raise ParameterError(f"reduced probe lacks what nano-placing needs ({exc})") from None
+        if not osc:
+            raise ParameterError(f"the reduced probe has no mode along {direction}")
+        if length is None:
+            length = (prov.get("parameters") or {}).get("length")
+        if length is None:
+            raise ParameterError("the reduced probe does not give the beam length: pass length=")
+        L = float(length)
+        omegas = tuple(2 * math.pi * float(o.frequency_hz) for o in osc)
+        masses = tuple(float(o.mass) for o in osc)
         EI = k * L**3 / 3.0
-        rhoA = mass_total / L if math.isfinite(mass_total) else masses[0] * 4.0 / L
-        prov.update({"m_equivalent_geometric": k / omegas[0] ** 2, "m_table": float(TABLE["m"]), "mass_scale": 1.0})
-        probe = cls(k, omegas, masses, zeta, L, EI, rhoA, "geometric", str(prov.get("source", "FEM")), prov)
+        rhoA = (k / omegas[0] ** 2) / (EQUIV_MASS_RATIO * L)
+        prov.update({"m_equivalent_geometric": k / omegas[0] ** 2, "beam_mass_geometric": rhoA * L,
+                     "m_table": float(TABLE["m"]), "mass_scale": 1.0,
+                     "reduced_damping_ratios": [float(o.damping_ratio) for o in osc]})
+        probe = cls(k, omegas, masses, zeta, L, EI, rhoA, "geometric", str(prov.get("source", "FEM")), prov,
+                    getattr(getattr(reduced, "ritz", None), "model", None), None)
         return probe.with_mass_source(mass_source)
 
 

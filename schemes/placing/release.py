@@ -70,21 +70,29 @@ from probedyn.schemes.contact import get_contact_model
 from . import _kernel as K
 from .probe import TABLE, PlacingProbe
 
-OUTCOMES = {-1: "failed", 0: "attached", 1: "recaptured", 2: "released", 3: "undecided"}
+OUTCOMES = {-1: "failed", 0: "attached", 1: "recaptured", 2: "released", 3: "undecided", 4: "tip reaches substrate",
+            5: "weight exceeds adhesion"}
 G = 9.80665
 
 #: Table 4.1 elastic constants used with Table 4.4's lambda, radii and zeta_0 (Table 4.4 gives none)
 _T41 = ("E_t", "nu_t", "E_s", "nu_s")
 
 
-def placing_contact(lam: float | None = None, **overrides):
+def placing_contact(lam: float | None = None, H: float | None = None, **overrides):
     """The Maugis-Dugdale contact of Table 4.4: ``lambda = 2``, ``R_t = 50 nm``, ``R_s = 160 nm``,
     ``zeta_0 = 0.375 nm``; elastic constants of Table 4.1 (the registry's defaults; Table 4.4
     gives none). ``lambda`` sets the work of adhesion (2.24); so the tail's Hamaker constant is
     ``12 pi W zeta_0^2 = 1.35e-19 J`` (Table 4.4's ``H_sb = 1.995e-19 J`` would give
-    ``lambda = 2.6``: the table is not self-consistent, docs/placing.md)."""
-    kw = {"lam": float(TABLE["lambda"] if lam is None else lam), "R_t": float(TABLE["R_t"]),
-          "R_s": float(TABLE["R_s"]), "z0": float(TABLE["zeta0"])}
+    ``lambda = 2.6``: the table is not self-consistent, docs/placing.md). With ``H`` given instead,
+    the work of adhesion is ``H / (12 pi zeta_0^2)`` (one Hamaker constant for the tail and the
+    adhesion; used to vary ``H_sb`` consistently)."""
+    if lam is not None and H is not None:
+        raise ParameterError("give lambda or the Hamaker constant H, not both")
+    kw = {"R_t": float(TABLE["R_t"]), "R_s": float(TABLE["R_s"]), "z0": float(TABLE["zeta0"])}
+    if H is not None:
+        kw["H"] = float(H)
+    else:
+        kw["lam"] = float(TABLE["lambda"] if lam is None else lam)
     kw.update(overrides)
     return get_contact_model("md", **kw)
 
@@ -491,6 +499,13 @@ def _tables(lam: float) -> ContactTables:
     return _TABLE_CACHE[lam]
 
 
+def _tables_H(H: float) -> ContactTables:
+    key = ("H", H)
+    if key not in _TABLE_CACHE:
+        _TABLE_CACHE[key] = ContactTables.build(placing_contact(H=H))
+    return _TABLE_CACHE[key]
+
+
 def release_cells(M, A, omega, D, probe: Mapping[str, Any], zeta_c: float = 0.1, lam: float = 2.0,
                   n_modes: int = 1, n_periods: float = 3.0, n_fly: float = 20.0, rtol: float = 1e-6) -> dict[str, np.ndarray]:
     """Sweep cell function (vectorised): the release outcome of every cell (``M``, ``A``,
@@ -505,6 +520,12 @@ def release_cells(M, A, omega, D, probe: Mapping[str, Any], zeta_c: float = 0.1,
            "cpu_s": np.zeros(n)}
     for i in range(n):
         t0 = time.perf_counter()
+        if A[i] >= 0.9 * D[i]:  # the oscillating tip would hit the substrate: no release experiment
+            out["outcome"][i] = 4
+            continue
+        if M[i] * G >= abs(tabs.pull_off_force):  # cannot even be held: falls under its own weight
+            out["outcome"][i] = 5
+            continue
         st = setup_release(pr, M=float(M[i]), A=float(A[i]), omega=float(omega[i]), D=float(D[i]), zeta_c=zeta_c,
                            n_modes=n_modes, n_periods=n_periods, n_fly=n_fly, tables=tabs)
         r = simulate(st, rtol=rtol)
