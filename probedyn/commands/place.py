@@ -121,7 +121,7 @@ def capture(probe: str = PROBE_ARG, sets: Optional[List[str]] = SET_OPT, mass_so
         md = r["md"]
         lines.append(f"MD at zero load: k1 = {md['k1_n_per_m']:.4g} N/m, k0 = {md['k0_n']:.4g} N, "
                      f"pull-off {md['pull_off_n']:.4g} N; piecewise-linear max-error order: uniform "
-                     f"{r['pl_orders']['uniform']:.2f}, sqrt-spaced {r['pl_orders']['sqrt']:.2f}")
+                     f"{r['pl_orders']['uniform']:.2f}, graded {r['pl_orders']['graded']:.2f}")
         return "\n".join(lines)
 
     emit(res, as_json, human)

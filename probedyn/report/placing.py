@@ -86,7 +86,7 @@ def _fig_4_18(cap: dict[str, Any], a, b) -> None:
     ref = c4["uniform_8"]
     a.plot(np.asarray(ref["delta_m"]) * 1e9, np.asarray(ref["force_n"]) * 1e9, "k-", lw=2, label="MD, exact (registry)")
     for key, st, lab in (("uniform_4", "C1--", "4 segments, uniform"), ("uniform_8", "C0--", "8 segments, uniform"),
-                         ("sqrt_8", "C2:", "8 segments, sqrt-spaced")):
+                         ("graded_8", "C2:", "8 segments, graded (j/N)^4")):
         c = c4[key]
         a.plot(np.asarray(c["nodes_m"]) * 1e9, np.asarray(c["node_forces_n"]) * 1e9, st, marker="o", ms=3, label=lab)
     md = cap["md"]
@@ -95,7 +95,7 @@ def _fig_4_18(cap: dict[str, Any], a, b) -> None:
     a.set_ylabel(axis_label("contact force", "nN"))
     a.set_title("Fig 4.18: MD (lambda = 2), piecewise linear", fontsize=9)
     a.legend(fontsize=6.5)
-    for sp, st in (("uniform", "o-"), ("sqrt", "s-")):
+    for sp, st in (("uniform", "o-"), ("graded", "s-")):
         rows = cap["pl_errors"][sp]
         b.loglog([r["n_segments"] for r in rows], [r["max_error_n"] * 1e9 for r in rows], st,
                  label=f"{sp} nodes: order {cap['pl_orders'][sp]:.2f}")
@@ -460,8 +460,8 @@ def section(outdir: Path, quick: bool) -> str:
         "",
                 f"MD linearisation at zero load (4.28-4.29): k1 = {cp['md']['k1_n_per_m']:.4g} N/m, "
         f"k0 = {cp['md']['k0_n']:.4g} N; the piecewise-linear error decays as N^-{cp['pl_orders']['uniform']:.2f} "
-        f"with uniform nodes (vertical tangent at the jump-out point) and N^-{cp['pl_orders']['sqrt']:.2f} with "
-        "nodes uniform in sqrt(delta - delta_min) (the max error sits in the last segment, where P ~ sqrt).",
+        f"with uniform nodes (vertical tangent at the jump-out point) and N^-{cp['pl_orders']['graded']:.2f} with "
+        "nodes graded as (j/N)^4 towards the jump-out point.",
         "",
         "![Capture: Fig 4.21, mass effect, Fig 4.18](placing_capture.png)",
         "",

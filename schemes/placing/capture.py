@@ -41,8 +41,8 @@ MD linearisation (4.28)-(4.29), Fig 4.18: the contact's operating point at a giv
 ``k1 = dP/ddelta`` there and ``k0 = P - k1 delta``; the piecewise-linear approximation of the
 unloading (stable) branch and its error. With nodes uniform in ``delta`` the maximum error
 decays only as ``N^-1/2``: the branch ends at the jump-out point with a vertical tangent,
-``P - P_js ~ sqrt(delta - delta_min)``; nodes uniform in ``sqrt(delta - delta_min)`` restore
-``N^-2`` (:func:`piecewise_linear_error`).
+``P - P_js ~ sqrt(delta - delta_min)``; nodes graded as ``(j/N)^4`` towards it restore ``N^-2``
+(:func:`piecewise_linear_error`).
 """
 
 from __future__ import annotations
@@ -346,7 +346,7 @@ def _pl_reference(contact, delta_max: float | None, n_eval: int) -> tuple[float,
     if not delta_max > d_min:
         raise ParameterError("delta_max must exceed the jump-out penetration")
     ue = np.linspace(0.0, 1.0, n_eval)
-    de = d_min + (delta_max - d_min) * ue**2
+    de = d_min + (delta_max - d_min) * ue**4
     Pe = contact.force(de + np.r_[1e-12 * s.d_unit, np.zeros(n_eval - 1)], "unloading")
     return d_min, float(delta_max), de, np.asarray(Pe, float)
 
@@ -358,15 +358,18 @@ def piecewise_linear_error(contact, n_segments: int, spacing: str = "uniform", d
     load of ``+3 |pull-off|``); errors against the exact MD force on ``n_eval`` points (or a
     precomputed ``reference`` from :func:`_pl_reference`).
 
-    ``spacing="uniform"``: nodes uniform in delta; ``"sqrt"``: uniform in ``sqrt(delta - delta_min)``."""
+    ``spacing="uniform"``: nodes uniform in delta; ``"graded"``: ``delta - delta_min ~ (j/N)^4``,
+    the grading that restores the second order against the square-root end (a segment of
+    length ``d`` next to ``x^(1/2)`` has the error ``~ d^(1/2)``, one at ``x`` has ``d^2 x^(-3/2)``;
+    with ``x_j = (j/N)^q`` both are ``O(N^-2)`` for ``q >= 4``)."""
     if int(n_segments) < 1:
         raise ParameterError(f"n_segments must be >= 1, got {n_segments}")
-    if spacing not in ("uniform", "sqrt"):
-        raise ParameterError(f"spacing must be 'uniform' or 'sqrt', got {spacing!r}")
+    if spacing not in ("uniform", "graded"):
+        raise ParameterError(f"spacing must be 'uniform' or 'graded', got {spacing!r}")
     d_min, delta_max, de, Pe = reference if reference is not None else _pl_reference(contact, delta_max, n_eval)
     s = contact.scales
     u = np.linspace(0.0, 1.0, int(n_segments) + 1)
-    nodes = d_min + (delta_max - d_min) * (u if spacing == "uniform" else u**2)
+    nodes = d_min + (delta_max - d_min) * (u if spacing == "uniform" else u**4)
     Pn = np.asarray(contact.force(nodes + np.r_[1e-12 * s.d_unit, np.zeros(len(nodes) - 1)], "unloading"), float)
     # exact values at the evaluation points, with the nodes merged in (the interpolant is exact there)
     Pl = np.interp(de, nodes, Pn)

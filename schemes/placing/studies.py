@@ -162,7 +162,7 @@ def capture_study(probe: PlacingProbe, K_values: Sequence[float] = (0.0, 3.0, 30
     lin = cap.md_linearisation(contact, 0.0)
     ns = [2, 4, 8, 16, 32, 64]
     ref = cap._pl_reference(contact, None, 2001)
-    pl = {sp: [cap.piecewise_linear_error(contact, k, sp, reference=ref) for k in ns] for sp in ("uniform", "sqrt")}
+    pl = {sp: [cap.piecewise_linear_error(contact, k, sp, reference=ref) for k in ns] for sp in ("uniform", "graded")}
     orders = {sp: cap.convergence_order(ns[2:], [r["max_error_n"] for r in pl[sp][2:]]) for sp in pl}
     curves = {f"{sp}_{r['n_segments']}": {"delta_m": r["delta_m"], "force_n": r["force_n"], "force_pl_n": r["force_pl_n"],
                                           "nodes_m": r["nodes_m"], "node_forces_n": r["node_forces_n"]}
