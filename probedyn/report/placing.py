@@ -331,32 +331,33 @@ def plot_multi(mul: dict[str, Any], path: Path) -> Path:
     ax.legend(fontsize=6)
     s = mul["selective_frequency"]
     om = np.asarray(s["omega_rad_s"])
-    thr = np.asarray(s["Y_threshold_m"])
+    thr = np.asarray(s["Y_threshold"])
+    unit = ("tip force F0", "N") if s["drive"] == "tip" else ("base amplitude", "m")
     ax = axs[1]
     ax.loglog(om, thr[:, 0], "C0-", label=f"sample 1 at L/2 ({s['M_kg']:.2g} kg)")
     ax.loglog(om, thr[:, 1], "C3-", label=f"sample 2 at L ({s['M_kg']:.2g} kg)")
     for c in s.get("checks", []):
         if c["case"].startswith("frequency"):
-            ax.plot([c["omega_rad_s"]], [c["Y_m"]], "k*", ms=9)
-            ax.annotate(f"1 {c['outcome_sample1']}, 2 {c['outcome_sample2']}", (c["omega_rad_s"], c["Y_m"]),
+            ax.plot([c["omega_rad_s"]], [c["Y"]], "k*", ms=9)
+            ax.annotate(f"1 {c['outcome_sample1']}, 2 {c['outcome_sample2']}", (c["omega_rad_s"], c["Y"]),
                         fontsize=6.5, xytext=(4, 4), textcoords="offset points")
     ax.set_xlabel(axis_label("drive frequency omega", "rad/s"))
-    ax.set_ylabel(axis_label("base amplitude releasing the sample", "m"))
+    ax.set_ylabel(axis_label(unit[0] + " releasing the sample", unit[1]))
     ax.set_title("Fig 4.25: frequency-based selective release", fontsize=9)
     ax.legend(fontsize=7)
     a = mul["selective_amplitude"]
-    Y = np.asarray(a["Y_m"])
-    th = np.asarray(a["Y_threshold_m"])
+    Y = np.asarray(a["Y"])
+    th = np.asarray(a["Y_threshold"])
     ax = axs[2]
     for k, (lab, col) in enumerate((("sample 1 at L/2", "C0"), ("sample 2 at L", "C3"))):
-        ax.loglog(Y * 1e9, Y / th[k], "-", color=col, label=f"{lab}: releases at Y = {th[k] * 1e9:.3g} nm")
+        ax.loglog(Y, Y / th[k], "-", color=col, label=f"{lab}: releases at {th[k]:.3g} {unit[1]}")
     ax.axhline(1.0, color="k", lw=0.8, label="tension = pull-off force")
     for c in s.get("checks", []):
         if c["case"].startswith("amplitude"):
-            ax.axvline(c["Y_m"] * 1e9, color="0.5", ls=":", lw=0.8)
-            ax.annotate(f"sim: 1 {c['outcome_sample1']}, 2 {c['outcome_sample2']}", (c["Y_m"] * 1e9, 0.3),
+            ax.axvline(c["Y"], color="0.5", ls=":", lw=0.8)
+            ax.annotate(f"sim: 1 {c['outcome_sample1']}, 2 {c['outcome_sample2']}", (c["Y"], 0.3),
                         rotation=90, fontsize=6.5)
-    ax.set_xlabel(axis_label("base amplitude Y", "nm"))
+    ax.set_xlabel(axis_label(unit[0], unit[1]))
     ax.set_ylabel("contact tension / pull-off force")
     ax.set_title(f"Fig 4.26: amplitude-based, omega = {a['omega_rad_s']:.3g} rad/s", fontsize=9)
     ax.legend(fontsize=7)

@@ -539,7 +539,7 @@ def release_cells(M, A, omega, D, probe: Mapping[str, Any], zeta_c: float = 0.1,
 
 def outcome_map(probe: PlacingProbe, grid: Mapping[str, Any], fixed: Mapping[str, Any] | None = None,
                 out=None, workers: int = 2, chunk_size: int | None = None, progress: bool = False,
-                processes: bool = True, **kw):
+                processes: bool = True, restart: bool = False, **kw):
     """An outcome map over any of ``M``, ``A``, ``omega``, ``D`` (the others fixed, Table 4.4
     defaults; ``A`` defaults to the tip amplitude of ``F0 = 5e-7 N``) on Dask
     (:func:`probedyn.schemes.sweep.run_sweep`), NetCDF at ``out``. Returns the SweepResult."""
@@ -560,7 +560,7 @@ def outcome_map(probe: PlacingProbe, grid: Mapping[str, Any], fixed: Mapping[str
     fixed.update(kw)
     attrs = {"outcomes": json_outcomes(), "model": "schemes.placing.release (full Maugis-Dugdale, eq 4.42)"}
     return run_sweep(release_cells, g, fixed=fixed, out=out, workers=workers, chunk_size=chunk_size,
-                     progress=progress, processes=processes, attrs=attrs)
+                     progress=progress, processes=processes, attrs=attrs, restart=restart)
 
 
 def json_outcomes() -> str:

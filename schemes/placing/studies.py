@@ -182,7 +182,7 @@ def capture_study(probe: PlacingProbe, K_values: Sequence[float] = (0.0, 3.0, 30
         sample[src] = {"mu": M / (pr.rhoA * pr.L), "K_contact": k1 * pr.L**3 / pr.EI,
                        "f1_bare_hz": base / (2 * math.pi), "df_rel_hanging": hang / base - 1.0,
                        "df_rel_grounded": grd / base - 1.0,
-                       "df_rel_first_order": -0.5 * M / pr.m}
+                       "df_rel_first_order": -0.5 * M / pr.modal_masses[0]}
     err = [abs(r["rel_diff"]) for r in checks]
     return {"rows": rows, "mass_curve": mass_curve, "check": checks, "check_method": method,
             "check_max_abs_rel": max(err) if err else math.nan,
@@ -319,12 +319,13 @@ def landing_study(probe: PlacingProbe, n: int = 9, law: str = "derjaguin") -> di
 def multi_study(probe: PlacingProbe, model=None, ns: Sequence[int] = (2, 3, 4, 6, 8, 12, 16),
                 mode_counts: Sequence[int] = (6, 8, 12, 16), ratios: Sequence[float] = (0.1, 1.0),
                 fem_reference: bool = True, selective_mass: float = 1e-13, verify: bool = True,
-                inverse_starts: int = 8, basis=None) -> dict[str, Any]:
+                inverse_starts: int = 8, basis=None, drive: str = "tip") -> dict[str, Any]:
     """Rayleigh-Ritz convergence (polynomial and FEM-mode bases) against the exact beam and the
     FEM with two masses at L/2 and L; the printed 2-term matrices; identifiability and one
     inverse solution; selective release by frequency and by amplitude. ``basis``: a Ritz basis
     of ``model`` with static shapes at L/2 and L (sub-bases by truncation, no eigen-solve);
-    else one is built per mode count."""
+    else one is built per mode count. ``drive``: ``"tip"`` (a force F0 at the tip, 4.13; amplitudes
+    in N) or ``"base"`` (clamp motion, in m) for the selective release."""
     L, EI, rA = probe.L, probe.EI, probe.rhoA
     mb = rA * L
     scale = float(probe.provenance.get("mass_scale", 1.0))
@@ -383,35 +384,47 @@ def multi_study(probe: PlacingProbe, model=None, ns: Sequence[int] = (2, 3, 4, 6
     w_c = math.sqrt(tabs0.k1_bar * tabs0.P / tabs0.l / Msel)  # the sample's contact resonance
     w_hi = min(40 * w1, 0.3 * w_c)  # quasi-static contact: the threshold formula holds
     om = np.geomspace(0.2 * w1, w_hi, 600)
-    thr = mu.release_thresholds(probe, ms_sel, om, "base")
+    thr = mu.release_thresholds(probe, ms_sel, om, drive)
     ratio = thr[:, 1] / thr[:, 0]
     i1 = int(np.argmax(ratio))  # sample 1 (L/2) easiest relative to sample 2
     i2 = int(np.argmin(ratio))
-    thr_tab = mu.release_thresholds(probe, [(0.5 * L, float(TABLE["M1"])), (L, float(TABLE["M2"]))], om, "base")
-    sel = {"M_kg": Msel, "omega_c_rad_s": w_c, "omega_rad_s": om, "Y_threshold_m": thr, "Y_threshold_table_masses_m": thr_tab,
-           "best_for_sample1": {"omega_rad_s": float(om[i1]), "Y1_m": float(thr[i1, 0]), "Y2_m": float(thr[i1, 1])},
-           "best_for_sample2": {"omega_rad_s": float(om[i2]), "Y1_m": float(thr[i2, 0]), "Y2_m": float(thr[i2, 1])}}
+    thr_tab = mu.release_thresholds(probe, [(0.5 * L, float(TABLE["M1"])), (L, float(TABLE["M2"]))], om, drive)
+    other = "base" if drive == "tip" else "tip"
+    thr_o = mu.release_thresholds(probe, ms_sel, om, other)
+    sel = {"drive": drive, "M_kg": Msel, "omega_c_rad_s": w_c, "omega_rad_s": om, "Y_threshold": thr,
+           "Y_threshold_table_masses": thr_tab,
+           "best_for_sample1": {"omega_rad_s": float(om[i1]), "Y1": float(thr[i1, 0]), "Y2": float(thr[i1, 1]),
+                                "ratio": float(ratio[i1])},
+           "best_for_sample2": {"omega_rad_s": float(om[i2]), "Y1": float(thr[i2, 0]), "Y2": float(thr[i2, 1]),
+                                "ratio": float(ratio[i2])},
+           "other_drive": other, "other_drive_max_ratio": float(np.max(thr_o[:, 1] / thr_o[:, 0])),
+           "other_drive_min_ratio": float(np.min(thr_o[:, 1] / thr_o[:, 0]))}
     # amplitude-based selection at a fixed frequency below the first mode
     w_amp = 0.8 * w1
-    Ys = np.geomspace(0.2, 5.0, 25) * float(np.min(mu.release_thresholds(probe, ms_sel, [w_amp], "base")))
-    T = np.abs(mu.local_response(probe, ms_sel, [w_amp], "base"))[0]
-    amp = {"omega_rad_s": w_amp, "Y_m": Ys, "local_per_Y": T,
-           "Y_threshold_m": mu.release_thresholds(probe, ms_sel, [w_amp], "base")[0]}
+    Ys = np.geomspace(0.2, 5.0, 25) * float(np.min(mu.release_thresholds(probe, ms_sel, [w_amp], drive)))
+    T = np.abs(mu.local_response(probe, ms_sel, [w_amp], drive))[0]
+    amp = {"drive": drive, "omega_rad_s": w_amp, "Y": Ys, "local_per_Y": T,
+           "Y_threshold": mu.release_thresholds(probe, ms_sel, [w_amp], drive)[0]}
     if verify:
         tabs = rel._tables(float(TABLE["lambda"]))
         checks = []
-        for label, wv, Y in (("frequency, sample 1 window", float(om[i1]), 0.5 * (thr[i1, 0] + min(thr[i1, 1], 10 * thr[i1, 0]))),
-                             ("frequency, sample 2 window", float(om[i2]), 0.5 * (thr[i2, 1] + min(thr[i2, 0], 10 * thr[i2, 1]))),
-                             ("amplitude, low", w_amp, float(np.sqrt(amp["Y_threshold_m"][0] * amp["Y_threshold_m"][1]))),
-                             ("amplitude, high", w_amp, float(1.5 * max(amp["Y_threshold_m"])))):
-            Tl = np.abs(mu.local_response(probe, ms_sel, [wv], "base"))[0]
+        cases = [("frequency, sample 1 alone" if ratio[i1] > 1 else "frequency, best for sample 1", float(om[i1]),
+                  float(np.sqrt(thr[i1, 0] * thr[i1, 1]))),
+                 ("frequency, sample 2 alone", float(om[i2]), float(np.sqrt(thr[i2, 0] * thr[i2, 1]))),
+                 ("amplitude, low", w_amp, float(np.sqrt(amp["Y_threshold"][0] * amp["Y_threshold"][1]))),
+                 ("amplitude, high", w_amp, float(1.5 * max(amp["Y_threshold"])))]
+        for label, wv, Y in cases:
+            Tl = np.abs(mu.local_response(probe, ms_sel, [wv], drive))[0]
+            thr_l = mu.release_thresholds(probe, ms_sel, [wv], drive)[0]
             outs = []
             for k, (l, Mk) in enumerate(ms_sel):
                 pk = mu.probe_at(probe, l, ms_sel)
                 Ak = float(Y * Tl[k])
                 st = rel.setup_release(pk, M=Mk, A=Ak, omega=wv, tables=tabs, D=max(50e-6, 10 * float(np.max(Tl * Y))))
                 outs.append(rel.simulate(st).outcome)
-            checks.append({"case": label, "omega_rad_s": wv, "Y_m": Y, "local_amplitudes_m": list(Tl * Y),
+            pred = ["released" if Y > thr_l[k] else "attached" for k in range(2)]
+            checks.append({"case": label, "omega_rad_s": wv, "Y": Y, "local_amplitudes_m": list(Tl * Y),
+                           "predicted_sample1": pred[0], "predicted_sample2": pred[1],
                            "outcome_sample1": outs[0], "outcome_sample2": outs[1]})
         sel["checks"] = checks
     return {"convergence": conv, "printed": printed, "identifiability": ident,
