@@ -102,7 +102,7 @@ def _ritz_capture(basis, probe: PlacingProbe, K: float, muv: float, n: int):
 
 def capture_study(probe: PlacingProbe, K_values: Sequence[float] = (0.0, 3.0, 30.0, 300.0, 3000.0),
                   mu_values: Sequence[float] = (0.0, 0.1, 1.0), n: int = 3, basis=None,
-                  fem_check: bool = False, n_x: int = 101) -> dict[str, Any]:
+                  fem_check: bool = False, n_x: int = 101, n_eval: int = 2001) -> dict[str, Any]:
     """Frequency equation (corrected and printed) for a grid of ``K = k1 L^3/EI`` and
     ``mu = M/(rho A L)``; the check against the FEM (``fem_check``: full re-solves; else against
     the FEM-mode Ritz model with static shapes at the tip, ``basis``); mode shapes for increasing
@@ -161,7 +161,7 @@ def capture_study(probe: PlacingProbe, K_values: Sequence[float] = (0.0, 3.0, 30
     contact = rel.placing_contact()
     lin = cap.md_linearisation(contact, 0.0)
     ns = [2, 4, 8, 16, 32, 64]
-    ref = cap._pl_reference(contact, None, 2001)
+    ref = cap._pl_reference(contact, None, int(n_eval))
     pl = {sp: [cap.piecewise_linear_error(contact, k, sp, reference=ref) for k in ns] for sp in ("uniform", "graded")}
     orders = {sp: cap.convergence_order(ns[2:], [r["max_error_n"] for r in pl[sp][2:]]) for sp in pl}
     curves = {f"{sp}_{r['n_segments']}": {"delta_m": r["delta_m"], "force_n": r["force_n"], "force_pl_n": r["force_pl_n"],
