@@ -205,7 +205,10 @@ def release_examples(probe: PlacingProbe, A: float = RELEASE_A, omega: float = R
     with their trajectories; plus the Table 4.4 operating point."""
     tabs = rel._tables(float(TABLE["lambda"]))
     M_th = abs(tabs.pull_off_force) / (omega**2 * A)
-    Ms = M_th * np.geomspace(0.7, 3.0, n_scan)
+    # recapture lives in a narrow band just above the threshold: scan it densely
+    k = max(n_scan - 8, 4)
+    Ms = M_th * np.concatenate([np.geomspace(0.7, 0.9, 4, endpoint=False), np.linspace(0.9, 1.1, k),
+                                np.geomspace(1.2, 3.0, 4)])
     codes = []
     for M in Ms:
         st = rel.setup_release(probe, M=float(M), A=A, omega=omega, tables=tabs)
