@@ -217,3 +217,9 @@ def element_volumes(mesh) -> np.ndarray:
     p = mesh.p[:, mesh.t]  # (3, 4, nel)
     a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
     return np.abs(np.einsum("ie,ie->e", a, np.cross(b, c, axis=0))) / 6.0
+
+
+def region_volumes(mesh, names) -> dict[str, float]:
+    """Volume [m^3] of each named subdomain of a tet mesh (names the mesh lacks are left out)."""
+    vol = element_volumes(mesh)
+    return {n: float(vol[mesh.subdomains[n]].sum()) for n in names if n in (mesh.subdomains or {})}
