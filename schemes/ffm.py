@@ -144,11 +144,6 @@ class FFM:
         s0 = self.friction.presliding_stiffness()
         return math.nan if s0 is None else s0 * s0 / self.cantilever["k_x"]
 
-    def first_slip_estimate(self) -> float:
-        """Base travel to the first slip in the quasi-static limit: F_s / k_x (SOURCE-NOTES 12)."""
-        lv = self.friction.levels()
-        return math.nan if lv is None else lv[0] / self.cantilever["k_x"]
-
 
 # ------------------------------------------------------------------------------------------
 # Numba Rosenbrock (ode23s) integrator for the 1D FFM model with the model's own kernel

@@ -175,9 +175,3 @@ class MaugisDugdale(ContactModel):
 
     def nd_endpoint(self):
         return endpoint(self.lam)
-
-    def m_ratio(self, A) -> np.ndarray:
-        """``m = c / a`` (outer radius of the adhesive annulus over the contact radius)."""
-        if self.lam == 0:
-            return np.full(np.shape(np.atleast_1d(A)), np.inf)
-        return np.hypot(1.0, solve_s(A, self.lam))
