@@ -141,8 +141,6 @@ class AugmentedModel(ElasticModel):
     def energy_shares(self, Phi: np.ndarray, qt: np.ndarray | None = None) -> list[dict[str, float]]:
         """Kinetic-energy shares (``phi^T M_region phi`` / total) per region, of the point
         masses and of the lumped tip, for mesh shapes ``Phi`` (ndofs, k) and tip DOFs ``qt``."""
-        from probedyn.fem import elasticity as el
-
         k = Phi.shape[1]
         parts: dict[str, np.ndarray] = {}
         for r, name in enumerate(self.region_names):
