@@ -620,10 +620,11 @@ def push(substrate_name: str = "mica", overrides: Mapping[str, Any] | None = Non
 
 
 def transition_speed(substrate_name: str = "mica", overrides: Mapping[str, Any] | None = None, *,
-                     lo: float = 3e-6, hi: float = 150e-6, rel_tol: float = 0.02,
+                     lo: float = _T41["V"], hi: float = 150e-6, rel_tol: float = 0.02,
                      n_lattice: float = 10.0) -> dict[str, Any]:
     """Speed at which stick-slip gives way to sliding, by bisection on the regime of pushes
-    started from rest (``lo`` must be stick-slip, ``hi`` sliding). Bisection in log-speed until
+    started from rest (``lo`` must be stick-slip, ``hi`` sliding; default ``lo``: the pushing
+    speed of 4.1.1). Bisection in log-speed until
     ``hi/lo - 1 < rel_tol``; returns the bracket, its geometric mean and every evaluation."""
     evals = []
 

@@ -42,14 +42,35 @@ from __future__ import annotations
 import difflib
 import importlib
 import pkgutil
-from typing import Any, Callable, Generic, Iterator, TypeVar
+from typing import Any, Callable, ClassVar, Generic, Iterator, TypeVar
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import ParamSet
 
 T = TypeVar("T", bound=type)
 
-__all__ = ["Registry", "RegistryError"]
+__all__ = ["Model", "Registry", "RegistryError"]
+
+
+class Model:
+    """What every registered model declares; the base class of each family derives from it."""
+
+    #: registry key (lower case)
+    key: ClassVar[str] = ""
+    #: one line saying what the model is
+    title: ClassVar[str] = ""
+    #: the equations / tables / references it implements
+    source: ClassVar[str] = ""
+
+    @property
+    def name(self) -> str:
+        """The registry key (read-only alias kept for callers written before the registry)."""
+        return self.key
+
+    @property
+    def equations(self) -> str:
+        """The source equations (alias of :attr:`source`)."""
+        return self.source
 
 
 class RegistryError(TypeError):

@@ -25,22 +25,14 @@ import numpy as np
 
 from probedyn.core.errors import DataFormatError
 from probedyn.core.params import ParamSet, load_toml
-from probedyn.core.registry import Registry
+from probedyn.core.registry import Model, Registry
 
 
-class Probe:
+class Probe(Model):
     """Base class.  Subclasses set ``key``, ``title``, ``source`` and ``params`` and implement
     :meth:`build` and :meth:`tip_point` (and usually :meth:`references`)."""
 
-    key: ClassVar[str] = ""
-    title: ClassVar[str] = ""
-    source: ClassVar[str] = ""
     params: ClassVar[ParamSet] = ParamSet([])
-
-    @property
-    def name(self) -> str:
-        """The registry key (alias kept for callers written before the one registry pattern)."""
-        return self.key
 
     @property
     def description(self) -> str:

@@ -11,7 +11,7 @@ User choices (SOURCE-NOTES item 10):
 * ``holder = "meshed"`` (a silicon block L_h x holder_width x holder_thickness with its PZT
   stiffness-tuning piezolayer on top) or ``"point"`` (a rigid mass on the face-averaged
   displacement of the body end face, no rotary inertia, as in the beam equation 3.8);
-* ``holder_mass_source = "table"``: the holder carries Table 3.1's ``m_h`` = 2e-7 kg (the
+* ``holder_mass_source = "table"``: the holder carries Table 3.1's ``m_h`` (the
   meshed holder's density is scaled so that holder + piezolayer weigh m_h), or ``"geometry"``:
   the holder weighs what its volume and materials give (1.2e-10 kg for the default block,
   ~1700 times less than the table value);
@@ -40,6 +40,7 @@ from probedyn.lumped.smart import duo_bimorph_references
 from probedyn.lumped.smart_analytic import DuoBimorphBeam
 from probedyn.meshes._gmsh import region_volumes
 from probedyn.meshes.cache import MeshOptions
+from probedyn.meshes.duo_bimorph import DEFAULTS as GEOM
 from probedyn.meshes.duo_bimorph import duo_bimorph_mesh, named_points, validate
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
@@ -49,19 +50,19 @@ PZT_CHOICES = ("pzt-5h", "pzt-5h-iso")
 T31 = preset("table-3.1")
 
 _PARAMS = ParamSet([
-    Param("length", T31["L"], "m", "duo-bimorph length L (x)", lo=10e-6, hi=0.02, positive=True, source="Table 3.1"),
-    Param("width", T31["w"], "m", "duo-bimorph width w (y)", lo=1e-6, hi=0.005, positive=True, source="Table 3.1"),
-    Param("thickness", T31["h"], "m", "total thickness h of the two PZT layers (z)", lo=0.2e-6, hi=0.002,
+    Param("length", GEOM["length"], "m", "duo-bimorph length L (x)", lo=10e-6, hi=0.02, positive=True, source="Table 3.1"),
+    Param("width", GEOM["width"], "m", "duo-bimorph width w (y)", lo=1e-6, hi=0.005, positive=True, source="Table 3.1"),
+    Param("thickness", GEOM["thickness"], "m", "total thickness h of the two PZT layers (z)", lo=0.2e-6, hi=0.002,
           positive=True, source="Table 3.1"),
-    Param("electrode_gap", T31["w0"], "m", "electrode separation w0 (splits each face into left/right)", lo=1e-8,
+    Param("electrode_gap", GEOM["electrode_gap"], "m", "electrode separation w0 (splits each face into left/right)", lo=1e-8,
           hi=0.005, positive=True, source="Table 3.1, eq 3.5"),
     Param("holder", "meshed", "", "tip holder: meshed block + piezolayer, or a point mass m_h on the end face",
           kind=str, choices=("meshed", "point")),
-    Param("holder_length", T31["L_h"], "m", "holder length L_h", lo=1e-7, hi=0.005, positive=True,
+    Param("holder_length", GEOM["holder_length"], "m", "holder length L_h", lo=1e-7, hi=0.005, positive=True,
           source="Table 3.1"),
-    Param("holder_width", 30e-6, "m", "holder width (meshed holder)", lo=1e-7, hi=0.005, positive=True),
-    Param("holder_thickness", 8e-6, "m", "holder block thickness (meshed holder)", lo=1e-8, hi=0.002, positive=True),
-    Param("piezolayer_thickness", 2e-6, "m", "stiffness-tuning piezolayer on the holder", lo=1e-8, hi=0.002,
+    Param("holder_width", GEOM["holder_width"], "m", "holder width (meshed holder)", lo=1e-7, hi=0.005, positive=True),
+    Param("holder_thickness", GEOM["holder_thickness"], "m", "holder block thickness (meshed holder)", lo=1e-8, hi=0.002, positive=True),
+    Param("piezolayer_thickness", GEOM["piezolayer_thickness"], "m", "stiffness-tuning piezolayer on the holder", lo=1e-8, hi=0.002,
           positive=True, source="3.2.1"),
     Param("holder_material", "silicon", "", "material of the holder block", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
@@ -78,8 +79,8 @@ _PARAMS = ParamSet([
           source="Table 3.1"),
     Param("k_tz", T31["k_z2"], "N/m", "holder spring along z, k_z2", lo=1e-4, hi=1e7, positive=True,
           source="Table 3.1"),
-    Param("tip_height", 5e-6, "m", "meshed tip cone height", lo=1e-8, hi=0.002, positive=True),
-    Param("tip_radius", 2e-6, "m", "meshed tip cone base radius", lo=1e-8, hi=0.002, positive=True),
+    Param("tip_height", GEOM["tip_height"], "m", "meshed tip cone height", lo=1e-8, hi=0.002, positive=True),
+    Param("tip_radius", GEOM["tip_radius"], "m", "meshed tip cone base radius", lo=1e-8, hi=0.002, positive=True),
     Param("material", "pzt-5h", "", "PZT of the layers: transversely isotropic, or isotropic E = 1/s11",
           kind=str, choices=PZT_CHOICES),
     Param("density", T31["rho"], "kg/m^3", "density of the PZT (overrides the material's)", lo=1000.0,

@@ -14,7 +14,7 @@ User choices (SOURCE-NOTES item 10):
 * ``holder_mass_source = "table"`` (Table 3.2's m_h = 2e-5 kg; the meshed collar's density is
   scaled to it) or ``"geometry"``;
 * ``tip = "lumped"`` (mass ``tip_mass`` on k_tx, k_ty, k_tz at the holder end face) or
-  ``"none"``. Table 3.2 gives neither m nor k_t: the defaults take m = 0.5e-7 kg from Table 3.1
+  ``"none"``. Table 3.2 gives neither m nor k_t: the defaults take Table 3.1's m
   and k_t = 10 N/m (the "manipulation" stiffness of section 3.4.1).
 
 Defaults: Re = 0.5 mm, L = 5 mm (Table 3.2), **Ri = 0.45 mm** (section 3.5; Table 3.2 prints
@@ -36,6 +36,7 @@ from probedyn.fem.materials import get_material, radial_poling
 from probedyn.lumped.smart import piezotube_references
 from probedyn.lumped.smart_analytic import Piezotube as Tube
 from probedyn.meshes.cache import MeshOptions
+from probedyn.meshes.piezotube import DEFAULTS as GEOM
 from probedyn.meshes.piezotube import piezotube_mesh, validate
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
@@ -43,18 +44,18 @@ from probedyn.probes._smart import SmartProbe
 T32 = preset("table-3.2")
 
 _PARAMS = ParamSet([
-    Param("Re", T32["R_e"], "m", "outer radius R_e", lo=10e-6, hi=0.05, positive=True, source="Table 3.2"),
-    Param("Ri", T32["R_i"], "m", "inner (bore) radius R_i (section 3.5; Table 3.2 prints 0.3e-3)", lo=1e-6,
+    Param("Re", GEOM["Re"], "m", "outer radius R_e", lo=10e-6, hi=0.05, positive=True, source="Table 3.2"),
+    Param("Ri", GEOM["Ri"], "m", "inner (bore) radius R_i (section 3.5; Table 3.2 prints 0.3e-3)", lo=1e-6,
           hi=0.05, positive=True, source="3.5"),
-    Param("length", T32["L"], "m", "tube length L (probedyn x)", lo=50e-6, hi=0.1, positive=True, source="Table 3.2"),
+    Param("length", GEOM["length"], "m", "tube length L (probedyn x)", lo=50e-6, hi=0.1, positive=True, source="Table 3.2"),
     Param("delta_y", 0.0, "m", "bore offset along y (source delta_y)", lo=-0.01, hi=0.01, source="Fig 3.19"),
     Param("delta_z", 0.0, "m", "bore offset along z (source delta_x)", lo=-0.01, hi=0.01, source="Fig 3.19"),
     Param("holder", "meshed", "", "tip holder: meshed collar + piezolayer ring, or a point mass m_h", kind=str,
           choices=("meshed", "point")),
-    Param("holder_length", 0.5e-3, "m", "holder (collar) length L_h", lo=1e-6, hi=0.05, positive=True),
-    Param("holder_wall", 0.25e-3, "m", "radial thickness of the holder collar outside Re", lo=1e-6, hi=0.05,
+    Param("holder_length", GEOM["holder_length"], "m", "holder (collar) length L_h", lo=1e-6, hi=0.05, positive=True),
+    Param("holder_wall", GEOM["holder_wall"], "m", "radial thickness of the holder collar outside Re", lo=1e-6, hi=0.05,
           positive=True),
-    Param("piezolayer_thickness", 25e-6, "m", "stiffness-tuning piezolayer ring on the holder", lo=1e-7, hi=0.005,
+    Param("piezolayer_thickness", GEOM["piezolayer_thickness"], "m", "stiffness-tuning piezolayer ring on the holder", lo=1e-7, hi=0.005,
           positive=True, source="3.3.1"),
     Param("holder_material", "silicon", "", "material of the holder collar", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),

@@ -65,7 +65,7 @@ from scipy.interpolate import CubicSpline
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset
-from probedyn.core.registry import Registry
+from probedyn.core.registry import Model, Registry
 
 Branch = Literal["loading", "unloading", "stable", "unstable"]
 
@@ -178,7 +178,7 @@ def _as_array(x) -> tuple[np.ndarray, bool]:
     return np.atleast_1d(arr), arr.ndim == 0
 
 
-class ContactModel(ABC):
+class ContactModel(Model, ABC):
     """A tip–sample contact model: force, contact radius and stiffness vs. penetration.
 
     Subclasses provide the normalised curve (:meth:`nd_curve`), its ``A -> 0`` end point
@@ -189,9 +189,6 @@ class ContactModel(ABC):
     this package is found by discovery, so **a new contact model is one file**.
     """
 
-    key: ClassVar[str] = ""
-    title: ClassVar[str] = ""
-    source: ClassVar[str] = ""
     params: ClassVar[ParamSet] = COMMON_PARAMS
 
     #: table resolution of the parametric curve (points in A)
@@ -201,16 +198,6 @@ class ContactModel(ABC):
         self.values = self.params.resolve(overrides)
         self.scales = resolve_scales(self.values)
         self._table_cache: dict[float, dict[str, np.ndarray]] = {}
-
-    @property
-    def name(self) -> str:
-        """The registry key (alias kept for callers written before the one registry pattern)."""
-        return self.key
-
-    @property
-    def equations(self) -> str:
-        """The source equations (alias of :attr:`source`)."""
-        return self.source
 
     # ------------------------------------------------------------------ normalised model
     @property
@@ -274,21 +261,28 @@ class ContactModel(ABC):
         P = np.concatenate([[P0], P])
         dD = np.concatenate([[dD[0]], dD])
         dP = np.concatenate([[dP[0]], dP])
-        i_min = int(np.argmin(D))
-        A_star, D_min = A[i_min], D[i_min]
-        if 0 < i_min < len(A) - 1:  # refine the turning point: dD/dA = 0 by bisection on the table bracket
-            lo, hi = A[i_min - 1], A[i_min + 1]
-            for _ in range(80):
-                mid = 0.5 * (lo + hi)
-                if self.nd_curve(np.array([mid]))[2][0] < 0:
-                    lo = mid
-                else:
-                    hi = mid
-            A_star = 0.5 * (lo + hi)
-            D_min = float(self.nd_curve(np.array([A_star]))[0][0])
+        # the turning point (jump-out under displacement control): dD/dA = 0
+        A_star, D_min = self._refine_minimum(A, D, int(np.argmin(D)), value=0, slope=2, n_iter=80)
         tab = dict(A=A, D=D, P=P, dD=dD, dP=dP, A_star=A_star, D_min=D_min, A_max=A_max)
         self._table_cache[key] = tab
         return tab
+
+    def _refine_minimum(self, A: np.ndarray, f: np.ndarray, i: int, value: int, slope: int,
+                        n_iter: int) -> tuple[float, float]:
+        """Minimum of a curve quantity ``f`` (entry ``value`` of :meth:`nd_curve`) found at table
+        index ``i``, refined inside the table bracket by bisection on the sign of its derivative
+        (entry ``slope``); at the table's ends the table value is kept."""
+        if not 0 < i < len(A) - 1:
+            return A[i], f[i]
+        lo, hi = A[i - 1], A[i + 1]
+        for _ in range(n_iter):
+            mid = 0.5 * (lo + hi)
+            if self.nd_curve(np.array([mid]))[slope][0] < 0:
+                lo = mid
+            else:
+                hi = mid
+        a = 0.5 * (lo + hi)
+        return a, float(self.nd_curve(np.array([a]))[value][0])
 
     def _table_covering(self, D_target: float) -> dict[str, np.ndarray]:
         A_max = 4.0
@@ -394,18 +388,7 @@ class ContactModel(ABC):
         """
         tab = self._table()
         A, P = tab["A"], tab["P"]
-        i = int(np.argmin(P))
-        A_pc, P_pc = A[i], P[i]
-        if 0 < i < len(A) - 1:
-            lo, hi = A[i - 1], A[i + 1]
-            for _ in range(100):
-                mid = 0.5 * (lo + hi)
-                if self.nd_curve(np.array([mid]))[3][0] < 0:
-                    lo = mid
-                else:
-                    hi = mid
-            A_pc = 0.5 * (lo + hi)
-            P_pc = float(self.nd_curve(np.array([A_pc]))[1][0])
+        A_pc, P_pc = self._refine_minimum(A, P, int(np.argmin(P)), value=1, slope=3, n_iter=100)
         P_pc = min(P_pc, self.nd_endpoint()[1])
         A_star = tab["A_star"]
         if A_star > 0:

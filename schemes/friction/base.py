@@ -55,21 +55,15 @@ import numpy as np
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset
-from probedyn.core.registry import Registry, RegistryError
+from probedyn.core.registry import Model, Registry, RegistryError
 
 #: Table 2.1 (mica FFM experiment): default friction levels of the bristle-type models
 TABLE_2_1 = preset("table-2.1")
 
 
-class FrictionModel:
+class FrictionModel(Model):
     """Base class: a parameter set, validation, a numba kernel and numpy wrappers."""
 
-    #: registry key (lower case)
-    key: ClassVar[str] = ""
-    #: one-line description
-    title: ClassVar[str] = ""
-    #: the source equations implemented
-    source: ClassVar[str] = ""
     #: declared parameters (SI units)
     params: ClassVar[ParamSet]
     #: names of the parameters packed (in order) into the kernel's parameter vector
@@ -91,16 +85,6 @@ class FrictionModel:
 
     def __getitem__(self, name: str) -> Any:
         return self.values[name]
-
-    @property
-    def name(self) -> str:
-        """The registry key (alias kept for callers written before the one registry pattern)."""
-        return self.key
-
-    @property
-    def equations(self) -> str:
-        """The source equations (alias of :attr:`source`)."""
-        return self.source
 
     def scales(self) -> tuple[float, float]:
         """``(force scale [N], internal-state scale)``: the natural size of the friction force
@@ -170,6 +154,21 @@ class FrictionModel:
         """Steady-state friction force at constant sliding velocity ``v`` (``dz/dt = 0``);
         subclasses with a closed form override this."""
         raise NotImplementedError
+
+
+class BristleModel(FrictionModel):
+    """A bristle-type model (LuGre 2.3-2.5, the generalised bristle 2.7-2.9): static and kinetic
+    levels ``F_s``, ``F_c`` and the bristle stiffness ``sigma0`` among its parameters."""
+
+    def scales(self) -> tuple[float, float]:
+        """Static friction and the bristle deflection at it, ``F_s / sigma0``."""
+        return self.values["F_s"], self.values["F_s"] / self.values["sigma0"]
+
+    def levels(self) -> tuple[float, float]:
+        return self.values["F_s"], self.values["F_c"]
+
+    def presliding_stiffness(self) -> float:
+        return self.values["sigma0"]
 
 
 def positive_param(name: str, default: float, unit: str, doc: str, source: str,

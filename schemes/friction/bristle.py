@@ -39,7 +39,7 @@ from numba import njit
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
 
-from .base import FRICTION_MODELS, TABLE_2_1, FrictionModel, positive_param
+from .base import FRICTION_MODELS, TABLE_2_1, BristleModel, positive_param
 
 
 @njit(cache=True)
@@ -65,7 +65,7 @@ def bristle_kernel(p, x, v, z):
 
 
 @FRICTION_MODELS.register
-class GeneralisedBristle(FrictionModel):
+class GeneralisedBristle(BristleModel):
     key = "bristle"
     title = "generalised-bristle nano-friction model of the source (1D reduction, V_y = 0)"
     source = "(2.7)-(2.9) [(2.10)-(2.12) in 2D]"
@@ -95,16 +95,6 @@ class GeneralisedBristle(FrictionModel):
         v = self.values
         return np.array([v["sigma0"], v["F_s"], v["F_c"], v["V_s"], v["F_v"],
                          1.0 if v["vmax"] == "literal" else 0.0])
-
-    def scales(self) -> tuple[float, float]:
-        """Static friction and the bristle deflection at it, ``F_s / sigma0``."""
-        return self.values["F_s"], self.values["F_s"] / self.values["sigma0"]
-
-    def levels(self) -> tuple[float, float]:
-        return self.values["F_s"], self.values["F_c"]
-
-    def presliding_stiffness(self) -> float:
-        return self.values["sigma0"]
 
     def steady_force(self, v):
         """Steady sliding (z' = 0) for V > 0: F = F_c + (F_s - F_c) exp(-(V/2V_s)^2) + F_v V."""

@@ -21,7 +21,7 @@ from numba import njit
 
 from probedyn.core.params import Param, ParamSet
 
-from .base import FRICTION_MODELS, TABLE_2_1, FrictionModel, positive_param
+from .base import FRICTION_MODELS, TABLE_2_1, BristleModel, positive_param
 
 
 @njit(cache=True)
@@ -41,7 +41,7 @@ def lugre_kernel(p, x, v, z):
 
 
 @FRICTION_MODELS.register
-class LuGre(FrictionModel):
+class LuGre(BristleModel):
     key = "lugre"
     title = "LuGre bristle friction with Stribeck effect"
     source = "(2.3)-(2.5)"
@@ -59,16 +59,6 @@ class LuGre(FrictionModel):
     packed = ("sigma0", "sigma1", "F_s", "F_c", "V_s", "F_v")
     load_params = ("F_s", "F_c")
     kernel = staticmethod(lugre_kernel)
-
-    def scales(self) -> tuple[float, float]:
-        """Static friction and the bristle deflection at it, ``F_s / sigma0``."""
-        return self.values["F_s"], self.values["F_s"] / self.values["sigma0"]
-
-    def levels(self) -> tuple[float, float]:
-        return self.values["F_s"], self.values["F_c"]
-
-    def presliding_stiffness(self) -> float:
-        return self.values["sigma0"]
 
     def steady_force(self, v):
         v = np.asarray(v, float)
