@@ -134,6 +134,7 @@ def _python_kernel(p, x, v, z):  # not compiled: the FFM integrator could not in
     (CONTACT_MODELS, lambda: _contact(nd_curve=None), "must define 'nd_curve'"),
     (CONTACT_MODELS, lambda: _contact(title=None), "'title'"),
     (PROBES, lambda: _probe(build=None), "must define 'build'"),
+    (PROBES, lambda: _probe(params=None), "'params'"),
     (PROBES, lambda: int, "must derive from Probe"),
 ])
 def test_a_model_missing_a_required_piece_is_refused_at_registration(registry, make, match):

@@ -32,7 +32,8 @@ class Probe(Model):
     """Base class.  Subclasses set ``key``, ``title``, ``source`` and ``params`` and implement
     :meth:`build` and :meth:`tip_point` (and usually :meth:`references`)."""
 
-    params: ClassVar[ParamSet] = ParamSet([])
+    #: geometry, material and mesh parameters (SI); every probe declares its own
+    params: ClassVar[ParamSet]
 
     @property
     def description(self) -> str:
