@@ -24,7 +24,11 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from probedyn.core.errors import ParameterError
-from probedyn.schemes.placing.probe import SILICON_E, SILICON_NU, SILICON_RHO, PlacingProbe, table_beam_geometry
+from probedyn.lumped.beam import RectBeam
+from probedyn.lumped.ritz import RitzBasis
+from probedyn.probes import get_probe
+from probedyn.schemes.placing.probe import (SILICON_E, SILICON_NU, SILICON_RHO, PlacingProbe, sample_point,
+                                            table_beam_geometry)
 
 SPECS = ("fem", "beam", "table-4.4")
 
@@ -36,8 +40,6 @@ RITZ_MODES = 8
 
 def placing_model(overrides: Mapping[str, Any] | None = None, probe: str = "cantilever"):
     """The ElasticModel of the placing cantilever (Table 4.4 geometry + ``overrides``)."""
-    from probedyn.probes import get_probe
-
     p, extra = get_probe(probe)
     vals: dict[str, Any] = {}
     if probe == "cantilever":
@@ -52,8 +54,6 @@ def placing_model(overrides: Mapping[str, Any] | None = None, probe: str = "cant
 def placing_probe(spec: str = "fem", overrides: Mapping[str, Any] | None = None, mass_source: str = "geometric",
                   n_modes: int = 4, zeta: float | None = None) -> PlacingProbe:
     """A :class:`PlacingProbe` from ``spec`` (module docstring)."""
-    from probedyn.lumped.beam import RectBeam
-
     spec = str(spec)
     if spec == "table-4.4":
         if overrides:
@@ -84,9 +84,6 @@ def placing_ritz(model, n_modes: int = RITZ_MODES):
     """The FEM-mode Ritz basis nano-placing uses: ``n_modes`` FEM modes plus static correction
     shapes along z at the free-end face (the tip: capture, release) and at the centroid line at
     L/2 and L (the samples of Figs 4.24-4.26)."""
-    from probedyn.lumped.ritz import RitzBasis
-    from probedyn.schemes.placing.multi import sample_point
-
     L = float(model.bundle.mesh.p[0].max() - model.bundle.mesh.p[0].min())
     att = [("free_end", "z"), (sample_point(model, 0.5 * L), "z"), (sample_point(model, L), "z")]
     return RitzBasis.from_model(model, int(n_modes), attachments=att)

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.plotting import axis_label, fmt_hz, pyplot, savefig
+from probedyn.schemes.placing.probe import TABLE
 
 OUTCOME_COLORS = {0: "#d9d9d9", 1: "#fdae61", 2: "#2b83ba", 3: "#d7191c", 4: "#000000", 5: "#8c510a",
                   -1: "#7b3294"}
@@ -238,7 +239,7 @@ def _map(m: dict[str, Any], ax, title: str, F_po: float | None, k1: float | None
             Ms = np.geomspace(x[0], x[-1], 300)
             ax.plot(Ms, np.sqrt(abs(F_po) / (Ms * fx["A"])), "k--", lw=1, label="M omega^2 A = |F_po|")
             ax.plot(Ms, np.sqrt(k1 / Ms), "k:", lw=1, label="contact resonance sqrt(k1/M)")
-            ax.plot([2e-18], [2.5e3], "r*", ms=10, label="Table 4.4 point")
+            ax.plot([TABLE["M1"]], [TABLE["omega"]], "r*", ms=10, label="Table 4.4 point")
             ax.set_ylim(y[0], y[-1])
     for c in codes:
         if np.any(o == c):

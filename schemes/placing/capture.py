@@ -55,6 +55,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from probedyn.core.errors import ParameterError, SolverError
+from probedyn.fem.model import ElasticModel, PointMass, Spring
 
 from .probe import PlacingProbe
 
@@ -249,8 +250,6 @@ class Capture:
 
 
 def _with_attachments(model, point_masses, springs):
-    from probedyn.fem.model import ElasticModel
-
     regions = {n: (m, R) for n, m, R in zip(model.region_names, model.materials, model.orientations)}
     return ElasticModel(model.bundle, regions, clamp=model.clamp, point_masses=point_masses, springs=springs,
                         tip=model.tip, beam_axis=model.beam_axis, name=f"{model.name}+sample")
@@ -262,8 +261,6 @@ def fem_capture_frequencies(model, k1: float, M: float, n: int = 3, face: str = 
     and a grounded spring ``k1`` (along z) on the free-end face (face-averaged attachment, no
     rotary inertia: the beam's end condition). ``mass_scale`` multiplies ``M`` (to compare with
     a probe whose masses were rescaled: pass the probe's ``mass_scale``)."""
-    from probedyn.fem.model import PointMass, Spring
-
     pm = [PointMass(face, float(M) / mass_scale)] if M > 0 else []
     sp = [Spring(face, None, float(k1), (0.0, 0.0, 1.0))] if k1 > 0 else []
     fm = _with_attachments(model, pm, sp)

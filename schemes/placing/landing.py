@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from probedyn.core.errors import ParameterError, SolverError
 
@@ -198,8 +199,6 @@ def force_budget(M: float | None = None, D: float | None = None, heights=None, l
 def gravity_crossover(M: float | None = None, law: str = "hamaker", H: float | None = None,
                       R: float | None = None) -> float:
     """Gap [m] beyond which gravity exceeds the substrate's attraction on the sample."""
-    from scipy.optimize import brentq
-
     M = float(TABLE["M1"] if M is None else M)
     H = float(TABLE["H_ss"] if H is None else H)
     R = float(TABLE["R_s"] if R is None else R)

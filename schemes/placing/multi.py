@@ -41,7 +41,7 @@ superposition, base excitation ``Y0`` of the clamp or a force ``F0`` at the tip)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
@@ -51,7 +51,12 @@ from scipy.optimize import brentq, least_squares
 
 from probedyn.core.errors import ParameterError, SolverError
 
-from .probe import TABLE, PlacingProbe
+from probedyn.fem.model import PointMass
+from probedyn.lumped.ritz import RitzBasis
+
+from .capture import _with_attachments
+from .probe import TABLE, PlacingProbe, flapwise_indices, sample_point
+from .release import placing_contact, threshold_amplitude
 
 
 def _check_masses(masses: Sequence[tuple[float, float]], L: float) -> list[tuple[float, float]]:
@@ -240,21 +245,9 @@ def exact_frequencies(L: float, EI: float, rhoS: float, masses: Sequence[tuple[f
 # ------------------------------------------------------------------------------------------
 
 
-def sample_point(model, l: float) -> tuple[float, float, float]:
-    """Coordinates of a sample at ``x = l`` on the beam's mid-plane (centroid line)."""
-    p = model.bundle.mesh.p
-    y0 = 0.5 * (p[1].min() + p[1].max())
-    z0 = 0.5 * (p[2].min() + p[2].max())
-    return (float(min(l, p[0].max())), float(y0), float(z0))
-
-
 def fem_frequencies(model, masses: Sequence[tuple[float, float]], n: int = 4, mass_scale: float = 1.0) -> np.ndarray:
     """Flapwise frequencies [rad/s] of the FE model with point masses at the centroid line
     (full re-solve). ``mass_scale``: the probe's mass factor (``mass_source="table"``)."""
-    from probedyn.fem.model import PointMass
-
-    from .capture import _with_attachments
-
     pms = [PointMass(sample_point(model, l), m / mass_scale) for l, m in masses if m > 0]
     fm = _with_attachments(model, pms, [])
     res = fm.modes(2 * n + 3)
@@ -268,22 +261,8 @@ def ritz_basis(model, n_modes: int, positions: Sequence[float] = (), static: boo
     """The FEM-mode Ritz basis of ``model`` (issue 10's :class:`probedyn.lumped.ritz.RitzBasis`):
     ``n_modes`` FEM modes, plus static correction shapes (z) at the sample ``positions`` if
     ``static``."""
-    from probedyn.lumped.ritz import RitzBasis
-
     att = [(sample_point(model, l), "z") for l in positions] if static else []
     return RitzBasis.from_model(model, int(n_modes), attachments=att)
-
-
-def flapwise_indices(sol, model) -> list[int]:
-    """Indices of the flapwise modes of a Ritz solution: displacement along the centroid line
-    (at 1/4, 1/2, 3/4 and 1 of the length) mostly along z and not negligible (torsion modes do
-    not move the centroid line, lateral and axial modes move it along y and x)."""
-    L = float(np.ptp(model.bundle.mesh.p[0]))
-    U = np.stack([sol.at(sample_point(model, f * L)) for f in (0.25, 0.5, 0.75, 1.0)])  # (4, 3, k)
-    Ez = (U[:, 2, :] ** 2).sum(axis=0)
-    E = (U**2).sum(axis=(0, 1))
-    big = E > 1e-6 * E.max()
-    return [i for i in range(U.shape[2]) if big[i] and Ez[i] > 0.9 * E[i]]
 
 
 def ritz_flapwise(basis, masses: Sequence[tuple[float, float]], n: int = 4, model=None) -> np.ndarray:
@@ -469,8 +448,6 @@ def probe_at(probe: PlacingProbe, l: float, masses: Sequence[tuple[float, float]
              n_modes: int = 4) -> PlacingProbe:
     """The probe seen at the position ``l``: its Rayleigh-Ritz modes normalised at ``l``
     (modal mass ``1 / phi_n(l)^2``), for a release run of a sample sitting there."""
-    from dataclasses import replace
-
     rr = PolynomialRitz.from_probe(probe, n_shape)
     sol = rr.solve(masses)
     om, V = sol["omega"][:n_modes], sol["V"][:, :n_modes]
@@ -492,8 +469,6 @@ def release_thresholds(probe: PlacingProbe, masses: Sequence[tuple[float, float]
     """Drive amplitude [m of base motion, or N of tip force] at which each sample's contact
     reaches the pull-off force (``(len(omega), n_samples)``): the local threshold
     (:func:`.release.threshold_amplitude`) over the local response per unit drive."""
-    from .release import placing_contact, threshold_amplitude
-
     ms = _check_masses(masses, probe.L)
     if F_po is None or k1 is None:
         c = placing_contact()

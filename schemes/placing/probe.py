@@ -52,6 +52,7 @@ import numpy as np
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.presets import preset
+from probedyn.lumped import beam as bm
 
 MassSource = Literal["geometric", "table"]
 MASS_SOURCES = ("geometric", "table")
@@ -201,8 +202,6 @@ class PlacingProbe:
         ``omega_r = (b_r L)^2 sqrt(EI / (rho A L^4))`` (2.40-2.41); the tip-normalised modal
         mass of the clamped-free mode ``phi`` (2.39, ``phi(L)^2 = 4``, ``int phi^2 = L``) is
         ``rho A L / 4`` for every mode; ``k = 3 EI / L^3``."""
-        from probedyn.lumped import beam as bm
-
         zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
         EI = beam.E * beam.I("flapwise")
         rhoA = beam.rho * beam.A
@@ -221,8 +220,6 @@ class PlacingProbe:
         """Table 4.4 alone: ``k = 1 N/m``, ``m = 2e-12 kg`` (equivalent mass of the first mode),
         ``L = 2 mm``; higher modes and ``EI``, ``rho A`` from a uniform Euler-Bernoulli beam with
         these numbers (``EI = k L^3 / 3``, ``rho A = m / (0.2427 L)``). ``mass_source = "table"``."""
-        from probedyn.lumped import beam as bm
-
         zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
         k, m, L = float(TABLE["k"]), float(TABLE["m"]), float(TABLE["L"])
         EI = k * L**3 / 3.0
@@ -282,8 +279,6 @@ class PlacingProbe:
         ``n_modes`` flapwise FEM modes (the basis's leading columns) with their tip-normalised
         modal masses ``1 / phi_z(face)^2``; ``EI = k L^3 / 3``, ``rho A`` = FE mass / L. The basis
         is kept (``.ritz``) for the capture and multi-sample models."""
-        from .multi import flapwise_indices
-
         zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
         model = basis.model
         if model is None:
@@ -342,6 +337,26 @@ class PlacingProbe:
         return probe.with_mass_source(mass_source)
 
 
+def sample_point(model, l: float) -> tuple[float, float, float]:
+    """Coordinates of a sample at ``x = l`` on the beam's mid-plane (centroid line)."""
+    p = model.bundle.mesh.p
+    y0 = 0.5 * (p[1].min() + p[1].max())
+    z0 = 0.5 * (p[2].min() + p[2].max())
+    return (float(min(l, p[0].max())), float(y0), float(z0))
+
+
+def flapwise_indices(sol, model) -> list[int]:
+    """Indices of the flapwise modes of a Ritz solution: displacement along the centroid line
+    (at 1/4, 1/2, 3/4 and 1 of the length) mostly along z and not negligible (torsion modes do
+    not move the centroid line, lateral and axial modes move it along y and x)."""
+    L = float(np.ptp(model.bundle.mesh.p[0]))
+    U = np.stack([sol.at(sample_point(model, f * L)) for f in (0.25, 0.5, 0.75, 1.0)])  # (4, 3, k)
+    Ez = (U[:, 2, :] ** 2).sum(axis=0)
+    E = (U**2).sum(axis=(0, 1))
+    big = E > 1e-6 * E.max()
+    return [i for i in range(U.shape[2]) if big[i] and Ez[i] > 0.9 * E[i]]
+
+
 def mass_plausibility(probe: PlacingProbe) -> dict[str, Any]:
     """SOURCE-NOTES 10: Table 4.4's ``m`` against the probe's geometric masses.
 
@@ -365,5 +380,5 @@ def mass_plausibility(probe: PlacingProbe) -> dict[str, Any]:
     }
 
 
-__all__ = ["PlacingProbe", "TABLE", "MASS_SOURCES", "table_beam_geometry", "mass_plausibility",
+__all__ = ["PlacingProbe", "sample_point", "flapwise_indices", "TABLE", "MASS_SOURCES", "table_beam_geometry", "mass_plausibility",
            "EQUIV_MASS_RATIO", "BETA1_L"]

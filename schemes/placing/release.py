@@ -56,16 +56,19 @@ forces in ``pi W R``, masses in ``M``, time in ``tau = sqrt(M l / (pi W R))``.
 from __future__ import annotations
 
 import cmath
+import json
 import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
+from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.schemes.contact import get_contact_model
+from probedyn.schemes.sweep import run_sweep, validate_grid
 
 from . import _kernel as K
 from .probe import TABLE, PlacingProbe
@@ -392,8 +395,6 @@ def simulate_scipy(setup: ReleaseSetup, rtol: float = 1e-6, atol: float = 1e-6, 
     """The same model on ``scipy.integrate.solve_ivp`` (the plain reference): ``method`` with
     the analytic Jacobian, terminal events for the contact transitions and the release check,
     restarted at each transition; the right-hand side calls the compiled kernel."""
-    from scipy.integrate import solve_ivp
-
     par, mm, kk, cn, Pn, dPn = setup.par, setup.mm, setup.kk, setup.cn, setup.tables.Pn, setup.tables.dPn
     n = setup.z0.size
     N = setup.N
@@ -543,8 +544,6 @@ def outcome_map(probe: PlacingProbe, grid: Mapping[str, Any], fixed: Mapping[str
     """An outcome map over any of ``M``, ``A``, ``omega``, ``D`` (the others fixed, Table 4.4
     defaults; ``A`` defaults to the tip amplitude of ``F0 = 5e-7 N``) on Dask
     (:func:`probedyn.schemes.sweep.run_sweep`), NetCDF at ``out``. Returns the SweepResult."""
-    from probedyn.schemes.sweep import run_sweep, validate_grid
-
     fixed = dict(fixed or {})
     g = validate_grid(grid, fixed)
     for name in g:
@@ -564,8 +563,6 @@ def outcome_map(probe: PlacingProbe, grid: Mapping[str, Any], fixed: Mapping[str
 
 
 def json_outcomes() -> str:
-    import json
-
     return json.dumps({str(k): v for k, v in OUTCOMES.items()})
 
 

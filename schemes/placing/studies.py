@@ -13,11 +13,13 @@ heavier sample near the probe's modes) and say so.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
 
 from probedyn.core.errors import ParameterError
+from probedyn.lumped.ritz import RitzBasis
 
 from . import capture as cap
 from . import landing as ld
@@ -87,8 +89,6 @@ def approach_study(probe: PlacingProbe, amplitudes: Sequence[float] = (0.05e-9, 
 def capture_ritz_basis(model, n_modes: int = 8):
     """FEM-mode Ritz basis with static correction shapes (z) at the free end: exact in the
     static limit for a spring and a mass there (:mod:`probedyn.lumped.ritz`)."""
-    from probedyn.lumped.ritz import RitzBasis
-
     return RitzBasis.from_model(model, int(n_modes), attachments=[("free_end", "z")])
 
 
@@ -237,8 +237,6 @@ def release_maps(probe: PlacingProbe, n: int = 16, workers: int = 2, out_dir=Non
     * ``M_omega``: sample mass 1e-19-1e-9 kg x frequency 1e3-1e10 rad/s at ``A = 0.5 um`` (samples
       heavier than ``|F_po| / g = 4.8e-10 kg`` fall under their own weight);
     * ``D_omega``: release height 0.6-10 um x frequency around the threshold at ``A = 0.5 um``."""
-    from pathlib import Path
-
     specs = {
         "omega_A": ({"omega": np.geomspace(1e6, 1e10, n), "A": np.geomspace(1e-10, 2e-6, n)}, {"M": float(TABLE["M1"])}),
         "M_omega": ({"M": np.geomspace(1e-19, 1e-9, n), "omega": np.geomspace(1e3, 1e10, n)}, {"A": RELEASE_A}),
