@@ -232,6 +232,8 @@ def land(release: ReleaseResult, tilt: str = "amplitude", law: str = "derjaguin"
     """The flight after a released run (no flight for other outcomes). ``near_field=False``
     drops the lateral impulse of the near-field phase (the printed model's start)."""
     s = release.setup
+    if law not in LAWS:
+        raise ParameterError(f"unknown force law {law!r} ({', '.join(LAWS)})")
     theta = tilt_angle(s.A, s.probe.L, tilt)
     if release.code != 2:
         return Landing(release, theta, None)
