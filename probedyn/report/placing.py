@@ -29,6 +29,11 @@ OUTCOME_NAMES = {0: "attached", 1: "recaptured", 2: "released", 3: "undecided", 
                  5: "weight exceeds adhesion", -1: "failed"}
 
 
+def _a(v, *_args) -> np.ndarray:
+    """A float array of study data (JSON nulls become NaN)."""
+    return np.array(v, dtype=float)
+
+
 def _plain(fig) -> None:
     """Plain tick labels on every axis (``1e-06`` instead of mathtext ``10^-6``: the mathtext parser
     cost most of this section's drawing time) and no minor-tick labels."""
@@ -85,11 +90,11 @@ def _md(rows: list[dict[str, Any]], cols: list[tuple[str, str, str]]) -> str:
 def _fig_4_18(cap: dict[str, Any], a, b) -> None:
     c4 = cap["pl_curves"]
     ref = c4["uniform_8"]
-    a.plot(np.asarray(ref["delta_m"]) * 1e9, np.asarray(ref["force_n"]) * 1e9, "k-", lw=2, label="MD, exact (registry)")
+    a.plot(_a(ref["delta_m"]) * 1e9, _a(ref["force_n"]) * 1e9, "k-", lw=2, label="MD, exact (registry)")
     for key, st, lab in (("uniform_4", "C1--", "4 segments, uniform"), ("uniform_8", "C0--", "8 segments, uniform"),
                          ("graded_8", "C2:", "8 segments, graded (j/N)^4")):
         c = c4[key]
-        a.plot(np.asarray(c["nodes_m"]) * 1e9, np.asarray(c["node_forces_n"]) * 1e9, st, marker="o", ms=3, label=lab)
+        a.plot(_a(c["nodes_m"]) * 1e9, _a(c["node_forces_n"]) * 1e9, st, marker="o", ms=3, label=lab)
     md = cap["md"]
     a.plot([md["penetration_m"] * 1e9], [0.0], "rs", label=f"zero load: k1 = {md['k1_n_per_m']:.3g} N/m")
     a.set_xlabel(axis_label("penetration", "nm"))
@@ -109,7 +114,7 @@ def _fig_4_18(cap: dict[str, Any], a, b) -> None:
 def _fig_4_20(ap: dict[str, Any], a, b, c) -> None:
     fb = ap["force_balance"]
     for cv in fb["curves"]:
-        a.plot(np.asarray(cv["w_m"]) * 1e9, np.asarray(cv["net_force_n"]) * 1e9, label=f"z0 = {cv['z0_m'] * 1e9:.3f} nm")
+        a.plot(_a(cv["w_m"]) * 1e9, _a(cv["net_force_n"]) * 1e9, label=f"z0 = {cv['z0_m'] * 1e9:.3f} nm")
     js = fb["jump"]
     a.plot([js["w_star_m"] * 1e9], [0.0], "ks", label="jump into contact")
     a.axhline(0, color="0.5", lw=0.6)
@@ -118,10 +123,10 @@ def _fig_4_20(ap: dict[str, Any], a, b, c) -> None:
     a.set_ylabel(axis_label("net force -k w + F_vdW", "nN"))
     a.set_title("Fig 4.20a: force balance", fontsize=9)
     a.legend(fontsize=6.5)
-    wb = np.asarray(ap["response_omega_rad_s"]) / (2 * math.pi * ap["f0_hz"])
+    wb = _a(ap["response_omega_rad_s"]) / (2 * math.pi * ap["f0_hz"])
     for r in ap["response"]:
         lab = f"z0 = {r['z0_m'] * 1e9:.3g} nm, f_n = {fmt_hz(r['omega_n_rad_s'] / (2 * math.pi), 4)}"
-        b.semilogy(wb, r["gain"], label=lab)
+        b.plot(wb, r["gain"], label=lab)
         c.plot(wb, np.degrees(r["phase_rad"]), label=lab)
     for ax, t, yl in ((b, "Fig 4.20b: gain (4.19)", "gain |G|"), (c, "Fig 4.20c: phase (4.20)", axis_label("phase lag", "deg"))):
         ax.set_xlabel("omega / sqrt(k/m)")
@@ -131,24 +136,29 @@ def _fig_4_20(ap: dict[str, Any], a, b, c) -> None:
 
 
 def _shift(ap: dict[str, Any], ax) -> None:
+    """Relative difference of each frequency-shift estimate from the exact orbit period."""
     rows = ap["shift_rows"]
-    z = sorted({r["z0_m"] for r in rows})
-    small = [next(r["df_small_hz"] for r in rows if r["z0_m"] == zz) for zz in z]
-    ax.plot(np.asarray(z) * 1e9, -np.asarray(small), "k-", lw=2, label="small amplitude (4.21)")
+    zs = ap["jump"]["z0_star_m"]
     for i, A in enumerate(ap["amplitudes_m"]):
         rr = [r for r in rows if r["A_m"] == A]
-        zz = np.array([r["z0_m"] for r in rr]) * 1e9
+        z = np.array([r["z0_m"] for r in rr]) / zs
+        ex = np.array([np.nan if r["df_exact_hz"] is None else r["df_exact_hz"] for r in rr], float)
         col = f"C{i}"
-        ax.plot(zz, -np.array([r["df_giessibl_hz"] for r in rr]), "--", color=col, label=f"A = {A * 1e9:.3g} nm: Giessibl")
-        ax.plot(zz, -np.array([r["df_giessibl_sqrt_hz"] for r in rr]), ":", color=col, label="  Giessibl, sqrt form")
-        ax.plot(zz, -np.array([r["df_exact_hz"] for r in rr]), "-", color=col, lw=0.8, label="  exact orbit period")
-        ax.plot(zz, -np.array([r["df_sim_hz"] for r in rr]), "o", color=col, ms=5, mfc="none", label="  time simulation")
-    ax.axvline(ap["jump"]["z0_star_m"] * 1e9, color="0.5", lw=0.8, label="static jump distance")
-    ax.set_yscale("log")
-    ax.set_xlabel(axis_label("base distance z0", "nm"))
-    ax.set_ylabel(axis_label("-Delta f", "Hz"))
-    ax.set_title(f"frequency shift, f0 = {fmt_hz(ap['f0_hz'])}", fontsize=9)
-    ax.legend(fontsize=6, ncol=2)
+        for key, st, lab in (("df_small_hz", "-", "(4.21), small amplitude"), ("df_giessibl_hz", "--", "Giessibl"),
+                             ("df_giessibl_sqrt_hz", ":", "Giessibl, sqrt form")):
+            v = np.array([r[key] for r in rr], float)
+            ax.semilogy(z, np.abs(v / ex - 1), st, color=col, label=f"A = {A * 1e9:.3g} nm: {lab}")
+        sim = np.array([np.nan if r["df_sim_hz"] is None else r["df_sim_hz"] for r in rr], float)
+        ok = np.isfinite(sim)
+        ax.semilogy(z[ok], np.maximum(np.abs(sim[ok] / ex[ok] - 1), 1e-12), "o", color=col, mfc="none",
+                    label=f"A = {A * 1e9:.3g} nm: time simulation")
+        gone = ~np.isfinite(ex)
+        if np.any(gone):
+            ax.plot(z[gone], np.full(gone.sum(), 0.5), "x", color=col, ms=9, label=f"A = {A * 1e9:.3g} nm: no orbit (jump)")
+    ax.set_xlabel("base distance z0 / static jump distance z0*")
+    ax.set_ylabel("|Delta f / Delta f(exact orbit) - 1|")
+    ax.set_title(f"frequency shift vs the exact orbit period, f0 = {fmt_hz(ap['f0_hz'])}", fontsize=9)
+    ax.legend(fontsize=5.5, ncol=2)
 
 
 def plot_approach(ap: dict[str, Any], path: Path) -> Path:
@@ -168,15 +178,15 @@ def plot_capture(cap: dict[str, Any], path: Path) -> Path:
     plt = pyplot()
     fig, axs = plt.subplots(2, 3, figsize=(14, 8))
     sh = cap["shapes"]
-    x = np.asarray(sh["x_over_L"])
+    x = _a(sh["x_over_L"])
     for j in range(3):
         ax = axs[0, j]
         for i, a in enumerate(sh["analytic"]):
             col = f"C{i}"
             ax.plot(x, a["shapes"][j], "-", color=col, lw=1.2, label=f"K = {a['K']:g}, bL = {a['bL'][j]:.3f}")
             if sh["fem"]:
-                fx = np.asarray(sh["fem_x_over_L"])
-                fs = np.asarray(sh["fem"][i]["shapes"][j])
+                fx = _a(sh["fem_x_over_L"])
+                fs = _a(sh["fem"][i]["shapes"][j])
                 sel = slice(None, None, max(1, fx.size // 15))
                 ax.plot(fx[sel], fs[sel], "o", color=col, ms=3, mfc="none")
         ax.set_title(f"Fig 4.21, mode {j + 1}" + (": lines (4.40), circles FEM" if sh["fem"] else ": (4.40)"), fontsize=9)
@@ -186,9 +196,9 @@ def plot_capture(cap: dict[str, Any], path: Path) -> Path:
     mc = cap["mass_curve"]
     ax = axs[1, 0]
     for K, col in ((0.0, "C0"), (3.0, "C3")):
-        ax.plot(mc["mu"], np.asarray(mc[f"K{K:g}_corrected"]) ** 2 / 1.8751040687**2, "-", color=col,
+        ax.plot(mc["mu"], _a(mc[f"K{K:g}_corrected"]) ** 2 / 1.8751040687**2, "-", color=col,
                 label=f"K = {K:g}: (k1 - M w^2), corrected")
-        ax.plot(mc["mu"], np.asarray(mc[f"K{K:g}_printed"]) ** 2 / 1.8751040687**2, "--", color=col,
+        ax.plot(mc["mu"], _a(mc[f"K{K:g}_printed"]) ** 2 / 1.8751040687**2, "--", color=col,
                 label=f"K = {K:g}: (k1 + M w^2), printed")
     ax.set_xlabel("sample mass M / (rho A L)")
     ax.set_ylabel("first frequency / bare cantilever's")
@@ -203,7 +213,7 @@ def _fig_4_22(rex: dict[str, Any], ax) -> None:
     for i, (name, run) in enumerate(rex["runs"].items()):
         tr = run["trajectory"]
         M = run["result"]["inputs"]["M_kg"]
-        ax.plot(np.asarray(tr["t_s"]) / T, np.asarray(tr["penetration_m"]) * 1e9, color=f"C{i}",
+        ax.plot(_a(tr["t_s"]) / T, _a(tr["penetration_m"]) * 1e9, color=f"C{i}",
                 label=f"({i + 1}) M = {M:.3g} kg: {name}")
     ax.set_yscale("symlog", linthresh=2.0)
     ax.set_xlabel("time / drive period")
@@ -220,8 +230,8 @@ def _map(m: dict[str, Any], ax, title: str, F_po: float | None, k1: float | None
     codes = sorted(OUTCOME_COLORS)
     cmap = ListedColormap([OUTCOME_COLORS[c] for c in codes])
     norm = BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)
-    x, y = np.asarray(m["x"], float), np.asarray(m["y"], float)
-    o = np.asarray(m["outcome"], float)
+    x, y = _a(m["x"]), _a(m["y"])
+    o = _a(m["outcome"])
     ax.pcolormesh(x, y, o.T, cmap=cmap, norm=norm, shading="nearest")
     ax.set_xscale("log")
     ax.set_yscale("log")
@@ -257,7 +267,7 @@ def plot_release(rex: dict[str, Any], maps: dict[str, Any], path: Path) -> Path:
     titles = {"omega_A": "outcome map: M = 2e-18 kg", "M_omega": "outcome map: A = 0.5 µm",
               "D_omega": "outcome map: A = 0.5 µm, M = 2e-18 kg"}
     for ax, k in zip(axs[1:], keys):
-        n = np.asarray(maps[k]["outcome"]).shape[0]
+        n = _a(maps[k]["outcome"]).shape[0]
         _map(maps[k], ax, f"{titles[k]} ({n} x {n})", maps.get("F_pull_off_n"), maps.get("k1_n_per_m"))
     return _save(fig, path)
 
@@ -280,7 +290,7 @@ def plot_landing(land: dict[str, Any], path: Path) -> Path:
     ax = axs[0, 0]
     for i, d in enumerate(land["vs_D"]):
         if d["t_s"] is not None:
-            ax.plot(np.asarray(d["t_s"]) * 1e9, np.asarray(d["y_m"]) * 1e6, color=f"C{i}",
+            ax.plot(_a(d["t_s"]) * 1e9, _a(d["y_m"]) * 1e6, color=f"C{i}",
                     label=f"D = {d['D_m'] * 1e6:.0f} µm: lands after {d['t_flight_s'] * 1e9:.1f} ns")
     ax.set_xlabel(axis_label("time after the release decision", "ns"))
     ax.set_ylabel(axis_label("sample height y", "um"))
@@ -289,7 +299,7 @@ def plot_landing(land: dict[str, Any], path: Path) -> Path:
     ax = axs[0, 1]
     for i, d in enumerate(land["vs_H_sb"]):
         if d["t_s"] is not None:
-            ax.plot(np.asarray(d["t_s"]) * 1e9, np.asarray(d["x_m"]) * 1e12, color=f"C{i}",
+            ax.plot(_a(d["t_s"]) * 1e9, _a(d["x_m"]) * 1e12, color=f"C{i}",
                     label=f"H_sb = {d['H_sb_j']:.3g} J: R_L = {d['R_L_m'] * 1e12:.3g} pm")
     ax.set_xlabel(axis_label("time after the release decision", "ns"))
     ax.set_ylabel(axis_label("lateral position x", "pm"))
@@ -297,9 +307,9 @@ def plot_landing(land: dict[str, Any], path: Path) -> Path:
     ax.legend(fontsize=7)
     for i, om in enumerate(land["omegas_rad_s"]):
         k = f"{om:g}"
-        axs[1, 0].loglog(np.asarray(land["A_m"]) * 1e6, np.asarray(land["R_L_vs_A"][k]), "o-", color=f"C{i}",
+        axs[1, 0].loglog(_a(land["A_m"]) * 1e6, _a(land["R_L_vs_A"][k]), "o-", color=f"C{i}",
                          label=f"omega = {om:.0e} rad/s")
-        axs[1, 1].loglog(np.asarray(land["M_kg"]), np.asarray(land["R_L_vs_M"][k]), "o-", color=f"C{i}",
+        axs[1, 1].loglog(_a(land["M_kg"]), _a(land["R_L_vs_M"][k]), "o-", color=f"C{i}",
                          label=f"omega = {om:.0e} rad/s")
     axs[1, 0].set_xlabel(axis_label("tip amplitude A", "um"))
     axs[1, 0].set_title("Fig 4.28a: M = 2e-18 kg", fontsize=9)
@@ -331,8 +341,8 @@ def plot_multi(mul: dict[str, Any], path: Path) -> Path:
     ax.set_title(f"Rayleigh-Ritz, masses {ratio:g} rho A L at L/2 and L", fontsize=9)
     ax.legend(fontsize=6)
     s = mul["selective_frequency"]
-    om = np.asarray(s["omega_rad_s"])
-    thr = np.asarray(s["Y_threshold"])
+    om = _a(s["omega_rad_s"])
+    thr = _a(s["Y_threshold"])
     unit = ("tip force F0", "N") if s["drive"] == "tip" else ("base amplitude", "m")
     ax = axs[1]
     ax.loglog(om, thr[:, 0], "C0-", label=f"sample 1 at L/2 ({s['M_kg']:.2g} kg)")
@@ -347,8 +357,8 @@ def plot_multi(mul: dict[str, Any], path: Path) -> Path:
     ax.set_title("Fig 4.25: frequency-based selective release", fontsize=9)
     ax.legend(fontsize=7)
     a = mul["selective_amplitude"]
-    Y = np.asarray(a["Y"])
-    th = np.asarray(a["Y_threshold"])
+    Y = _a(a["Y"])
+    th = _a(a["Y_threshold"])
     ax = axs[2]
     for k, (lab, col) in enumerate((("sample 1 at L/2", "C0"), ("sample 2 at L", "C3"))):
         ax.loglog(Y, Y / th[k], "-", color=col, label=f"{lab}: releases at {th[k]:.3g} {unit[1]}")
@@ -370,7 +380,7 @@ def plot_release_run(res: dict[str, Any], path: Path) -> Path:
     plt = pyplot()
     tr = res["trajectory"]
     fig, ax = plt.subplots(figsize=(7, 4.2))
-    ax.plot(np.asarray(tr["t_s"]) * 1e6, np.asarray(tr["penetration_m"]) * 1e9, label=f"outcome: {res['outcome']}")
+    ax.plot(_a(tr["t_s"]) * 1e6, _a(tr["penetration_m"]) * 1e9, label=f"outcome: {res['outcome']}")
     ax.set_yscale("symlog", linthresh=2.0)
     ax.set_xlabel(axis_label("time", "us"))
     ax.set_ylabel(axis_label("penetration (negative: gap)", "nm"))
