@@ -323,10 +323,26 @@ def plot_landing(land: dict[str, Any], path: Path) -> Path:
 
 def plot_multi(mul: dict[str, Any], path: Path) -> Path:
     """Rayleigh-Ritz error against the number of shape functions / FEM modes (two masses at L/2
-    and L); Fig 4.25 (base amplitude releasing each sample against frequency); Fig 4.26
-    (contact tension of each sample against the base amplitude at one frequency)."""
+    and L); the frequencies against the position of one sample (exact beam, polynomial Ritz,
+    FEM modes); Fig 4.25 (drive amplitude releasing each sample against frequency); Fig 4.26
+    (contact tension of each sample against the drive amplitude at one frequency)."""
     plt = pyplot()
-    fig, axs = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig, axes = plt.subplots(2, 2, figsize=(12, 8.5))
+    axs = [axes[0, 0], axes[1, 0], axes[1, 1]]
+    ax = axes[0, 1]
+    pos = mul["positions"]
+    x = _a(pos["x_over_L"])
+    for j in range(3):
+        bare = float(_a(pos["bare"])[j])
+        ax.plot(x, _a(pos["exact"])[:, j] / bare, "-", color=f"C{j}", label=f"mode {j + 1}: exact beam")
+        ax.plot(x, _a(pos["polynomial"])[:, j] / bare, "o", color=f"C{j}", ms=4, mfc="none",
+                label=f"mode {j + 1}: polynomial Ritz (12)")
+        if len(pos["ritz_modes"]):
+            ax.plot(x, _a(pos["ritz_modes"])[:, j] / bare, "x", color=f"C{j}", ms=5, label=f"mode {j + 1}: FEM modes")
+    ax.set_xlabel("sample position l / L")
+    ax.set_ylabel("frequency / bare probe's")
+    ax.set_title("one sample of 0.1 rho A L against its position", fontsize=9)
+    ax.legend(fontsize=6)
     ax = axs[0]
     ratio = sorted({r["ratio"] for r in mul["convergence"]})[0]
     for basis, mk in (("polynomial", "o-"), ("FEM modes", "s--"), ("FEM modes + static shapes", "^:")):
