@@ -29,9 +29,10 @@ corrected beta): with ``x = bL``, ``K = k1 L^3 / EI``, ``mu = M / (rho A L)`` an
 
 Limits (tests): ``K = mu = 0`` gives (2.40)/(4.39); ``K = 0`` the tip-mass equation (3.10,
 standard form, SOURCE-NOTES 1); ``K -> infinity`` the clamped-pinned ``tan x = tanh x``
-(3.9266, 7.0686, ...); ``mu -> 0`` with finite ``K`` a spring-supported cantilever
-(``K -> 0``: ``x^4 ~ 3 ... ``). Mode shapes: (4.40) for every ``beta`` (the moment condition alone
-fixes the ratio of the two constants), evaluated in a cancellation-free form.
+(3.9266, 7.0686, ...); a spring alone (``mu = 0``, ``K = 3``, i.e. ``k1 = k``) stiffens mode 1 to
+``bL = 2.2135`` (``omega`` x 1.39, close to the ``sqrt(2)`` of a doubled static stiffness).
+Mode shapes: (4.40) for every ``beta`` (the moment condition alone fixes the ratio of the two
+constants), evaluated in a cancellation-free form.
 
 Forced response (4.41): modal superposition with modes normalised to
 ``int rho A psi^2 dx + M psi(L)^2 = 1`` (grounded) and a force ``F0`` at the tip.
