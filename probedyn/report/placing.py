@@ -500,7 +500,8 @@ def section(outdir: Path, quick: bool) -> str:
         "**Approach (4.13-4.21).** Force balance: the tip jumps into contact at "
         f"z0* = zeta0 + 1.5 (H R / 3k)^(1/3) = {js['z0_star_m'] * 1e9:.4f} nm. Slow-approach simulations: "
         + "; ".join(f"{s['speed_m_s']:.0e} m/s -> {s['z0_jump_m'] * 1e9:.4f} nm" for s in sims)
-        + f" (delay exponent {ap['jump_delay_exponents'][0]:.2f}, 2/3 for the passage through a fold). "
+        + f" (the delay falls as v^{ap['jump_delay_exponents'][0]:.2f} between these speeds; a slow passage through "
+        "a fold gives v^(2/3) asymptotically). "
         f"Linearised response checked in the time domain at z0 = {ap['forced_check']['z0_m'] * 1e9:.3f} nm: "
         f"amplitude ratio {ap['forced_check']['amplitude_sim_m'] / ap['forced_check']['amplitude_linear_m']:.6f}.",
         "",
