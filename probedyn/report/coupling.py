@@ -36,8 +36,8 @@ def plot_traces(res: dict[str, Any], path: Path) -> Path:
     a2.set_xlim(40, None)
     a2.set_ylim(11.5, 13.3)
     a2.set_title("rescaled by the friction scale f: the traces collapse")
-    a1.legend(fontsize=7)
-    a2.legend(fontsize=7)
+    a1.legend(fontsize=7, loc="upper left")
+    a2.legend(fontsize=7, loc="lower right")
     fig.tight_layout()
     return savefig(fig, path)
 

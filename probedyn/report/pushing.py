@@ -102,7 +102,7 @@ def plot_zigzag(res, path: Path) -> Path:
     ax[1].set_aspect("equal")
     ax[1].set_xlabel(axis_label("x", "nm"))
     ax[1].set_ylabel(axis_label("y", "nm"))
-    ax[1].legend(fontsize=7)
+    ax[1].legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=2)
     return savefig(fig, path)
 
 

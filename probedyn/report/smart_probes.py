@@ -81,7 +81,7 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
     (markers, every mode solved) and the lowest modes of the lumped model (lines, as many as
     the FEM solved)."""
     plt = pyplot()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 5.2))
     ks = sorted({r["k_t"] for r in rows})
     at = {(r["k_t"], r["mode"]): r for r in rows}
     sizes = (9, 6, 3.5)
@@ -95,14 +95,13 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
     a1.set_xlabel(axis_label("holder stiffness k_t", "N/m"))
     a1.set_ylabel("energy share of the mode")
     a1.set_ylim(-0.02, 1.02)
-    a1.legend(fontsize=7)
+    a1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     a1.set_title(f"{title}: where the mode's energy sits")
     nm = max(r["mode"] for r in rows)
     markers = ("o", "x", "+", "s", "^", "v", "d", "*")
-    for mode in range(1, nm + 1):
+    for mode in range(1, nm + 1):  # open markers of decreasing size: coincident modes stay visible
         a2.loglog(ks, [at[(k, mode)]["frequency_hz"] for k in ks], markers[(mode - 1) % len(markers)],
-                  ms=8 if mode == 1 else 6, mfc="none" if mode == 1 else None, color=f"C{mode - 1}",
-                  label=f"FEM mode {mode}")
+                  ms=max(11 - 1.5 * mode, 4), mfc="none", mew=1.3, color=f"C{mode - 1}", label=f"FEM mode {mode}")
     if lumped:
         kk = np.array(lumped["k"])
         F = np.array(lumped["f"])
@@ -110,7 +109,7 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
             a2.loglog(kk, F[:, j], "-", color="grey", lw=0.8, label=f"lumped model, lowest {nm} modes" if j == 0 else None)
     a2.set_xlabel(axis_label("holder stiffness k_t", "N/m"))
     a2.set_ylabel(axis_label("frequency", "Hz"))
-    a2.legend(fontsize=7)
+    a2.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3)
     a2.set_title("FEM (markers) vs lumped model (lines)")
     fig.tight_layout()
     return savefig(fig, path)
@@ -217,7 +216,10 @@ def section(outdir: Path, quick: bool = False) -> str:
                   f"and frequencies (right) vs the holder stiffness k_t. Markers: FEM; lines: the lumped model of the "
                   f"table above, its lowest {n_fem} modes (the ones the FEM sweep solves"
                   + (f"; its higher modes, {fmt_hz(min(above))} and up, are outside the plotted FEM range" if above else "")
-                  + ").*", ""]
+                  + ")."
+                  + (" Modes with dir \"-\" (torsion) have no counterpart in the lumped model: where one is among the "
+                     f"lowest {n_fem} FEM modes, a FEM marker has no line and the highest line no marker."
+                     if any(r["direction"] == "-" for r in loc["rows"]) else "") + "*", ""]
         mat = S.study_materials(probe, {**ov, "tip": "none"})
         parts += ["Transversely isotropic PZT-5H vs isotropic E = 1/s11 (body + holder):", "",
                   markdown_table(mat["rows"], MAT_COLS), ""]

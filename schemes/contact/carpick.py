@@ -3,8 +3,9 @@ Salmeron (COS), J. Colloid Interface Sci. 211 (1999) 395: an independent check o
 Maugis–Dugdale solution (departure 7) over the whole DMT–JKR transition.
 
 COS fit: ``lambda = -0.924 ln(1 - 1.02 alpha)``, pull-off load in units of pi W R
-``-(0.267 alpha^2 - 0.767 alpha + 2.000)``; it is exact in the limits (-2 for DMT, alpha = 0;
--1.5 for JKR, alpha = 1) and within about 1 % of Maugis' result in between.
+``-(0.267 alpha^2 - 0.767 alpha + 2.000)``: -2 at lambda = 0 (DMT), -1.5 at alpha = 1 (JKR; as
+lambda -> inf alpha tends to 1/1.02, where the fit gives -1.505), within about 1 % of Maugis'
+result in between.
 """
 
 from __future__ import annotations
