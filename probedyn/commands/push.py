@@ -37,7 +37,7 @@ def push_cmd(
         out.mkdir(parents=True, exist_ok=True)
         from probedyn.report.pushing import plot_push
 
-        r["plot"] = str(plot_push(res, r, out / "push.png", f"{substrate}, V = {res.model.p['V']:g} m/s"))
+        r["plot"] = str(plot_push(res, r, out / "push.png", f"{substrate}, V = {res.model.p['V'] * 1e6:g} µm/s"))
         save(out, "push.json", r)
 
     def human(d):

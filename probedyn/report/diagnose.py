@@ -132,6 +132,11 @@ def summary(res: dict[str, Any]) -> str:
                 lines.append(f"    {m['measure']} predicted [{m['unit']}]: {pv}")
             if gm["pairs_left_unseparated"]:
                 lines.append("  still indistinguishable: " + "; ".join(" vs ".join(p) for p in gm["pairs_left_unseparated"]))
+        for p in c["pairs"]:
+            m = p["separating_measurement"]
+            if m:
+                lines.append(f"  {c['causes'][0]} vs {p['cause']}: measure {m['measure']} "
+                             f"({m['a']:.5g} vs {m['b']:.5g} {m['unit']}, {m['separation_sigma']:.1f} sigma apart)")
     fin = res["final"]
     lines.append("final model: baseline" + "".join(f" + {c}" for c in fin["causes"])
                  + f", chi2 = {fin['chi2']:.3g} for {fin['dof']} dof (p {_p(fin['p_value'])})")

@@ -42,8 +42,8 @@ def plot_push(res, r: dict, path: Path, title: str) -> Path:
         ax[2].set_ylabel(axis_label("sample y", "nm"))
         ax[2].set_aspect("equal")
         ax[2].legend(fontsize=7)
-    else:
-        ax[1].set_xlabel(axis_label("base travel", "nm"))
+    for a in ax[:2]:
+        a.set_xlabel(axis_label("base travel", "nm"))
     return savefig(fig, path)
 
 
@@ -143,7 +143,7 @@ def section(outdir: Path, quick: bool) -> str:
     pre = presliding_study(PRESLIDING_LATTICES[:2] if quick else PRESLIDING_LATTICES, PRESLIDING_ZETA0)
     f2 = plot_presliding(pre, outdir / "push_presliding.png").name
     zrows = [r for r in pre["rows"] if r["what"] == "zeta0"]
-    adh = ", ".join(f"{r['adhesion'] * 1e9:.2g}" for r in zrows)
+    adh = ", ".join(f"{r['adhesion'] * 1e9:.2f}" for r in zrows)
     zs = ", ".join(f"{r['value'] * 1e9:.3g}" for r in zrows)
     z_table = preset("table-4.4")["zeta0"]
     md.append(f"\n**Pre-sliding (Fig 4.4).** The sample creeps up its lattice well until the corrugation's fold, "

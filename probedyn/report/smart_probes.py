@@ -22,7 +22,7 @@ from probedyn.plotting import axis_label, fmt_hz, fmt_um, pyplot, savefig
 from probedyn.probes import get_probe
 from probedyn.report._tables import markdown_table
 
-LUMPED_COLS = [("group", "group", ""), ("order", "n", ""), ("fem_mode", "FEM mode", ""), ("fem_hz", "FEM", "hz6"),
+LUMPED_COLS = [("group", "group", ""), ("n", "n", ""), ("fem_mode", "FEM mode", ""), ("fem_hz", "FEM", "hz6"),
                ("lumped_hz", "lumped", "hz6"), ("rel_diff", "rel. diff", "+.2e"),
                ("predicted_error", "predicted", ".2e"), ("tolerance", "tolerance", ".2e"), ("within", "within", ""),
                ("valid", "valid", "")]
@@ -88,10 +88,11 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
     for j, (modes, label) in enumerate(_tracks(rows, ks)[:n_tracks]):
         sel = [at[(k, modes[0])] for k in ks]
         c = f"C{j}"
-        a1.semilogx(ks, [r["se_holder_spring"] for r in sel], "o-", color=c, ms=sizes[j], mfc="none",
-                    label=f"{label}: strain energy in holder spring")
-        a1.semilogx(ks, [r["ke_tip"] for r in sel], "s--", color=c, ms=sizes[j] * 0.7, alpha=0.8,
-                    label=f"{label}: kinetic energy in tip")
+        a1.semilogx(ks, [r["se_holder_spring"] for r in sel], "o-", color=c, ms=sizes[j], mfc="none", label=label)
+        a1.semilogx(ks, [r["ke_tip"] for r in sel], "s--", color=c, ms=sizes[j] * 0.7, alpha=0.8)
+    # line-style key: solid = strain energy in the holder spring, dashed = kinetic energy in the tip
+    a1.plot([], [], "ko-", mfc="none", label="strain energy in holder spring")
+    a1.plot([], [], "ks--", ms=4, label="kinetic energy in tip")
     a1.set_xlabel(axis_label("holder stiffness k_t", "N/m"))
     a1.set_ylabel("energy share of the mode")
     a1.set_ylim(-0.02, 1.02)
@@ -105,14 +106,22 @@ def plot_localisation(rows: list[dict], path: Path, title: str, lumped: dict | N
     if lumped:
         kk = np.array(lumped["k"])
         F = np.array(lumped["f"])
-        for j in range(min(F.shape[1], nm)):
-            a2.loglog(kk, F[:, j], "-", color="grey", lw=0.8, label=f"lumped model, lowest {nm} modes" if j == 0 else None)
+        for j in lumped_in_range(lumped, rows):
+            a2.loglog(kk, F[:, j], "-", color="grey", lw=0.8, label="lumped model" if j == 0 else None)
     a2.set_xlabel(axis_label("holder stiffness k_t", "N/m"))
     a2.set_ylabel(axis_label("frequency", "Hz"))
     a2.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3)
     a2.set_title("FEM (markers) vs lumped model (lines)")
     fig.tight_layout()
     return savefig(fig, path)
+
+
+def lumped_in_range(lumped: dict, rows: list[dict], margin: float = 1.05) -> list[int]:
+    """Indices of the lumped modes that come within ``margin`` of the highest FEM frequency of the
+    sweep somewhere on it: the lines that have FEM markers to compare with."""
+    top = margin * max(r["frequency_hz"] for r in rows)
+    F = np.array(lumped["f"])
+    return [j for j in range(F.shape[1]) if float(F[:, j].min()) <= top]
 
 
 def plot_eccentricity(rows: list[dict], path: Path) -> Path:
@@ -148,20 +157,26 @@ def draw_modes(result, path: Path, what: str) -> str:
             "magnitude normalised per mode, grey: undeformed.*")
 
 
-def _reference_orders(rows: list[dict]) -> list[dict]:
-    """Number the analytic rows by the formula's mode order n: the partner of a degenerate pair
-    compares with the same analytic value, so it keeps the same n (marked "(pair)")."""
+def _pair_orders(rows: list[dict], group: tuple[str, ...], value: str, out_key: str = "n") -> list[dict]:
+    """Number rows by mode order within their group (``group`` keys): the partner of a degenerate
+    pair (the same ``value`` within DEGENERATE as the row before it in the group) keeps the
+    order of its partner, marked "(pair)"."""
     out, seen = [], {}
     for r in rows:
-        key = (r["direction"], r["formula"])
-        vals = seen.setdefault(key, [])
-        if vals and r["value_hz"] == vals[-1]:
+        vals = seen.setdefault(tuple(r[k] for k in group), [])
+        if vals and abs(r[value] / vals[-1] - 1) < DEGENERATE:
             n = f"{len(vals)} (pair)"
         else:
-            vals.append(r["value_hz"])
+            vals.append(r[value])
             n = str(len(vals))
-        out.append({**r, "n": n})
+        out.append({**r, out_key: n})
     return out
+
+
+def _reference_orders(rows: list[dict]) -> list[dict]:
+    """Analytic rows numbered by the formula's mode order n (a degenerate partner compares with
+    the same analytic value and keeps its partner's n)."""
+    return _pair_orders(rows, ("direction", "formula"), "value_hz")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -202,11 +217,12 @@ def section(outdir: Path, quick: bool = False) -> str:
                   + (" (Table 3.2 gives mu for the piezotube)" if mu else
                      " (Table 3.1 gives no damping for the duo-bimorph, so c_i = 0; set `--set mu=...` to add it)") + ":", "",
                   markdown_table(lum["lumped"]["parameters"], PAR_COLS), "",
-                  markdown_table(lum["rows"], LUMPED_COLS), ""]
+                  markdown_table(_pair_orders(lum["rows"], ("group",), "lumped_hz"), LUMPED_COLS), ""]
         loc = S.study_localisation(probe, ks, ov)
         n_fem = max(r["mode"] for r in loc["rows"])
         curves = lumped_holder_sweep(lum["lumped"], ks, S.PROBE_SETUP[probe]["sweep_dirs"])
-        above = sorted({round(f) for f in np.array(curves["f"])[:, n_fem:].ravel()})
+        drawn = lumped_in_range(curves, loc["rows"])
+        above = [float(np.min(np.array(curves["f"])[:, j])) for j in range(len(curves["f"][0])) if j not in drawn]
         fig = plot_localisation(loc["rows"], outdir / f"{probe}-localisation.png", probe, curves)
         parts += [f"Section 3.4.1, holder stiffness sweep of the assembled probe (FEM, lowest {n_fem} modes; KE = kinetic "
                   "energy share, SE = strain energy share; dir \"-\": a torsion mode or no direction carrying 60 % of the "
@@ -214,8 +230,8 @@ def section(outdir: Path, quick: bool = False) -> str:
                   markdown_table(loc["rows"], LOC_COLS), "", f"![localisation]({fig.name})", "",
                   f"*{probe}, assembled probe: energy shares of the lowest modes (left; a degenerate pair is one curve) "
                   f"and frequencies (right) vs the holder stiffness k_t. Markers: FEM; lines: the lumped model of the "
-                  f"table above, its lowest {n_fem} modes (the ones the FEM sweep solves"
-                  + (f"; its higher modes, {fmt_hz(min(above))} and up, are outside the plotted FEM range" if above else "")
+                  f"table above, the modes that reach the frequency range of the {n_fem} FEM modes solved"
+                  + (f"; its modes from {fmt_hz(min(above))} up lie above that range and are not drawn" if above else "")
                   + ")."
                   + (" Modes with dir \"-\" (torsion) have no counterpart in the lumped model: where one is among the "
                      f"lowest {n_fem} FEM modes, a FEM marker has no line and the highest line no marker."
