@@ -1,6 +1,6 @@
 """The lumped smart-probe model (eq 3.37) over the holder stiffness, and modes of two variants
 of a probe paired by family (used by the holder-stiffness and holder-mass studies of
-section 3.4.1 and SOURCE-NOTES item 10).
+section 3.4.1 and of departure 5 in docs/source-departures.md).
 
 * :func:`lumped_holder_sweep` re-solves the same lumped model (the body's J, K_2, C_2 and the
   tip mass m from :func:`probedyn.lumped.smart.reduce_from_fem`) with the holder springs of

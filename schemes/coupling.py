@@ -46,6 +46,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any, Callable, Literal, Sequence
 
 import numpy as np
+from scipy.signal import find_peaks
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.presets import preset as table
@@ -113,8 +114,6 @@ def scan_metrics(x: np.ndarray, F: np.ndarray, drop_fraction: float = 0.3,
     slip). First stick length: ``x`` travelled before the first slip; period: median spacing of
     consecutive slips; mean friction, peak and valley levels: over the part after the first slip.
     """
-    from scipy.signal import find_peaks
-
     x = np.asarray(x, float)
     F = np.asarray(F, float)
     if x.shape != F.shape or x.size < 10:

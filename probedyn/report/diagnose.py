@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.diagnose.engine import diagnose, make_problem
-from probedyn.plotting import pyplot, savefig
+from probedyn.plotting import fmt_hz, pyplot, savefig
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "measurements"
 
@@ -27,6 +27,11 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "measurements"
 def _p(p: float) -> str:
     """A p-value; 0.0 (below the smallest double) prints as a bound."""
     return "< 1e-300" if p == 0 else f"= {p:.2g}"
+
+
+def _val(v: float, unit: str) -> str:
+    """A predicted value with its unit (frequencies through fmt_hz)."""
+    return fmt_hz(v) if unit == "Hz" else f"{v:.5g} {unit}"
 
 
 def _param(name: str, p: dict[str, Any]) -> str:
@@ -128,15 +133,16 @@ def summary(res: dict[str, Any]) -> str:
             lines.append("  to separate them (every pair > 3 sigma apart), measure: "
                          + "; ".join(m["measure"] for m in gm["measurements"]))
             for m in gm["measurements"]:
-                pv = ", ".join(f"{k} {v:.5g}" for k, v in m["predictions"].items())
-                lines.append(f"    {m['measure']} predicted [{m['unit']}]: {pv}")
+                pv = ", ".join(f"{k} {_val(v, m['unit'])}" for k, v in m["predictions"].items())
+                lines.append(f"    {m['measure']} predicted: {pv}")
             if gm["pairs_left_unseparated"]:
                 lines.append("  still indistinguishable: " + "; ".join(" vs ".join(p) for p in gm["pairs_left_unseparated"]))
         for p in c["pairs"]:
             m = p["separating_measurement"]
             if m:
                 lines.append(f"  {c['causes'][0]} vs {p['cause']}: measure {m['measure']} "
-                             f"({m['a']:.5g} vs {m['b']:.5g} {m['unit']}, {m['separation_sigma']:.1f} sigma apart)")
+                             f"({_val(m['a'], m['unit'])} vs {_val(m['b'], m['unit'])}, "
+                             f"{m['separation_sigma']:.1f} sigma apart)")
     fin = res["final"]
     lines.append("final model: baseline" + "".join(f" + {c}" for c in fin["causes"])
                  + f", chi2 = {fin['chi2']:.3g} for {fin['dof']} dof (p {_p(fin['p_value'])})")
