@@ -58,13 +58,11 @@ LOC_COLS = [("k_t", "k_t [N/m]", "g"), ("mode", "mode", ""), ("frequency_hz", "f
             ("ke_tip", "KE tip", ".3f"), ("ke_holder_tip", "KE holder+tip", ".4f"), ("ke_body", "KE body", ".2e"),
             ("se_holder_spring", "SE holder spring", ".3f")]
 ECC_COLS = [("delta_um", "|delta| [µm]", "g"), ("f_low_hz", "f low [Hz]", ".7g"), ("f_high_hz", "f high [Hz]", ".7g"),
-            ("split", "split", ".3e"), ("split_predicted", "split EB", ".3e"), ("angle_low_deg", "angle low [deg]", ".3f"),
-            ("angle_predicted_deg", "angle EB [deg]", ".1f"), ("coupling_yz", "K_yz/sqrt(K_yy K_zz)", "+.3e"),
+            ("split", "split", ".3e"), ("split_predicted", "split EB", ".3e"), ("angle_low_deg", "angle low [°]", ".3f"),
+            ("angle_predicted_deg", "angle EB [°]", ".1f"), ("coupling_yz", "K_yz/sqrt(K_yy K_zz)", "+.3e"),
             ("coupling_axial_lateral", "axial-lateral coupling", ".3e"), ("centroid_um", "centroid offset [µm]", ".3g")]
 MAT_COLS = [("mode", "mode", ""), ("family", "family", ""), ("aniso_hz", "PZT-5H [Hz]", ".6g"),
             ("iso_hz", "iso E=1/s11 [Hz]", ".6g"), ("rel_diff", "rel. diff", "+.3e")]
-REF_COLS = [("mode", "mode", ""), ("direction", "dir", ""), ("order", "n", ""), ("formula", "formula", ""),
-            ("fem_hz", "FEM [Hz]", ".6g"), ("value_hz", "formula [Hz]", ".6g"), ("rel_diff", "rel. diff", "+.4f")]
 CONV_COLS = [("mode", "mode", ""), ("family", "family", ""), ("f_finest_hz", "finest [Hz]", ".7g"),
              ("f_extrapolated_hz", "extrapolated [Hz]", ".7g"), ("observed_order", "observed order", ".2f"),
              ("rel_change_last", "last change", "+.2e")]
