@@ -230,9 +230,9 @@ def section(outdir: Path, quick: bool = False) -> str:
                   markdown_table(loc["rows"], LOC_COLS), "", f"![localisation]({fig.name})", "",
                   f"*{probe}, assembled probe: energy shares of the lowest modes (left; a degenerate pair is one curve) "
                   f"and frequencies (right) vs the holder stiffness k_t. Markers: FEM; lines: the lumped model of the "
-                  f"table above, the modes that reach the frequency range of the {n_fem} FEM modes solved"
-                  + (f"; its modes from {fmt_hz(min(above))} up lie above that range and are not drawn" if above else "")
-                  + ")."
+                  f"table above, drawn for its modes that reach the frequency range of the {n_fem} FEM modes solved"
+                  + (f" (its modes from {fmt_hz(min(above))} up lie above that range and are not drawn)" if above else "")
+                  + "."
                   + (" Modes with dir \"-\" (torsion) have no counterpart in the lumped model: where one is among the "
                      f"lowest {n_fem} FEM modes, a FEM marker has no line and the highest line no marker."
                      if any(r["direction"] == "-" for r in loc["rows"]) else "") + "*", ""]
