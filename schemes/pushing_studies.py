@@ -43,14 +43,6 @@ def stairs_and_sliding(substrates: Sequence[str] = ("mica", "hopg"), slow: float
     return runs, rows
 
 
-def _adhesion(contact) -> float:
-    """Magnitude of the pull-off force of the push model's tip-sample DMT contact. (The registry's
-    contact models give ``pull_off_force()`` (negative); the push model's own DMT contact on main
-    gives ``pull_off`` (positive) until the pushing scheme uses the registry's DMT.)"""
-    f = getattr(contact, "pull_off_force", None)
-    return abs(float(f())) if callable(f) else float(contact.pull_off)
-
-
 def _presliding_run(overrides: dict[str, Any], substrate: str) -> tuple[P.PushResult, dict[str, Any], P.PushModel]:
     m = P.make_model(substrate, overrides, dim=1)
     res = P.simulate(m, 3e-9 + m.p["a"])  # well past the first slip (observed at ~1.5 nm for mica)
@@ -70,7 +62,7 @@ def presliding_study(lattices: Sequence[float] = PRESLIDING_LATTICES, zeta0s: Se
             pre = r["presliding"]
             runs.append((what, val, res))
             rows.append({"what": what, "value": val, "x": pre["sample_displacement_m"], "q": m.p["a"] / 4,
-                         "F": pre["peak_friction_N"], "X": pre["base_travel_m"], "adhesion": _adhesion(m.contact)})
+                         "F": pre["peak_friction_N"], "X": pre["base_travel_m"], "adhesion": -m.contact.pull_off_force()})
     return {"runs": runs, "rows": rows}
 
 

@@ -53,7 +53,7 @@ def modes_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mod
 def compare_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_modes: int = NMODES_OPT,
                 out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Mode-by-mode table: FEM frequency, each applicable analytic formula, relative difference."""
-    from probedyn.fem.compare import comparison_rows
+    from probedyn.lumped.compare import comparison_rows
 
     p, values, result = solve(probe, set_, n_modes)
     rows = comparison_rows(p, values, result)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from probedyn.fem.compare import comparison_rows
+from probedyn.lumped.compare import comparison_rows
 from probedyn.fem.render import render_panel
 from probedyn.lumped.reduce import reduce_modes
 from probedyn.plotting import fmt_hz, fmt_um

@@ -16,10 +16,10 @@ import numpy as np
 
 from probedyn.core.io import write_json
 from probedyn.fem.render import render_panel
-from probedyn.lumped import smart as S
 from probedyn.lumped.holder_sweep import lumped_holder_sweep, pair_by_family
 from probedyn.plotting import axis_label, fmt_hz, fmt_um, pyplot, savefig
 from probedyn.probes import get_probe
+from probedyn.probes import studies as S
 from probedyn.report._tables import markdown_table
 
 LUMPED_COLS = [("group", "group", ""), ("n", "n", ""), ("fem_mode", "FEM mode", ""), ("fem_hz", "FEM", "hz6"),
@@ -140,7 +140,7 @@ def plot_eccentricity(rows: list[dict], path: Path) -> Path:
 
 
 def eccentricity_rows(rows: list[dict]) -> list[dict]:
-    """The rows of :func:`probedyn.lumped.smart.study_eccentricity` with offsets in µm for tables."""
+    """The rows of :func:`probedyn.probes.studies.study_eccentricity` with offsets in µm for tables."""
     return [{**r, "delta_um": r["delta"] * 1e6, "centroid_um": r["centroid_offset"] * 1e6} for r in rows]
 
 
@@ -220,7 +220,7 @@ def section(outdir: Path, quick: bool = False) -> str:
                   markdown_table(_pair_orders(lum["rows"], ("group",), "lumped_hz"), LUMPED_COLS), ""]
         loc = S.study_localisation(probe, ks, ov)
         n_fem = max(r["mode"] for r in loc["rows"])
-        curves = lumped_holder_sweep(lum["lumped"], ks, S.PROBE_SETUP[probe]["sweep_dirs"])
+        curves = lumped_holder_sweep(lum["lumped"], ks, p.sweep_directions)
         drawn = lumped_in_range(curves, loc["rows"])
         above = [float(np.min(np.array(curves["f"])[:, j])) for j in range(len(curves["f"][0])) if j not in drawn]
         fig = plot_localisation(loc["rows"], outdir / f"{probe}-localisation.png", probe, curves)
