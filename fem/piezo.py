@@ -33,9 +33,10 @@ Each electrode of the layout is, for one solve,
 * **floating** (open circuit): its phi nodes share **one** unknown and its net charge is zero
   (the Gauss equations of its nodes are summed).
 
-Nodes that belong to two electrodes of the layout (the common edge of adjacent sectors) are
-left free: they lie in the inter-electrode gap, whose width is one element and vanishes under
-refinement.  Everything else is free (``D . n = 0``).
+A node on the common edge of k electrodes of the layout (adjacent sectors) takes the mean of
+their k potentials: an inter-electrode gap of vanishing width, linear in the voltages and
+without any gap between electrodes at the same potential.  Everything else is free
+(``D . n = 0``).
 
 Elimination: with ``phi = T phi_r + P V`` (``T``: free and floating unknowns -> nodes, ``P``:
 driven voltages -> nodes) the system in (u, phi_r) is symmetric indefinite::
@@ -241,6 +242,27 @@ class PiezoStatic:
         out[self.phi_nodes] = self.phi
         return out
 
+    def write_vtu(self, path) -> Any:
+        """VTU (quadratic tetrahedra, VTK tetra10 order) with point fields ``displacement`` [m]
+        and ``potential`` [V] (0 off the piezoelectric regions), written atomically."""
+        import meshio
+
+        from probedyn.core.io import atomic_path
+        from probedyn.fem.io import tetra10_connectivity
+
+        mech = self.model.mech
+        conn = tetra10_connectivity(mech.mesh, mech.basis)
+        phi = np.nan_to_num(self.phi_full(), nan=0.0)
+        m = meshio.Mesh(mech.basis.doflocs.T, [("tetra10", conn)],
+                        point_data={"displacement": self.u.reshape(mech.n_nodes, 3), "potential": phi},
+                        cell_data={"piezo_region": [self.model.elem_piezo.astype(np.int32)]})
+        from pathlib import Path
+
+        path = Path(path)
+        with atomic_path(path) as tmp:
+            meshio.write(tmp, m, file_format="vtu")
+        return path
+
 
 @dataclass
 class PiezoModes:
@@ -355,14 +377,20 @@ class PiezoModel:
         count = np.zeros(self.n_phi, dtype=np.int64)
         for loc in nodes.values():
             count[loc] += 1
-        self.electrode_nodes: dict[str, np.ndarray] = {}
+        self.electrode_nodes: dict[str, np.ndarray] = {}  # every node of the electrode
         for name, loc in nodes.items():
             own = loc[count[loc] == 1]
             if own.size < 0.5 * loc.size:
                 others = [o for o, l2 in nodes.items() if o != name and np.intersect1d(l2, loc).size > 0.25 * loc.size]
                 raise GeometryError(f"electrode '{name}' overlaps {', '.join(others) or 'other electrodes'}: "
                                     f"a layout needs disjoint electrodes")
-            self.electrode_nodes[name] = own
+            self.electrode_nodes[name] = loc
+        # incidence with shares: a node on k electrodes (their common edge) takes the mean of their
+        # potentials, so W[node, e] = 1/k  (phi_node = sum_e W[node, e] phi_e)
+        r = np.concatenate([nodes[n] for n in self.electrodes])
+        c = np.concatenate([np.full(nodes[n].size, i) for i, n in enumerate(self.electrodes)])
+        self._W = sp.csr_matrix((1.0 / count[r], (r, c)), shape=(self.n_phi, len(self.electrodes)))
+        self._on_electrode = count > 0
         if reference is not None and reference not in self.electrode_nodes:
             raise GeometryError(f"reference electrode '{reference}' is not in the layout ({', '.join(self.electrodes)})")
         self.reference = reference
@@ -453,24 +481,23 @@ class PiezoModel:
         return out
 
     def _operators(self, states: dict[str, State]):
-        """(T, P, driven names, floating names): phi = T phi_r + P V_driven."""
-        driven = [n for n, s in states.items() if s != "float"]
-        floating = [n for n, s in states.items() if s == "float"]
+        """(T, P, driven names, floating names): ``phi = T phi_r + P V_driven``.
+
+        Free nodes (on no electrode) are unknowns of their own; an electrode node takes the
+        potential of its electrode, and a node on the common edge of k electrodes the mean of
+        their k potentials (a vanishing inter-electrode gap: linear in the voltages, symmetric,
+        no gap between electrodes at the same potential).  Floating electrodes add one unknown
+        each (the last columns of T)."""
+        names = list(self.electrodes)
+        driven = [n for n in names if states[n] != "float"]
+        floating = [n for n in names if states[n] == "float"]
         n = self.n_phi
-        role = np.full(n, -1, dtype=np.int64)  # -1 free; k >= 0 driven k; -(2+j) floating j
-        for k, name in enumerate(driven):
-            role[self.electrode_nodes[name]] = k
-        for j, name in enumerate(floating):
-            role[self.electrode_nodes[name]] = -(2 + j)
-        free = np.nonzero(role == -1)[0]
-        cols = np.full(n, -1, dtype=np.int64)
-        cols[free] = np.arange(free.size)
-        for j in range(len(floating)):
-            cols[role == -(2 + j)] = free.size + j
-        rows = np.nonzero(cols >= 0)[0]
-        T = sp.csr_matrix((np.ones(rows.size), (rows, cols[rows])), shape=(n, free.size + len(floating)))
-        drows = np.nonzero(role >= 0)[0]
-        P = sp.csr_matrix((np.ones(drows.size), (drows, role[drows])), shape=(n, len(driven)))
+        free = np.nonzero(~self._on_electrode)[0]
+        Tfree = sp.csr_matrix((np.ones(free.size), (free, np.arange(free.size))), shape=(n, free.size))
+        W = self._W.tocsc()
+        Tfl = W[:, [names.index(e) for e in floating]] if floating else sp.csr_matrix((n, 0))
+        T = sp.hstack([Tfree, Tfl], format="csr")
+        P = W[:, [names.index(e) for e in driven]].tocsr() if driven else sp.csr_matrix((n, 0))
         if T.shape[1] and not driven:
             raise ParameterError("at least one electrode must be driven or grounded (the potential needs a reference)")
         return T, P, driven, floating
@@ -552,60 +579,87 @@ class PiezoModel:
         """Static solution for electrode ``voltages`` ({electrode: volts | 'ground' | 'float'};
         the other electrodes of the layout take ``others``) and mechanical ``forces``
         ({attachment: (Fx, Fy, Fz)} [N], as :meth:`ElasticModel.static_displacement`)."""
+        return self.static_many([voltages or {}], [forces or {}], others=others, solver=solver)[0]
+
+    def static_many(self, voltages: Sequence[Mapping[str, State]], forces: Sequence[Mapping[Any, Sequence[float]]]
+                    | None = None, others: State = "ground", solver: str = "indefinite") -> list[PiezoStatic]:
+        """Several load cases with one factorisation.  Every case must drive (or float) the
+        same electrodes; only the voltage values and the forces differ."""
         if solver not in SOLVERS:
             raise SolverError(f"unknown piezo solver '{solver}' (known: {', '.join(SOLVERS)})")
-        st = self._states(voltages, others)
-        T, P, driven, floating = self._operators(st)
-        V = np.array([st[n] for n in driven], dtype=float)
+        cases = [self._states(v, others) for v in voltages]
+        if not cases:
+            return []
+        forces = list(forces) if forces is not None else [{}] * len(cases)
+        if len(forces) != len(cases):
+            raise ParameterError("static_many: one force dict per voltage case")
+        pattern = [s == "float" for s in cases[0].values()]
+        for st in cases[1:]:
+            if [s == "float" for s in st.values()] != pattern:
+                raise ParameterError("static_many: all cases must float the same electrodes")
+        st0 = cases[0]
+        T, P, driven, floating = self._operators(st0)
         K, M, free, n_extra = self.mechanical_system()
         Kup, Kpp = self.blocks()
         t0 = time.perf_counter()
-        f = np.zeros(self.mech.ndofs_total)
-        for where, F in (forces or {}).items():
-            f += np.asarray(self.mech.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)).ravel()
-        fu = np.concatenate([f[free], np.zeros(n_extra)])
-        phiD = P @ V
-        fu = fu - np.concatenate([Kup[free] @ phiD, np.zeros(n_extra)])
-        gr = T.T @ (Kpp @ phiD)
-        nu = fu.size
+        nu = free.size + n_extra
+        rhs_u, rhs_r, phiDs = [], [], []
+        for st, fc in zip(cases, forces):
+            V = np.array([st[n] for n in driven], dtype=float)
+            f = np.zeros(self.mech.ndofs_total)
+            for where, F in fc.items():
+                f += np.asarray(self.mech.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)).ravel()
+            phiD = P @ V
+            rhs_u.append(np.concatenate([f[free] - Kup[free] @ phiD, np.zeros(n_extra)]))
+            rhs_r.append(T.T @ (Kpp @ phiD))
+            phiDs.append(phiD)
         A, Kuu, Kur, Krr, alpha = self._coupled(T)
         t1 = time.perf_counter()
+        sols = []
+        extra_t: dict[str, float] = {}
         if solver == "indefinite":
             fac = factorize(A, spd=False)
             try:
-                x = self._refined_solver(A, fac)(np.concatenate([fu, alpha * gr]))
+                solve = self._refined_solver(A, fac)
+                for fu, gr in zip(rhs_u, rhs_r):
+                    x = solve(np.concatenate([fu, alpha * gr]))
+                    sols.append((x[:nu], alpha * x[nu:]))
             finally:
                 fac.release()
-            uu, phir = x[:nu], alpha * x[nu:]
             backend = fac.backend
-            extra_t = {}
         else:
             solve_u, fr, release, iters = self._schur_solver(Kuu, Kur, Krr)
             try:
-                # phi_r = Krr^-1 (Kur^T u - gr);  S u = fu + Kur Krr^-1 gr
-                uu = solve_u(fu + Kur @ fr.solve(gr))
-                phir = fr.solve(Kur.T @ uu - gr)
+                for fu, gr in zip(rhs_u, rhs_r):
+                    # phi_r = Krr^-1 (Kur^T u - gr);  S u = fu + Kur Krr^-1 gr
+                    uu = solve_u(fu + Kur @ fr.solve(gr))
+                    sols.append((uu, fr.solve(Kur.T @ uu - gr)))
             finally:
                 release()
             backend = f"schur-pcg({iters[0] if iters else 0} it)"
             extra_t = {"cg_iterations": float(sum(iters))}
         t2 = time.perf_counter()
-        u = np.zeros(self.mech.ndofs_total)
-        u[free] = uu[: free.size]
-        phi = T @ phir + phiD
-        if not (np.all(np.isfinite(u)) and np.all(np.isfinite(phi))):
-            raise SolverError("coupled static solve produced non-finite values")
-        q = Kpp @ phi - Kup.T @ u
-        charges = {n: float(q[self.electrode_nodes[n]].sum()) for n in self.electrodes}
-        pots = {}
-        for n in self.electrodes:
-            pots[n] = float(st[n]) if st[n] != "float" else float(phi[self.electrode_nodes[n]].mean())
-        for n in floating:
-            charges[n] = 0.0
-        timings = dict(self.timings)
-        timings.update(setup_s=t1 - t0, solve_s=t2 - t1, **extra_t)
-        return PiezoStatic(u, uu[free.size:], phi, self.phi_nodes, pots, charges, int(nu + phir.size),
-                           backend, timings, self)
+        out = []
+        for st, phiD, (uu, phir) in zip(cases, phiDs, sols):
+            u = np.zeros(self.mech.ndofs_total)
+            u[free] = uu[: free.size]
+            phi = T @ phir + phiD
+            if not (np.all(np.isfinite(u)) and np.all(np.isfinite(phi))):
+                raise SolverError("coupled static solve produced non-finite values")
+            q = Kpp @ phi - Kup.T @ u  # nodal charge; a shared node's charge is split like its potential
+            Q = self._W.T @ q
+            charges = {n: float(Q[i]) for i, n in enumerate(self.electrodes)}
+            pots = {}
+            for i, n in enumerate(self.electrodes):
+                pots[n] = float(st[n]) if st[n] != "float" else float(phir[T.shape[1] - len(floating) +
+                                                                         floating.index(n)])
+            for n in floating:
+                charges[n] = 0.0
+            timings = dict(self.timings)
+            timings.update(setup_s=t1 - t0, solve_s=t2 - t1, n_cases=float(len(cases)), **extra_t)
+            out.append(PiezoStatic(u, uu[free.size:], phi, self.phi_nodes, pots, charges, int(nu + phir.size),
+                                   backend, timings, self))
+        return out
 
     # ---- actuation loads ---------------------------------------------------------------------
     def actuation_loads(self, driven: Sequence[str], others: State = "ground") -> tuple[np.ndarray, np.ndarray]:

@@ -204,5 +204,52 @@ def _rot_to_x() -> np.ndarray:
     return poling_rotation("+x")
 
 
+
+
+TUBE_LAYOUT = ("electrode_yp", "electrode_zp", "electrode_ym", "electrode_zm", "electrode_inner")
+
+
+def tube_cantilever(Re: float = 0.5e-3, Ri: float = 0.45e-3, length: float = 5e-3, n_wall: int = 1,
+                    element_size: float | None = None, delta_y: float = 0.0, delta_z: float = 0.0,
+                    clamp: str = "full", material: str | PiezoMaterial = "pzt-5h") -> PiezoModel:
+    """The bare piezotube (no holder) of :mod:`probedyn.meshes.piezotube`, radially poled, with the
+    quartered layout (inner electrode = reference), clamped at x = 0 (``clamp = "full"``: all
+    DOFs of the end face; ``"sliding"``: u_x on the face, the face free to deform in its plane
+    (u_z on the y = 0 line, u_y at two points of the z = 0 line blocking the rigid in-plane
+    motion: see :func:`sliding_clamp_dofs`)).  Tip = the area-averaged tube end ``tube_end``."""
+    from probedyn.fem.materials import radial_poling
+    from probedyn.meshes.cache import MeshOptions
+    from probedyn.meshes.piezotube import piezotube_mesh
+
+    if clamp not in ("full", "sliding"):
+        raise ParameterError(f"tube clamp must be 'full' or 'sliding', got {clamp!r}")
+    mat = get_piezo_material(material)
+    bundle = piezotube_mesh({"Re": Re, "Ri": Ri, "length": length, "delta_y": delta_y, "delta_z": delta_z,
+                             "holder": "point"}, MeshOptions(element_size, int(n_wall)))
+    Rr = radial_poling(axis_point=(0.0, 0.0, 0.0), axis_dir=(1.0, 0.0, 0.0))
+    mech = ElasticModel(bundle, {"tube": (mat.elastic(), Rr)}, clamp=["clamp"] if clamp == "full" else [],
+                        tip="tube_end", name="tube")
+    fixed = np.zeros(0, dtype=np.int64) if clamp == "full" else _tube_sliding(mech)
+    return PiezoModel(mech, {"tube": (mat, Rr)}, electrodes=list(TUBE_LAYOUT), reference="electrode_inner",
+                      tip="tube_end", fixed_dofs=fixed)
+
+
+def _tube_sliding(mech: ElasticModel) -> np.ndarray:
+    """u_x on the clamp face; u_z at the nodes of the face on the y axis (y != 0, z = 0 ... the
+    two wall crossings of the z = 0 line carry u_y = 0 only at one of them)."""
+    basis = mech.basis
+    nodes = np.unique(basis.get_dofs(facets=mech.mesh.boundaries["clamp"]).all())
+    x = basis.doflocs[:, nodes]
+    ext = np.ptp(basis.doflocs, axis=1).max()
+    on_y = np.abs(x[2]) < 1e-9 * ext  # the two wall crossings of the y axis (z = 0)
+    on_z = np.abs(x[1]) < 1e-9 * ext  # ... of the z axis (y = 0)
+    if not (np.any(on_y) and np.any(on_z)):
+        raise GeometryError("sliding tube clamp: no nodes on the y or z axis of the clamp face")
+    # block in-plane rigid motion: u_z = 0 on the y-axis nodes (symmetric about z = 0) and
+    # u_y = 0 on the z-axis nodes; this also blocks the rotation about x
+    return np.unique(np.concatenate([3 * nodes, 3 * nodes[on_y] + 2, 3 * nodes[on_z] + 1]))
+
+
 __all__ = ["box_bundle", "support_321", "free_block", "bimorph_cantilever", "bimorph_drive", "bar_31", "rod_33",
+           "tube_cantilever", "sliding_clamp_dofs", "TUBE_LAYOUT",
            "BIMORPH_CONFIGS"]

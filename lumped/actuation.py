@@ -4,9 +4,11 @@ against the coupled piezoelectric FEM (:mod:`probedyn.fem.piezo`; numbers in doc
 Sign conventions (probedyn axes: x along the probe/tube, z up; PZT has d31 < 0):
 
 * a layer poled along +p, in a field E, has the free in-plane strain ``d31 (E . p)``: it
-  **contracts** when the field is parallel to the poling (d31 < 0);
-* all deflections are **signed** and per volt of the named drive; a formula taken from the
-  source is evaluated with the signed d31, which reproduces the FEM's signs.
+  **contracts** when the field is parallel to the poling (d31 < 0) and extends when it opposes
+  it; the field points from the higher to the lower potential;
+* bimorph deflections are **signed** and per volt of the named drive; the duo-bimorph and tube
+  formulas return the deflection per volt of a drive pattern whose positive command moves the
+  tip along the positive axis (:mod:`probedyn.probes.piezo`), i.e. they use ``|d31|``.
 
 Bimorph cantilever (laminate theory, two equal PZT layers of total thickness h)
 -------------------------------------------------------------------------------
@@ -45,7 +47,8 @@ potential, plate-like layers, fringing at the gap) are measured in docs/piezo.md
 
 Piezotube (3.34-3.36)
 ---------------------
-Thin tube (mean radius R, wall t = Re - Ri, quarters at +V / -V, inner grounded): the moment
+Thin tube (mean radius R, wall t = Re - Ri, quarters at -V / +V, inner grounded, outward
+poling: the +V quarter extends, the -V quarter contracts, the tube bends towards -V): the moment
 of the free strain ``d31 V / t`` over the two quarters is ``2 sqrt(2) Y d31 V R^2`` and
 ``EI = Y pi R^3 t``, so
 
@@ -55,7 +58,7 @@ The print's 3.34 has ``R_e`` where the standard form (Chen, J. Vac. Sci. Technol
 3204) has the diameter D: it is **twice** too large (SOURCE-NOTES item 8; the FEM decides,
 docs/piezo.md).  Thick wall (radial field ``V / (r ln(Re/Ri))``, exact annulus):
 ``Delta = 2 sqrt(2) d31 L^2 V / (pi (Re^2 + Ri^2) ln(Re/Ri))``.  Axial (all outer electrodes
-at V): 3.35 ``Delta_z = d31 L V / t`` (thin) or ``2 d31 L V / ((Re + Ri) ln(Re/Ri))`` (thick).
+at +V: inward field against the poling, extension): 3.35 ``Delta_z = d31 L V / t`` (thin) or ``2 d31 L V / ((Re + Ri) ln(Re/Ri))`` (thick).
 3.36 ``V_z = 0.9 (L/Re) V_x`` follows from the printed 3.34; with the corrected 3.34 it is
 ``V_z = sqrt(2) L V_x / (pi R) = 0.45 (L/R) V_x``.
 
@@ -193,9 +196,9 @@ def _tube(Re: float, Ri: float) -> tuple[float, float]:
 
 
 def tube_lateral_per_volt(length: float, Re: float, Ri: float, d31: float, form: str = "thin") -> float:
-    """Lateral tip deflection per volt [m/V] of a radially poled tube with quarters at +V and -V
-    (inner grounded), towards the +V quarter for d31 < 0 and outward poling (returned as
-    ``-formula(d31)`` so that it is positive).
+    """Lateral tip deflection per volt [m/V] of a tube poled radially outward with quarters at
+    -V and +V (inner grounded): towards the -V quarter (the +V quarter extends for d31 < 0);
+    returned positive (``|d31|``).
 
     ``form``: ``"printed"`` = 3.34 as printed, ``2 sqrt(2) |d31| L^2 / (pi Re t)``;
     ``"thin"`` = ``sqrt(2) |d31| L^2 / (pi R t)`` (R mean radius; = the standard form with the
@@ -215,8 +218,8 @@ def tube_lateral_per_volt(length: float, Re: float, Ri: float, d31: float, form:
 
 
 def tube_axial_per_volt(length: float, Re: float, Ri: float, d31: float, form: str = "thin") -> float:
-    """Axial extension per volt [m/V] with all outer electrodes at -V (inner grounded), i.e. the
-    field against the outward poling (extension for d31 < 0): 3.35 ``|d31| L / t`` (``"thin"`` =
+    """Axial extension per volt [m/V] with all outer electrodes at +V (inner grounded): the
+    inward field opposes the outward poling, the tube extends (d31 < 0): 3.35 ``|d31| L / t`` (``"thin"`` =
     ``"printed"``) or ``2 |d31| L / ((Re + Ri) ln(Re/Ri))`` (``"thick"``)."""
     L = _pos("length", length)
     Re, Ri = _tube(Re, Ri)
@@ -239,9 +242,10 @@ def tube_sector_deflection(length: float, Re: float, Ri: float, d31: float, volt
                            edges_deg: Sequence[float]) -> np.ndarray:
     """Lateral tip deflection (2,) [m] along (e_0, e_90) of a tube whose outer electrode is cut
     into sectors ``[edges[k], edges[k+1]]`` (degrees, the last one wrapping to edges[0] + 360)
-    at ``voltages[k]`` (inner grounded; thick-wall radial field).  Each sector contributes
-    ``-d31 L^2 (Re^2 - Ri^2) / (4 I ln(Re/Ri)) V_k int (cos, sin) dtheta`` (bends towards a
-    contracting sector); quarters at +-V give :func:`tube_lateral_per_volt` ("thick")."""
+    at ``voltages[k]`` (inner grounded, outward poling, thick-wall radial field).  Each sector
+    contributes ``d31 L^2 (Re^2 - Ri^2) / (4 I ln(Re/Ri)) V_k int (cos, sin) dtheta`` (a sector at
+    +V extends and the tube bends away from it); quarters at -+V give
+    :func:`tube_lateral_per_volt` ("thick")."""
     L = _pos("length", length)
     Re, Ri = _tube(Re, Ri)
     e = np.radians(np.asarray(edges_deg, dtype=float))
@@ -250,7 +254,7 @@ def tube_sector_deflection(length: float, Re: float, Ri: float, d31: float, volt
     if V.shape != e.shape:
         raise ParameterError("one voltage per sector")
     I = math.pi * (Re**4 - Ri**4) / 4
-    c = -d31 * L**2 * (Re**2 - Ri**2) / (4 * I * math.log(Re / Ri))
+    c = d31 * L**2 * (Re**2 - Ri**2) / (4 * I * math.log(Re / Ri))
     return c * np.array([np.sum(V * (np.sin(e2) - np.sin(e))), np.sum(V * (np.cos(e) - np.cos(e2)))])
 
 
@@ -264,9 +268,10 @@ class GammaMatrix:
     z along the tube axis; probedyn's tube axis is x, source x = probedyn z, source y = probedyn y).
 
     ``displacement[i, j]`` [m/V]: tip (tube end) displacement along i for a unit input u_j with
-    the electrode voltages ``Q+x: u_x - u_z, Q-x: -u_x - u_z, Q+y: u_y - u_z, Q-y: -u_y - u_z``,
-    inner electrode grounded (quarters Q centred on the axes).  The sign of u_z is chosen so that
-    every diagonal entry is positive (a positive u_z extends a PZT tube, d31 < 0, outward poling).
+    the electrode voltages ``Q+x: -u_x + u_z, Q-x: u_x + u_z, Q+y: -u_y + u_z, Q-y: u_y + u_z``,
+    inner electrode grounded (quarters Q centred on the axes; PZT, d31 < 0, poled radially
+    outward): the signs make every diagonal entry positive (u_x moves the tip along +x, u_z
+    extends the tube), so that positive definiteness means what 3.52 needs.
     ``reference`` = the diagonal of the concentric tube (same model), so that
     ``normalised = displacement / reference[:, None]`` is dimensionless and equal to the identity
     without eccentricity.  ``source`` says where it comes from.
@@ -342,8 +347,8 @@ def eccentric_radii(theta: np.ndarray, Ro: float, Ri: float, dx: float, dy: floa
 
 
 def _quarter_voltages(j: int) -> np.ndarray:
-    """Voltages of the quarters (+x, +y, -x, -y) for a unit input u_j (class docstring)."""
-    return [np.array([1.0, 0.0, -1.0, 0.0]), np.array([0.0, 1.0, 0.0, -1.0]), -np.ones(4)][j]
+    """Voltages of the quarters (+x, +y, -x, -y) for a unit input u_j (GammaMatrix docstring)."""
+    return [np.array([-1.0, 0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0, 1.0]), np.ones(4)][j]
 
 
 def gamma_matrix(Re: float, Ri: float, length: float, delta_x: float = 0.0, delta_y: float = 0.0,
@@ -355,8 +360,8 @@ def gamma_matrix(Re: float, Ri: float, length: float, delta_x: float = 0.0, delt
 
     * quarters are angular sectors about the outer circle's centre c1 (where the electrodes
       are); along the ray at angle theta the wall spans ``inner(theta) <= r <= Re`` and the
-      field is ``V / t(theta)``, ``t = Re - inner`` (:func:`eccentric_radii`);
-    * free strain ``Lambda = d31 E``; its first moment about the centroid c,
+      field is ``V / t(theta)`` inward, ``t = Re - inner`` (:func:`eccentric_radii`);
+    * free strain ``Lambda = -d31 V / t`` (outer electrode at V, outward poling); its first moment about the centroid c,
       ``m = int Lambda (r - c) dA``, and its resultant ``n = int Lambda dA``, with
       ``int_{inner}^{Re} r^2 dr = (Re^3 - inner^3)/3`` (the f1, f2 of 3.40-3.41 with the shift
       of the pole to c1 and the term -c (Re^2 - inner^2)/2) and ``int r dr = (Re^2 - inner^2)/2``
@@ -406,8 +411,8 @@ def _gamma_displacement(Re, Ri, L, dx, dy, d31, n_theta) -> np.ndarray:
         r2 = (Re**2 - ri**2) / 2.0
         mx = np.sum((r3 * np.cos(th) - c[0] * r2) / t) * w
         my = np.sum((r3 * np.sin(th) - c[1] * r2) / t) * w
-        m_q.append(d31 * np.array([mx, my]))
-        n_q.append(d31 * np.sum(r2 / t) * w)
+        m_q.append(-d31 * np.array([mx, my]))  # Lambda = -d31 V / t per volt
+        n_q.append(-d31 * np.sum(r2 / t) * w)
     m_q, n_q = np.array(m_q), np.array(n_q)
     Icinv = np.linalg.inv(Ic)
     for j in range(3):

@@ -1,0 +1,383 @@
+"""The smart probes as electromechanical models: piezoelectric regions, poling, electrode
+layouts and drive patterns, and the actuation studies built on them (issue 12).
+
+The mechanical model comes from the probe (``probe.build(values)``: mesh, materials, clamp,
+holder, lumped tip); :class:`probedyn.fem.piezo.PiezoModel` adds the potential on the PZT
+regions.  Regions that carry no electrodes (the holder's stiffness-tuning piezolayer) stay
+purely elastic with their short-circuit stiffness c^E.
+
+Duo-bimorph (source 3.2.1, Fig 3.5)
+-----------------------------------
+Layers ``upper_layer`` / ``lower_layer`` poled through the thickness; electrodes
+``electrode_upper_left/right``, ``electrode_lower_left/right`` (left = +y) and
+``electrode_middle`` (the interface; grounded reference).  ``poling = "parallel"`` (default:
+both layers +z, the source's "four electrodes at the same voltage" bends the probe) or
+``"series"`` (upper +z, lower -z).  Patterns (volts per volt of the command; a positive command
+moves the tip along +z / +y; PZT has d31 < 0, so a layer extends where the field opposes its
+poling):
+
+* ``V_z`` (vertical bending, lower layer extends): parallel - all four outer electrodes at -1;
+  series - upper -1, lower +1;
+* ``V_y`` (lateral bending, right half (-y) extends, left half contracts): parallel -
+  upper-left -1, lower-left +1, upper-right +1, lower-right -1; series - left -1, right +1.
+
+Piezotube (source 3.3.1, Figs 3.10-3.11)
+----------------------------------------
+The ``tube`` poled radially outward (:func:`probedyn.fem.materials.radial_poling`); inner
+electrode grounded (reference).  A positive voltage on an outer electrode makes an inward field,
+against the poling: the wall under it extends and the tube bends away from it.  Layouts: ``quarters`` (``electrode_yp, zp, ym, zm``) and
+``sectors`` (``electrode_sector_00 .. 11``, 30 degrees each, sector k centred at 30 k degrees
+from +y towards +z).  Patterns in the **source's names** (source x = probedyn z, source y =
+probedyn y, source z = the tube axis = probedyn x):
+
+* ``V_x``: -1 on the +z quarter, +1 on the -z quarter (sectors: the three sectors of each): the
+  tip moves along +z;
+* ``V_y``: -1 on the +y quarter, +1 on the -y quarter: along +y;
+* ``V_z``: +1 on every outer electrode: the tube extends (+x);
+* sectors only: ``V_x_cos`` / ``V_y_cos``: ``V_k = -cos(theta_k - theta_axis)`` on all 12
+  sectors (the pattern that maximises the bending moment per peak volt: 9.8 % more than
+  quarters).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from probedyn.core.errors import GeometryError, MaterialError, ParameterError
+from probedyn.fem.materials import radial_poling
+from probedyn.fem.piezo import PiezoModel, PiezoStatic, coupling_factors, match_modes
+from probedyn.lumped.actuation import GammaMatrix
+from probedyn.probes import get_probe
+
+DUO_OUTER = ("electrode_upper_left", "electrode_upper_right", "electrode_lower_left", "electrode_lower_right")
+TUBE_QUARTERS = ("electrode_yp", "electrode_zp", "electrode_ym", "electrode_zm")
+TUBE_SECTORS = tuple(f"electrode_sector_{k:02d}" for k in range(12))
+#: sectors making up each quarter (meshes/piezotube.py QUARTERS)
+_QUARTER_SECTORS = {"electrode_yp": (11, 0, 1), "electrode_zp": (2, 3, 4), "electrode_ym": (5, 6, 7),
+                    "electrode_zm": (8, 9, 10)}
+POLINGS = ("parallel", "series")
+
+
+@dataclass(frozen=True)
+class PiezoSetup:
+    """Piezoelectric description of a probe (module docstring)."""
+
+    probe: str
+    regions: dict[str, Any]
+    layouts: dict[str, tuple[str, ...]]
+    default_layout: str
+    reference: str
+    patterns: dict[str, dict[str, dict[str, float]]]
+    frame: dict[str, str] = field(default_factory=dict)
+
+    def layout(self, name: str | None) -> tuple[str, ...]:
+        name = self.default_layout if name is None else name
+        if name not in self.layouts:
+            raise ParameterError(f"{self.probe}: unknown electrode layout '{name}' (known: {', '.join(self.layouts)})")
+        return self.layouts[name]
+
+    def pattern(self, layout: str | None, name: str) -> dict[str, float]:
+        lay = self.default_layout if layout is None else layout
+        pats = self.patterns.get(lay, {})
+        if name not in pats:
+            raise ParameterError(f"{self.probe}: unknown drive pattern '{name}' for layout '{lay}' "
+                                 f"(known: {', '.join(pats)})")
+        return pats[name]
+
+
+def _duo_setup(poling: str) -> PiezoSetup:
+    if poling not in POLINGS:
+        raise ParameterError(f"duo-bimorph poling must be 'parallel' or 'series', got {poling!r}")
+    lower = "+z" if poling == "parallel" else "-z"
+    ul, ur, ll, lr = DUO_OUTER
+    if poling == "parallel":
+        pats = {"V_z": {ul: -1.0, ur: -1.0, ll: -1.0, lr: -1.0},
+                "V_y": {ul: -1.0, ll: 1.0, ur: 1.0, lr: -1.0}}
+    else:
+        pats = {"V_z": {ul: -1.0, ur: -1.0, ll: 1.0, lr: 1.0},
+                "V_y": {ul: -1.0, ll: -1.0, ur: 1.0, lr: 1.0}}
+    return PiezoSetup("duo-bimorph", {"upper_layer": "+z", "lower_layer": lower},
+                      {"split": DUO_OUTER + ("electrode_middle",)}, "split", "electrode_middle",
+                      {"split": pats}, {"x": "x (along the probe)", "y": "y (lateral)", "z": "z (vertical)"})
+
+
+def _tube_setup() -> PiezoSetup:
+    yp, zp, ym, zm = TUBE_QUARTERS
+    quarters = {"V_x": {zp: -1.0, zm: 1.0}, "V_y": {yp: -1.0, ym: 1.0},
+                "V_z": {yp: 1.0, zp: 1.0, ym: 1.0, zm: 1.0}}
+    sectors: dict[str, dict[str, float]] = {}
+    for pname, pat in quarters.items():
+        sectors[pname] = {TUBE_SECTORS[k]: v for q, v in pat.items() for k in _QUARTER_SECTORS[q]}
+    th = np.radians(30.0 * np.arange(12))
+    sectors["V_x_cos"] = {TUBE_SECTORS[k]: float(np.round(-np.sin(th[k]), 15)) for k in range(12)}  # +z: 90 deg
+    sectors["V_y_cos"] = {TUBE_SECTORS[k]: float(np.round(-np.cos(th[k]), 15)) for k in range(12)}
+    return PiezoSetup("piezotube", {"tube": "radial"},
+                      {"quarters": TUBE_QUARTERS + ("electrode_inner",),
+                       "sectors": TUBE_SECTORS + ("electrode_inner",)},
+                      "quarters", "electrode_inner", {"quarters": quarters, "sectors": sectors},
+                      {"x": "source z (tube axis)", "y": "source y", "z": "source x"})
+
+
+def piezo_setup(probe_name: str, poling: str | None = None) -> PiezoSetup:
+    """The :class:`PiezoSetup` of a registered smart probe."""
+    if probe_name == "duo-bimorph":
+        return _duo_setup(poling or "parallel")
+    if probe_name == "piezotube":
+        if poling not in (None, "radial"):
+            raise ParameterError(f"piezotube poling is radial, got {poling!r}")
+        return _tube_setup()
+    raise ParameterError(f"probe '{probe_name}' has no piezoelectric actuation (smart probes: duo-bimorph, piezotube)")
+
+
+def build_piezo_model(probe, values: dict[str, Any], layout: str | None = None, poling: str | None = None,
+                      piezo_material: str | None = None) -> tuple[PiezoModel, PiezoSetup]:
+    """The coupled model of a resolved probe: ``probe.build(values)`` + the piezo set-up.
+
+    ``piezo_material`` defaults to the probe's ``material`` value; a material without
+    piezoelectric constants (e.g. ``pzt-5h-iso``) raises a one-line MaterialError."""
+    setup = piezo_setup(probe.name, poling)
+    mat_name = piezo_material or values.get("material", "pzt-5h")
+    from probedyn.fem.piezo_materials import get_piezo_material
+
+    mat = get_piezo_material(mat_name)
+    mech = probe.build(values)
+    regions = {}
+    for rname, pol in setup.regions.items():
+        if pol == "radial":
+            pol = radial_poling(axis_point=(0.0, 0.0, 0.0), axis_dir=(1.0, 0.0, 0.0))
+        regions[rname] = (mat, pol)
+    pm = PiezoModel(mech, regions, electrodes=setup.layout(layout), reference=setup.reference)
+    return pm, setup
+
+
+def piezo_model(name_or_toml: str, overrides: Mapping[str, Any] | None = None, layout: str | None = None,
+                poling: str | None = None):
+    """(probe, values, PiezoModel, PiezoSetup) for a probe name or TOML file plus overrides."""
+    probe, toml_over = get_probe(name_or_toml)
+    values = probe.resolve({**toml_over, **dict(overrides or {})})
+    pm, setup = build_piezo_model(probe, values, layout, poling)
+    return probe, values, pm, setup
+
+
+# ---------------------------------------------------------------------------------------------
+# static actuation
+# ---------------------------------------------------------------------------------------------
+
+def tip_displacement(pm: PiezoModel, res: PiezoStatic) -> np.ndarray:
+    """Displacement (3,) [m] of the probe tip: the lumped tip DOFs if the model has a lumped tip
+    (statically they move with the holder end face), else the model's tip attachment."""
+    if res.extra.size >= 3:
+        return np.asarray(res.extra[:3], dtype=float)
+    return res.displacement_at(pm.tip)
+
+
+@dataclass
+class Actuation:
+    """A static actuation result (one drive)."""
+
+    probe: str
+    voltages: dict[str, float]
+    tip: np.ndarray
+    points: dict[str, np.ndarray]
+    charges: dict[str, float]
+    potentials: dict[str, float]
+    dofs: int
+    solver: str
+    timings: dict[str, float]
+    result: PiezoStatic = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"probe": self.probe, "voltages": self.voltages, "tip_displacement_m": self.tip,
+                "displacements_m": self.points, "electrode_charges_C": self.charges,
+                "electrode_potentials_V": self.potentials, "dofs": self.dofs, "solver": self.solver,
+                "timings": self.timings}
+
+
+def resolve_drive(setup: PiezoSetup, layout: str | None, pattern: str | None = None,
+                  electrodes: Sequence[str] = (), volts: float | Sequence[float] = 1.0) -> dict[str, float]:
+    """Electrode voltages from a pattern (scaled by ``volts``) or from electrode names with one
+    voltage each (or one voltage for all)."""
+    lay = setup.layout(layout)
+    v = np.atleast_1d(np.asarray(volts, dtype=float))
+    if not np.all(np.isfinite(v)):
+        raise ParameterError(f"voltages must be finite, got {volts}")
+    if pattern is not None:
+        if electrodes:
+            raise ParameterError("give a drive pattern or electrodes, not both")
+        if v.size != 1:
+            raise ParameterError("a pattern takes one voltage")
+        return {k: float(a * v[0]) for k, a in setup.pattern(layout, pattern).items()}
+    if not electrodes:
+        raise ParameterError("no drive: give a pattern or at least one electrode")
+    if v.size not in (1, len(electrodes)):
+        raise ParameterError(f"{len(electrodes)} electrodes but {v.size} voltages")
+    out = {}
+    for i, e in enumerate(electrodes):
+        if e not in lay:
+            raise GeometryError(f"unknown electrode '{e}' for {setup.probe} (layout electrodes: {', '.join(lay)})")
+        out[e] = float(v[0] if v.size == 1 else v[i])
+    return out
+
+
+def actuate(pm: PiezoModel, setup: PiezoSetup, voltages: Mapping[str, float], points: Sequence[str] = (),
+            solver: str = "indefinite") -> Actuation:
+    """Static response to electrode ``voltages`` (others of the layout grounded)."""
+    res = pm.static(voltages, others="ground", solver=solver)
+    pts = {p: res.displacement_at(p) for p in points}
+    return Actuation(setup.probe, dict(voltages), tip_displacement(pm, res), pts, res.charges, res.potentials,
+                     res.dofs, res.solver, res.timings, res)
+
+
+def blocked_force(pm: PiezoModel, voltages: Mapping[str, float], where: str, solver: str = "indefinite") -> dict[str, Any]:
+    """Blocked force [N] at the face ``where`` (area-averaged): the force that keeps its mean
+    displacement at zero under ``voltages``, ``F = -C^-1 u_free`` with the 3x3 compliance C of
+    the face at held electrode voltages (three unit-force solves) and the free displacement."""
+    free = pm.static(voltages, others="ground", solver=solver).displacement_at(where)
+    C = np.zeros((3, 3))
+    for j in range(3):
+        f = np.zeros(3)
+        f[j] = 1.0
+        C[:, j] = pm.static({}, forces={where: f}, others="ground", solver=solver).displacement_at(where)
+    F = -np.linalg.solve(C, free)
+    return {"where": where, "free_displacement": free, "compliance": C, "blocked_force": F}
+
+
+def actuation_table(pm: PiezoModel, setup: PiezoSetup, layout: str | None = None, points: Sequence[str] = (),
+                    solver: str = "indefinite") -> list[dict[str, Any]]:
+    """Tip displacement per volt for every drive pattern of the layout."""
+    rows = []
+    lay = setup.default_layout if layout is None else layout
+    for pname, pat in setup.patterns[lay].items():
+        a = actuate(pm, setup, pat, points, solver)
+        rows.append({"pattern": pname, "voltages": pat, "tip_m_per_V": a.tip,
+                     **{f"{p}_m_per_V": a.points[p] for p in points}, "dofs": a.dofs,
+                     "solve_s": a.timings.get("solve_s")})
+    return rows
+
+
+# ---------------------------------------------------------------------------------------------
+# eccentricity coupling of the piezotube from the FEM
+# ---------------------------------------------------------------------------------------------
+
+def _tube_gamma_voltages(j: int) -> dict[str, float]:
+    """Electrode voltages of unit input u_j (source frame; GammaMatrix docstring): quarters
+    Q+x = zp, Q-x = zm, Q+y = yp, Q-y = ym."""
+    yp, zp, ym, zm = TUBE_QUARTERS
+    if j == 0:
+        return {zp: -1.0, zm: 1.0}
+    if j == 1:
+        return {yp: -1.0, ym: 1.0}
+    return {yp: 1.0, zp: 1.0, ym: 1.0, zm: 1.0}
+
+
+def gamma_matrix_fem(overrides: Mapping[str, Any] | None = None, where: str = "tube_end",
+                     reference: np.ndarray | None = None, solver: str = "indefinite") -> GammaMatrix:
+    """The voltage -> tube-end displacement map of the piezotube from the coupled FEM
+    (:class:`~probedyn.lumped.actuation.GammaMatrix`, source frame), for the probe parameters
+    ``overrides`` (bore offset ``delta_z`` = source delta_x, ``delta_y`` = source delta_y; the
+    holder does not change a static response to voltages, so ``holder = "point"`` is the
+    default here).  ``reference``: the concentric tube's diagonal (computed with the same mesh
+    settings when omitted).  Three solves sharing one factorisation."""
+    ov = {"holder": "point", "tip": "none", **dict(overrides or {})}
+    probe, values, pm, setup = piezo_model("piezotube", ov, layout="quarters")
+    D = _gamma_columns(pm, where, solver)
+    if reference is None:
+        if values["delta_y"] == 0 and values["delta_z"] == 0:
+            reference = np.diag(D).copy()
+        else:
+            ov0 = {**ov, "delta_y": 0.0, "delta_z": 0.0}
+            _, _, pm0, _ = piezo_model("piezotube", ov0, layout="quarters")
+            reference = np.diag(_gamma_columns(pm0, where, solver)).copy()
+    return GammaMatrix(D, np.asarray(reference, dtype=float),
+                       f"FEM: coupled P2 piezo model, {pm.mechanical_system()[0].shape[0] + pm.n_phi} DOFs, "
+                       f"Re={values['Re']:g} Ri={values['Ri']:g} L={values['length']:g} "
+                       f"delta=({values['delta_z']:g}, {values['delta_y']:g}) m (source x, y), face '{where}'")
+
+
+def _gamma_columns(pm: PiezoModel, where: str, solver: str) -> np.ndarray:
+    res = pm.static_many([_tube_gamma_voltages(j) for j in range(3)], others="ground", solver=solver)
+    D = np.zeros((3, 3))
+    for j, r in enumerate(res):
+        u = r.displacement_at(where)  # probedyn (x axial, y, z)
+        D[:, j] = [u[2], u[1], u[0]]  # source (x = pd z, y = pd y, z = pd x)
+    return D
+
+
+# ---------------------------------------------------------------------------------------------
+# modes: short / open circuit, coupling factors, modal actuation
+# ---------------------------------------------------------------------------------------------
+
+def coupling_table(pm: PiezoModel, n_modes: int = 6, solver: str = "indefinite") -> dict[str, Any]:
+    """Short- and open-circuit modes and ``k_eff^2`` per mode (open-circuit modes matched to the
+    short-circuit ones by the largest modal assurance)."""
+    t0 = time.perf_counter()
+    sc = pm.modes(n_modes, "short", solver=solver)
+    t1 = time.perf_counter()
+    oc = pm.modes(n_modes, "open", solver=solver)
+    t2 = time.perf_counter()
+    _, M, free, n_extra = pm.mechanical_system()
+    A = np.vstack([sc.shapes[free], sc.extra.T]) if n_extra else sc.shapes[free]
+    B = np.vstack([oc.shapes[free], oc.extra.T]) if n_extra else oc.shapes[free]
+    j = match_modes(M, A, B)
+    f_oc = oc.frequencies_hz[j]
+    k2 = coupling_factors(sc.frequencies_hz, f_oc)
+    rows = [{"mode": i + 1, "family": sc.families[i], "f_sc_hz": float(sc.frequencies_hz[i]),
+             "f_oc_hz": float(f_oc[i]), "shift": float(f_oc[i] / sc.frequencies_hz[i] - 1.0),
+             "k_eff2": float(k2[i])} for i in range(len(k2))]
+    return {"rows": rows, "dofs": sc.dofs, "solver": sc.solver, "modal_s_short": t1 - t0, "modal_s_open": t2 - t1,
+            "short": sc, "open": oc}
+
+
+@dataclass
+class ModalActuation:
+    """Modal force per volt of each electrode (for reduced probes).
+
+    ``frequencies_hz`` (k,), ``modal_force`` (k, n_e) [N/V per unit modal coordinate of the
+    mass-normalised modes], ``tip_shapes`` (k, 3) modal displacement at the tip, so the tip
+    displacement per volt of electrode e is ``sum_i tip_shapes[i] modal_force[i, e] / omega_i^2``
+    statically; ``static_tip`` (n_e, 3) the exact static response (coupled solve) and
+    ``truncation`` (n_e,) the relative error of the k-mode sum at the tip."""
+
+    electrodes: list[str]
+    frequencies_hz: np.ndarray
+    modal_force: np.ndarray
+    tip_shapes: np.ndarray
+    static_tip: np.ndarray
+    modal_static_tip: np.ndarray
+    truncation: np.ndarray
+    loads: np.ndarray = field(repr=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"electrodes": self.electrodes, "frequencies_hz": self.frequencies_hz,
+                "modal_force_N_per_V": self.modal_force, "tip_shapes": self.tip_shapes,
+                "static_tip_m_per_V": self.static_tip, "modal_static_tip_m_per_V": self.modal_static_tip,
+                "truncation": self.truncation}
+
+
+def modal_actuation(pm: PiezoModel, n_modes: int = 8, electrodes: Sequence[str] | None = None,
+                    solver: str = "indefinite") -> ModalActuation:
+    """Load vector per volt of each electrode (the others grounded), its projection on the
+    short-circuit modes, and the static check of the modal sum at the tip."""
+    els = list(electrodes) if electrodes is not None else [e for e in pm.electrodes if e != pm.reference]
+    F, free = pm.actuation_loads(els)
+    modes = pm.modes(n_modes, "short", solver=solver)
+    _, _, _, n_extra = pm.mechanical_system()
+    Phi = np.vstack([modes.shapes[free], modes.extra.T]) if n_extra else modes.shapes[free]
+    Q = Phi.T @ F  # (k, n_e)
+    tip = np.asarray(modes.tip_displacement, dtype=float)  # (k, 3)
+    om2 = (2 * np.pi * modes.frequencies_hz) ** 2
+    modal_static = np.einsum("ic,ie,i->ec", tip, Q, 1.0 / om2)
+    stat = np.array([tip_displacement(pm, r) for r in pm.static_many([{e: 1.0} for e in els], others="ground",
+                                                                        solver=solver)])
+    trunc = np.linalg.norm(modal_static - stat, axis=1) / np.maximum(np.linalg.norm(stat, axis=1), 1e-300)
+    return ModalActuation(els, modes.frequencies_hz, Q, tip, stat, modal_static, trunc, F)
+
+
+__all__ = ["PiezoSetup", "piezo_setup", "build_piezo_model", "piezo_model", "Actuation", "actuate", "resolve_drive",
+           "blocked_force", "actuation_table", "gamma_matrix_fem", "coupling_table", "ModalActuation",
+           "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS"]
