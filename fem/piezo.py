@@ -517,7 +517,7 @@ class PiezoModel:
         return A, Kuu, Kur, Krr, alpha
 
     @staticmethod
-    def _refined_solver(A: sp.csr_matrix, fac, tol: float = 1e-10, max_refine: int = 5):
+    def _refined_solver(A: sp.csr_matrix, fac, tol: float = 1e-8, max_refine: int = 5):
         """Solve with residual check and iterative refinement (pivot perturbation of the
         indefinite factorisation can leave a residual above round-off).  Several right-hand
         sides are solved column by column (the factorisation's multi-RHS path expects
@@ -542,7 +542,7 @@ class PiezoModel:
             return np.column_stack([solve1(np.ascontiguousarray(b[:, j])) for j in range(b.shape[1])])
         return solve
 
-    def _schur_solver(self, Kuu: sp.csr_matrix, Kur: sp.csr_matrix, Krr: sp.csr_matrix, tol: float = 1e-10):
+    def _schur_solver(self, Kuu: sp.csr_matrix, Kur: sp.csr_matrix, Krr: sp.csr_matrix, tol: float = 1e-8):
         """``S^-1 b`` for ``S = Kuu + Kur Krr^-1 Kur^T`` by PCG with the factorised Kuu."""
         fu = factorize(Kuu, spd=True)
         fr = _columnwise(factorize(Krr, spd=True))

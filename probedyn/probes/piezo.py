@@ -51,6 +51,7 @@ import numpy as np
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError
 from probedyn.fem.materials import radial_poling
 from probedyn.fem.piezo import PiezoModel, PiezoStatic, coupling_factors, match_modes
+from probedyn.fem.piezo_materials import get_piezo_material
 from probedyn.lumped.actuation import GammaMatrix
 from probedyn.probes import get_probe
 
@@ -142,8 +143,6 @@ def build_piezo_model(probe, values: dict[str, Any], layout: str | None = None, 
     piezoelectric constants (e.g. ``pzt-5h-iso``) raises a one-line MaterialError."""
     setup = piezo_setup(probe.name, poling)
     mat_name = piezo_material or values.get("material", "pzt-5h")
-    from probedyn.fem.piezo_materials import get_piezo_material
-
     mat = get_piezo_material(mat_name)
     mech = probe.build(values)
     regions = {}
@@ -378,6 +377,57 @@ def modal_actuation(pm: PiezoModel, n_modes: int = 8, electrodes: Sequence[str] 
     return ModalActuation(els, modes.frequencies_hz, Q, tip, stat, modal_static, trunc, F)
 
 
+
+
+# ---------------------------------------------------------------------------------------------
+# range studies (source Figs 3.17, 3.18) and the eccentricity study (Fig 3.20)
+# ---------------------------------------------------------------------------------------------
+
+#: parameters the range studies vary, per probe (probe parameter names)
+RANGE_PARAMETERS = {"duo-bimorph": ("electrode_gap", "thickness"), "piezotube": ("length", "Re")}
+
+
+def range_point(name: str, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """FEM deflection per volt of the bare actuator (holder as a point, no tip) for every drive
+    pattern of the default layout, at the actuator's end face (duo-bimorph: x = L; piezotube:
+    the tube end), in probedyn axes [m/V]; with the DOFs and the solve time."""
+    ov = {"holder": "point", **dict(overrides or {})}
+    ov.setdefault("tip", "none")
+    probe, values, pm, setup = piezo_model(name, ov)
+    where = "holder_end" if name == "duo-bimorph" else "tube_end"
+    pats = setup.patterns[setup.default_layout]
+    t0 = time.perf_counter()
+    res = pm.static_many(list(pats.values()), others="ground")
+    out = {p: r.displacement_at(where) for p, r in zip(pats, res)}
+    return {"values": {k: values[k] for k in RANGE_PARAMETERS[name]}, "per_volt": out, "dofs": res[0].dofs,
+            "solve_s": time.perf_counter() - t0, "where": where}
+
+
+def gamma_study(deltas: Sequence[float], overrides: Mapping[str, Any] | None = None,
+                angle_deg: float = 45.0) -> list[dict[str, Any]]:
+    """Gamma from the FEM and from the corrected formula for bore offsets of magnitude
+    ``delta`` along ``angle_deg`` from the source's x axis (45 degrees: delta_x = delta_y, as in
+    section 3.5.4).  The FEM's concentric reference is computed once with the same mesh."""
+    from probedyn.lumped.actuation import gamma_matrix
+
+    ov = dict(overrides or {})
+    probe, _ = get_probe("piezotube")
+    values = probe.resolve({"holder": "point", "tip": "none", **ov})
+    G0 = gamma_matrix_fem({**ov, "delta_y": 0.0, "delta_z": 0.0})
+    ref = np.diag(G0.displacement).copy()
+    d31 = float(get_piezo_material(values["material"]).d[2, 0])
+    rows = []
+    for d in deltas:
+        dx, dy = d * math.cos(math.radians(angle_deg)), d * math.sin(math.radians(angle_deg))
+        t0 = time.perf_counter()
+        G = G0 if d == 0 else gamma_matrix_fem({**ov, "delta_z": dx, "delta_y": dy}, reference=ref)
+        t_fem = time.perf_counter() - t0
+        F = gamma_matrix(values["Re"], values["Ri"], values["length"], dx, dy, d31=d31, material=values["material"])
+        rows.append({"delta": d, "delta_x": dx, "delta_y": dy, "fem": G, "formula": F, "fem_s": t_fem})
+    return rows
+
+
 __all__ = ["PiezoSetup", "piezo_setup", "build_piezo_model", "piezo_model", "Actuation", "actuate", "resolve_drive",
            "blocked_force", "actuation_table", "gamma_matrix_fem", "coupling_table", "ModalActuation",
-           "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS"]
+           "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS",
+           "RANGE_PARAMETERS", "range_point", "gamma_study"]
