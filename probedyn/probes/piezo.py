@@ -233,17 +233,22 @@ def actuate(pm: PiezoModel, setup: PiezoSetup, voltages: Mapping[str, float], po
 
 
 def blocked_force(pm: PiezoModel, voltages: Mapping[str, float], where: str, solver: str = "indefinite") -> dict[str, Any]:
-    """Blocked force [N] at the face ``where`` (area-averaged): the force that keeps its mean
-    displacement at zero under ``voltages``, ``F = -C^-1 u_free`` with the 3x3 compliance C of
-    the face at held electrode voltages (three unit-force solves) and the free displacement."""
-    free = pm.static(voltages, others="ground", solver=solver).displacement_at(where)
-    C = np.zeros((3, 3))
-    for j in range(3):
-        f = np.zeros(3)
-        f[j] = 1.0
-        C[:, j] = pm.static({}, forces={where: f}, others="ground", solver=solver).displacement_at(where)
-    F = -np.linalg.solve(C, free)
-    return {"where": where, "free_displacement": free, "compliance": C, "blocked_force": F}
+    """Blocked force [N] at the face ``where`` (area-averaged attachment) under ``voltages``.
+
+    With the 3x3 compliance C of the face at held electrode voltages (three unit-force solves,
+    one factorisation with the drive) and the free displacement u: ``blocked_force`` =
+    ``-C^-1 u`` (all three components of the face held) and ``blocked_force_axis`` [d] =
+    ``-u[d] / C[d, d]`` (only component d held, the others free; d = the largest component of u)."""
+    cases = [dict(voltages)] + [{k: 0.0 for k in voltages}] * 3
+    forces = [{}] + [{where: tuple(np.eye(3)[j])} for j in range(3)]
+    res = pm.static_many(cases, forces, others="ground", solver=solver)
+    free = res[0].displacement_at(where)
+    C = np.column_stack([r.displacement_at(where) for r in res[1:]])
+    d = int(np.argmax(np.abs(free)))
+    axis = np.zeros(3)
+    axis[d] = -free[d] / C[d, d]
+    return {"where": where, "free_displacement": free, "compliance": C, "blocked_force": -np.linalg.solve(C, free),
+            "blocked_force_axis": axis, "axis": "xyz"[d]}
 
 
 def actuation_table(pm: PiezoModel, setup: PiezoSetup, layout: str | None = None, points: Sequence[str] = (),
@@ -404,10 +409,11 @@ def range_point(name: str, overrides: Mapping[str, Any] | None = None) -> dict[s
 
 
 def gamma_study(deltas: Sequence[float], overrides: Mapping[str, Any] | None = None,
-                angle_deg: float = 45.0) -> list[dict[str, Any]]:
-    """Gamma from the FEM and from the corrected formula for bore offsets of magnitude
-    ``delta`` along ``angle_deg`` from the source's x axis (45 degrees: delta_x = delta_y, as in
-    section 3.5.4).  The FEM's concentric reference is computed once with the same mesh."""
+                direction: Sequence[float] = (1.0, 1.0)) -> list[dict[str, Any]]:
+    """Gamma from the FEM and from the corrected formula for bore offsets
+    ``(delta_x, delta_y) = d * direction`` (source frame) for every ``d`` in ``deltas``; the
+    default ``direction = (1, 1)`` is section 3.5.4's ``delta_x = delta_y``.  The FEM's concentric
+    reference is computed once with the same mesh settings."""
     from probedyn.lumped.actuation import gamma_matrix
 
     ov = dict(overrides or {})
@@ -416,9 +422,10 @@ def gamma_study(deltas: Sequence[float], overrides: Mapping[str, Any] | None = N
     G0 = gamma_matrix_fem({**ov, "delta_y": 0.0, "delta_z": 0.0})
     ref = np.diag(G0.displacement).copy()
     d31 = float(get_piezo_material(values["material"]).d[2, 0])
+    ux, uy = (float(c) for c in direction)
     rows = []
     for d in deltas:
-        dx, dy = d * math.cos(math.radians(angle_deg)), d * math.sin(math.radians(angle_deg))
+        dx, dy = d * ux, d * uy
         t0 = time.perf_counter()
         G = G0 if d == 0 else gamma_matrix_fem({**ov, "delta_z": dx, "delta_y": dy}, reference=ref)
         t_fem = time.perf_counter() - t0
