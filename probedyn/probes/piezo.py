@@ -384,6 +384,31 @@ def modal_actuation(pm: PiezoModel, n_modes: int = 8, electrodes: Sequence[str] 
 
 
 
+def static_per_volt(pm: PiezoModel, electrodes: Sequence[str], solver: str = "indefinite") -> np.ndarray:
+    """Static displacement per volt of each electrode (the others of the layout grounded) on the
+    mechanical unknowns (free DOFs + lumped-tip DOFs): (n_mech, n_e), one factorisation."""
+    K, M, free, n_extra = pm.mechanical_system()
+    res = pm.static_many([{e: 1.0} for e in electrodes], others="ground", solver=solver)
+    return np.column_stack([np.concatenate([r.u[free], r.extra]) for r in res])
+
+
+def project_actuation(pm: PiezoModel, Phi: np.ndarray, omega: np.ndarray, electrodes: Sequence[str],
+                      solver: str = "indefinite") -> np.ndarray:
+    """Modal force per volt [N/V] of each electrode on given mass-normalised modes ``Phi``
+    (n_mech, k) with circular frequencies ``omega`` (k,), e.g. the elastic modes of a reduced
+    probe: ``f_i,e = omega_i^2 phi_i^T M u_e`` with ``u_e`` the coupled static displacement per
+    volt.  Then ``sum_i phi_i f_i,e / omega_i^2`` over all modes is exactly ``u_e`` (the modal
+    expansion of the true static response), whatever stiffness the modes were computed with
+    (the elastic c^E stiffness of a mechanical model lacks the induced-potential stiffening of
+    the coupled one, ~1 %); truncated, the usual static correction applies."""
+    K, M, free, n_extra = pm.mechanical_system()
+    Phi = np.asarray(Phi, dtype=float)
+    if Phi.shape[0] != K.shape[0]:
+        raise ParameterError(f"modes have {Phi.shape[0]} rows, the model has {K.shape[0]} mechanical unknowns")
+    U = static_per_volt(pm, electrodes, solver)
+    return (np.asarray(omega, dtype=float) ** 2)[:, None] * (Phi.T @ (M @ U))
+
+
 # ---------------------------------------------------------------------------------------------
 # range studies (source Figs 3.17, 3.18) and the eccentricity study (Fig 3.20)
 # ---------------------------------------------------------------------------------------------
@@ -437,4 +462,4 @@ def gamma_study(deltas: Sequence[float], overrides: Mapping[str, Any] | None = N
 __all__ = ["PiezoSetup", "piezo_setup", "build_piezo_model", "piezo_model", "Actuation", "actuate", "resolve_drive",
            "blocked_force", "actuation_table", "gamma_matrix_fem", "coupling_table", "ModalActuation",
            "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS",
-           "RANGE_PARAMETERS", "range_point", "gamma_study"]
+           "RANGE_PARAMETERS", "range_point", "gamma_study", "static_per_volt", "project_actuation"]
