@@ -17,13 +17,12 @@ import numpy as np
 import pytest
 
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError
-from probedyn.fem.materials import Material, rotate_voigt, voigt_to_tensor
+from probedyn.fem.materials import Material, rotate_voigt
 from probedyn.fem.model import ElasticModel
 from probedyn.fem.piezo import PiezoModel, coupling_factors
 from probedyn.fem.piezo_benchmarks import (bar_31, bimorph_cantilever, bimorph_drive, box_bundle, free_block,
                                           rod_33)
-from probedyn.fem.piezo_materials import (EPS0, PUBLISHED_E_FORM, PiezoMaterial, get_piezo_material,
-                                         poling_rotation)
+from probedyn.fem.piezo_materials import EPS0, PUBLISHED_E_FORM, get_piezo_material, poling_rotation
 from probedyn.lumped import actuation as act
 
 

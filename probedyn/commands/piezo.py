@@ -31,10 +31,14 @@ def actuate_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT,
                 out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Static displacement for electrode voltages: tip displacement, charges, VTU and picture."""
     from probedyn.core.params import parse_sets
-    from probedyn.probes.piezo import actuate, piezo_model, resolve_drive
+    from probedyn.probes import get_probe
+    from probedyn.probes.piezo import actuate, build_piezo_model, piezo_setup, resolve_drive
 
-    p, values, pm, setup = piezo_model(probe, parse_sets(set_), layout=layout, poling=poling)
-    drive = resolve_drive(setup, layout, pattern, electrode or [], volts if volts else 1.0)
+    p, toml_over = get_probe(probe)
+    values = p.resolve({**toml_over, **parse_sets(set_)})
+    setup = piezo_setup(p.name, poling)
+    drive = resolve_drive(setup, layout, pattern, electrode or [], volts if volts else 1.0)  # before any FEM work
+    pm, setup = build_piezo_model(p, values, layout, poling)
     points = ["holder_end", "tube_end"] if p.name == "piezotube" else ["holder_end", "free_end_centre"]
     a = actuate(pm, setup, drive, points=[q for q in points if _has(pm, q)])
     res = {**a.to_dict(), "pattern": pattern, "layout": layout or setup.default_layout, "parameters": values,

@@ -41,14 +41,13 @@ probedyn y, source z = the tube axis = probedyn x):
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from probedyn.core.errors import GeometryError, MaterialError, ParameterError
+from probedyn.core.errors import GeometryError, ParameterError
 from probedyn.fem.materials import radial_poling
 from probedyn.fem.piezo import PiezoModel, PiezoStatic, coupling_factors, match_modes
 from probedyn.fem.piezo_materials import get_piezo_material
