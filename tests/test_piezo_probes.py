@@ -136,3 +136,22 @@ def test_projected_actuation_expands_the_static_response():
     f = P.project_actuation(pm, Phi, np.sqrt(lam), ["electrode_middle"])
     u = P.static_per_volt(pm, ["electrode_middle"])[:, 0]
     assert np.allclose(Phi @ (f[:, 0] / lam), u, atol=1e-9 * np.abs(u).max())
+
+
+def test_fill_reduced_actuation_from_a_ritz_basis(tube):
+    """The modal forces per volt on the Ritz basis (modes + static shapes) of the elastic model:
+    the static tip response per volt is recovered by the reduced model within the basis'
+    truncation (the static shapes sit at the tip face, the load is distributed)."""
+    from types import SimpleNamespace
+
+    from probedyn.lumped.ritz import RitzBasis
+
+    probe, values, pm, setup = tube
+    rb = RitzBasis.from_model(pm.mech, 6, attachments=[("tube_end", "xyz")])
+    rp = SimpleNamespace(ritz=rb, modes=list(range(rb.r)), actuation={})
+    act_ = P.fill_reduced_actuation(rp, pm, ["electrode_zp"])
+    f = np.asarray(act_["electrode_zp"])
+    assert f.shape == (rb.r,)
+    u_red = rb.operator("tube_end") @ (f / rb.omega**2)
+    u_fem = pm.static({"electrode_zp": 1.0}).displacement_at("tube_end")
+    assert np.allclose(u_red, u_fem, rtol=0.02, atol=1e-3 * np.abs(u_fem).max())

@@ -408,6 +408,34 @@ def project_actuation(pm: PiezoModel, Phi: np.ndarray, omega: np.ndarray, electr
     return (np.asarray(omega, dtype=float) ** 2)[:, None] * (Phi.T @ (M @ U))
 
 
+def fill_reduced_actuation(reduced, pm: PiezoModel, electrodes: Sequence[str] | None = None,
+                           solver: str = "indefinite") -> dict[str, list[float]]:
+    """Fill ``reduced.actuation`` = {electrode: [modal force per volt of each retained mode]}
+    [N/V] of a reduced probe (issue 10's ``ReducedProbe``; duck-typed: ``reduced.ritz`` a
+    :class:`~probedyn.lumped.ritz.RitzBasis` of the same mechanical model, whose first
+    ``len(reduced.modes)`` columns are the mass-normalised retained modes) from the coupled model
+    ``pm`` (:func:`project_actuation`).  A scheme then drives mode i with ``sum_e f_i,e V_e``.
+    ``electrodes``: default every electrode of the layout but the grounded reference."""
+    rb = reduced.ritz
+    if rb is None:
+        raise ParameterError("this reduced probe has no Ritz basis (a table preset has no electrodes)")
+    n = len(reduced.modes)
+    K, M, free, n_extra = pm.mechanical_system()
+    if rb.T is None:
+        raise ParameterError("this reduced probe was loaded without its Ritz basis vectors (T)")
+    T = np.asarray(rb.T, dtype=float)
+    ntot = pm.mech.ndofs_total
+    if T.shape[0] == ntot + n_extra:  # full FEM coordinates (RitzBasis.T): keep the unknowns
+        T = np.vstack([T[free], T[ntot:]])
+    if T.shape[0] != K.shape[0]:
+        raise ParameterError(f"reduced probe basis has {T.shape[0]} rows, the piezo model {K.shape[0]} mechanical "
+                             f"unknowns: build both from the same probe parameters")
+    els = list(electrodes) if electrodes is not None else [e for e in pm.electrodes if e != pm.reference]
+    f = project_actuation(pm, T[:, :n], np.asarray(rb.omega[:n], dtype=float), els, solver)
+    reduced.actuation = {e: [float(v) for v in f[:, j]] for j, e in enumerate(els)}
+    return reduced.actuation
+
+
 # ---------------------------------------------------------------------------------------------
 # range studies (source Figs 3.17, 3.18) and the eccentricity study (Fig 3.20)
 # ---------------------------------------------------------------------------------------------
@@ -461,4 +489,5 @@ def gamma_study(deltas: Sequence[float], overrides: Mapping[str, Any] | None = N
 __all__ = ["PiezoSetup", "piezo_setup", "build_piezo_model", "piezo_model", "Actuation", "actuate", "resolve_drive",
            "blocked_force", "actuation_table", "gamma_matrix_fem", "coupling_table", "ModalActuation",
            "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS",
-           "RANGE_PARAMETERS", "range_point", "gamma_study", "static_per_volt", "project_actuation"]
+           "RANGE_PARAMETERS", "range_point", "gamma_study", "static_per_volt", "project_actuation",
+           "fill_reduced_actuation"]
