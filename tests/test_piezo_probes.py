@@ -154,4 +154,7 @@ def test_fill_reduced_actuation_from_a_ritz_basis(tube):
     assert f.shape == (rb.r,)
     u_red = rb.operator("tube_end") @ (f / rb.omega**2)
     u_fem = pm.static({"electrode_zp": 1.0}).displacement_at("tube_end")
-    assert np.allclose(u_red, u_fem, rtol=0.02, atol=1e-3 * np.abs(u_fem).max())
+    # truncation bound: the discarded modes' share of a static response is at most of the order
+    # (omega_1 / omega_n)^2 of the first retained to the last retained mode (measured: 1e-4)
+    bound = (rb.omega[0] / rb.omega[rb.n_modes - 1]) ** 2
+    assert np.abs(u_red - u_fem).max() < bound * np.abs(u_fem).max()
