@@ -31,31 +31,19 @@ def actuate_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT,
                 out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Static displacement for electrode voltages: tip displacement, charges, VTU and picture."""
     from probedyn.core.params import parse_sets
-    from probedyn.probes import get_probe
-    from probedyn.probes.piezo import actuate, build_piezo_model, piezo_setup, resolve_drive
+    from probedyn.probes.piezo import run_actuation
 
-    p, toml_over = get_probe(probe)
-    values = p.resolve({**toml_over, **parse_sets(set_)})
-    setup = piezo_setup(p.name, poling)
-    drive = resolve_drive(setup, layout, pattern, electrode or [], volts if volts else 1.0)  # before any FEM work
-    pm, setup = build_piezo_model(p, values, layout, poling)
-    points = ["holder_end", "tube_end"] if p.name == "piezotube" else ["holder_end", "free_end_centre"]
-    a = actuate(pm, setup, drive, points=[q for q in points if _has(pm, q)])
-    res = {**a.to_dict(), "pattern": pattern, "layout": layout or setup.default_layout, "parameters": values,
+    a, values = run_actuation(probe, parse_sets(set_), pattern, electrode or [], volts if volts else 1.0, layout, poling)
+    res = {**a.to_dict(), "pattern": pattern, "layout": layout or "default", "parameters": values,
            "axes": "probedyn axes: x along the probe, y lateral, z up" + (
-               "; source frame x = probedyn z, y = y, z = probedyn x (tube axis)" if p.name == "piezotube" else "")}
+               "; source frame x = probedyn z, y = y, z = probedyn x (tube axis)" if a.probe == "piezotube" else "")}
     if out is not None:
         files = [str(a.result.write_vtu(Path(out) / "actuate.vtu"))]
         if picture:
-            files.append(str(_picture(a, p.name, pattern, volts[0] if volts else 1.0, Path(out) / "actuate.png")))
+            files.append(str(_picture(a, a.probe, pattern, volts[0] if volts else 1.0, Path(out) / "actuate.png")))
         res["files"] = files
         save(out, "actuate.json", res)
     emit(res, as_json, _actuate_text)
-
-
-def _has(pm, where: str) -> bool:
-    mech = pm.mech
-    return where in (mech.mesh.boundaries or {}) or where in mech.bundle.points
 
 
 def _actuate_text(r: dict[str, Any]) -> str:
@@ -94,30 +82,18 @@ def _picture(a, probe: str, pattern: Optional[str], volts: float, path: Path) ->
 def modes_with_electrodes(probe: str, set_: Optional[List[str]], n_modes: int, electrodes: str,
                           out: Optional[Path], as_json: bool) -> None:
     """``probedyn modes PROBE --electrodes short|open|both`` (called from commands/modal.py)."""
-    from probedyn.core.errors import ParameterError
     from probedyn.core.params import parse_sets
-    from probedyn.probes.piezo import coupling_table, piezo_model
+    from probedyn.probes.piezo import electrode_modes
 
-    if electrodes not in ("short", "open", "both"):
-        raise ParameterError(f"--electrodes must be short, open or both, got {electrodes!r}")
-    p, values, pm, setup = piezo_model(probe, parse_sets(set_))
+    res = electrode_modes(probe, parse_sets(set_), n_modes, electrodes)
+    save(out, "modes_electrodes.json", res)
     if electrodes == "both":
-        t = coupling_table(pm, n_modes)
-        res = {"probe": p.name, "electrodes": "both", "dofs": t["dofs"], "solver": t["solver"], "rows": t["rows"],
-               "reference_electrode": pm.reference, "parameters": values}
-        save(out, "modes_electrodes.json", res)
         cols = [("mode", "mode", ""), ("family", "family", ""), ("f_sc_hz", "f short [Hz]", ".7g"),
                 ("f_oc_hz", "f open [Hz]", ".7g"), ("shift_pct", "shift [%]", ".4f"), ("k_eff2", "k_eff^2", ".5f")]
         emit(res, as_json, lambda r: f"{r['probe']}: {r['dofs']} DOFs, open = electrodes floating, "
              f"{r['reference_electrode']} grounded\n" + format_table(
                  [{**x, "shift_pct": 100 * x["shift"]} for x in r["rows"]], cols))
         return
-    m = pm.modes(n_modes, electrodes)
-    rows = [{"mode": i + 1, "frequency_hz": float(f), "family": fam}
-            for i, (f, fam) in enumerate(zip(m.frequencies_hz, m.families))]
-    res = {"probe": p.name, "electrodes": electrodes, "dofs": m.dofs, "solver": m.solver, "modes": rows,
-           "timings": m.timings, "parameters": values}
-    save(out, "modes_electrodes.json", res)
     cols = [("mode", "mode", ""), ("frequency_hz", "f [Hz]", ".7g"), ("family", "family", "")]
     emit(res, as_json, lambda r: f"{r['probe']} (electrodes {r['electrodes']}): {r['dofs']} DOFs\n"
          + format_table(r["modes"], cols))

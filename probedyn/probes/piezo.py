@@ -231,6 +231,23 @@ def actuate(pm: PiezoModel, setup: PiezoSetup, voltages: Mapping[str, float], po
                      res.dofs, res.solver, res.timings, res)
 
 
+def run_actuation(name_or_toml: str, overrides: Mapping[str, Any] | None = None, pattern: str | None = None,
+                  electrodes: Sequence[str] = (), volts: float | Sequence[float] = 1.0, layout: str | None = None,
+                  poling: str | None = None, solver: str = "indefinite") -> tuple[Actuation, dict[str, Any]]:
+    """One actuation from a probe name/TOML, overrides and a drive (pattern or electrodes with
+    voltages; the drive is validated before any FEM work).  Returns the :class:`Actuation`
+    (displacements also at the holder end and the actuator end) and the resolved parameters."""
+    probe, toml_over = get_probe(name_or_toml)
+    values = probe.resolve({**toml_over, **dict(overrides or {})})
+    setup = piezo_setup(probe.name, poling)
+    drive = resolve_drive(setup, layout, pattern, electrodes, volts)
+    pm, setup = build_piezo_model(probe, values, layout, poling)
+    mech = pm.mech
+    known = set(mech.mesh.boundaries or {}) | set(mech.bundle.points)
+    pts = [q for q in ("holder_end", "tube_end" if probe.name == "piezotube" else "free_end_centre") if q in known]
+    return actuate(pm, setup, drive, pts, solver), values
+
+
 def blocked_force(pm: PiezoModel, voltages: Mapping[str, float], where: str, solver: str = "indefinite") -> dict[str, Any]:
     """Blocked force [N] at the face ``where`` (area-averaged attachment) under ``voltages``.
 
@@ -334,6 +351,24 @@ def coupling_table(pm: PiezoModel, n_modes: int = 6, solver: str = "indefinite")
              "k_eff2": float(k2[i])} for i in range(len(k2))]
     return {"rows": rows, "dofs": sc.dofs, "solver": sc.solver, "modal_s_short": t1 - t0, "modal_s_open": t2 - t1,
             "short": sc, "open": oc}
+
+
+def electrode_modes(name_or_toml: str, overrides: Mapping[str, Any] | None = None, n_modes: int = 6,
+                    electrodes: str = "both", solver: str = "indefinite") -> dict[str, Any]:
+    """Coupled modes of a probe with its electrodes ``short``, ``open`` or ``both`` (then with
+    the shifts and k_eff^2 per mode, :func:`coupling_table`); a JSON-ready dict."""
+    if electrodes not in ("short", "open", "both"):
+        raise ParameterError(f"--electrodes must be short, open or both, got {electrodes!r}")
+    probe, values, pm, setup = piezo_model(name_or_toml, overrides)
+    if electrodes == "both":
+        t = coupling_table(pm, n_modes, solver)
+        return {"probe": probe.name, "electrodes": "both", "dofs": t["dofs"], "solver": t["solver"],
+                "rows": t["rows"], "reference_electrode": pm.reference, "parameters": values}
+    m = pm.modes(n_modes, electrodes, solver=solver)
+    rows = [{"mode": i + 1, "frequency_hz": float(f), "family": fam}
+            for i, (f, fam) in enumerate(zip(m.frequencies_hz, m.families))]
+    return {"probe": probe.name, "electrodes": electrodes, "dofs": m.dofs, "solver": m.solver, "modes": rows,
+            "timings": m.timings, "reference_electrode": pm.reference, "parameters": values}
 
 
 @dataclass
@@ -490,4 +525,5 @@ __all__ = ["PiezoSetup", "piezo_setup", "build_piezo_model", "piezo_model", "Act
            "blocked_force", "actuation_table", "gamma_matrix_fem", "coupling_table", "ModalActuation",
            "modal_actuation", "tip_displacement", "TUBE_QUARTERS", "TUBE_SECTORS", "DUO_OUTER", "POLINGS",
            "RANGE_PARAMETERS", "range_point", "gamma_study", "static_per_volt", "project_actuation",
-           "fill_reduced_actuation"]
+           "fill_reduced_actuation", "run_actuation",
+           "electrode_modes"]
