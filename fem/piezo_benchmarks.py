@@ -209,14 +209,21 @@ def _rot_to_x() -> np.ndarray:
 TUBE_LAYOUT = ("electrode_yp", "electrode_zp", "electrode_ym", "electrode_zm", "electrode_inner")
 
 
-def tube_cantilever(Re: float = 0.5e-3, Ri: float = 0.45e-3, length: float = 5e-3, n_wall: int = 1,
+def tube_cantilever(Re: float | None = None, Ri: float | None = None, length: float | None = None, n_wall: int = 1,
                     element_size: float | None = None, delta_y: float = 0.0, delta_z: float = 0.0,
                     clamp: str = "full", material: str | PiezoMaterial = "pzt-5h") -> PiezoModel:
     """The bare piezotube (no holder) of :mod:`probedyn.meshes.piezotube`, radially poled, with the
     quartered layout (inner electrode = reference), clamped at x = 0 (``clamp = "full"``: all
     DOFs of the end face; ``"sliding"``: u_x on the face, the face free to deform in its plane
     (u_z on the y = 0 line, u_y at two points of the z = 0 line blocking the rigid in-plane
-    motion: see :func:`sliding_clamp_dofs`)).  Tip = the area-averaged tube end ``tube_end``."""
+    motion: see :func:`sliding_clamp_dofs`)).  Tip = the area-averaged tube end ``tube_end``.
+    ``Re``, ``Ri``, ``length`` default to the piezotube preset (Table 3.2 as corrected)."""
+    from probedyn.core.presets import preset
+
+    t32 = preset("table-3.2")
+    Re = t32["R_e"] if Re is None else Re
+    Ri = t32["R_i"] if Ri is None else Ri
+    length = t32["L"] if length is None else length
     from probedyn.fem.materials import radial_poling
     from probedyn.meshes.cache import MeshOptions
     from probedyn.meshes.piezotube import piezotube_mesh

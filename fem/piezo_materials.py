@@ -56,7 +56,7 @@ from typing import Callable, Sequence, Union
 import numpy as np
 
 from probedyn.core.errors import MaterialError
-from probedyn.fem.materials import Material, bond_matrix
+from probedyn.fem.materials import PZT5H_SE, Material, bond_matrix
 
 EPS0 = 8.8541878128e-12  # vacuum permittivity [F/m]
 
@@ -184,7 +184,7 @@ def six_mm_tensors(s11: float, s12: float, s13: float, s33: float, s44: float, d
 
 #: d-form data [SI] (module docstring; Berlincourt et al. 1964).
 D_FORM: dict[str, dict[str, float]] = {
-    "pzt-5h": dict(s11=16.5e-12, s12=-4.78e-12, s13=-8.45e-12, s33=20.7e-12, s44=43.5e-12,
+    "pzt-5h": dict(**PZT5H_SE,  # the same s^E as the elastic material fem/materials.py 'pzt-5h'
                    d31=-274e-12, d33=593e-12, d15=741e-12, eps11T=3130 * EPS0, eps33T=3400 * EPS0,
                    rho=7500.0),
     "pzt-4": dict(s11=12.3e-12, s12=-4.05e-12, s13=-5.31e-12, s33=15.5e-12, s44=39.0e-12,

@@ -21,6 +21,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from probedyn.core.presets import preset
 from probedyn.fem.piezo_benchmarks import bimorph_cantilever, bimorph_drive
 from probedyn.fem.piezo_materials import get_piezo_material
 from probedyn.lumped import actuation as act
@@ -153,8 +154,13 @@ def tube_range_figure(path: Path, quick: bool) -> tuple[Path, list[dict[str, Any
     return savefig(fig, path), pts
 
 
+def _tube_preset() -> tuple[float, float, float]:
+    t = preset("table-3.2")
+    return t["R_e"], t["R_i"], t["L"]
+
+
 def gamma_figure(path: Path, quick: bool) -> tuple[Path, list[dict[str, Any]]]:
-    Re, Ri, L = 0.5e-3, 0.45e-3, 5e-3
+    Re, Ri, L = _tube_preset()
     ds = np.linspace(0.0, 5e-6, 41)
     lam = [act.gamma_matrix(Re, Ri, L, d, d).lambda_min() for d in ds]
     sym = [act.gamma_matrix(Re, Ri, L, d, d).symmetric_part_min() for d in ds]
@@ -221,7 +227,8 @@ def section(outdir: Path, quick: bool) -> str:
                            ("fem_ax", "FEM axial", ".4g"), ("eq_3_35", "3.35", ".4g")]), ""]
     # gamma
     p, rows = gamma_figure(outdir / "piezo-gamma.png", quick)
-    F = act.gamma_matrix(0.5e-3, 0.45e-3, 5e-3, 5e-6, 5e-6)
+    Re, Ri, L = _tube_preset()
+    F = act.gamma_matrix(Re, Ri, L, 5e-6, 5e-6)
     parts += ["### Eccentricity coupling Γ (3.38–3.44, Fig 3.20)", "", f"![Gamma]({p.name})", "",
               "Γ maps the inputs (u_x, u_y, u_z) to the tube-end displacement; normalised by the concentric tube's "
               "diagonal (identity without eccentricity). The printed 3.39–3.44 cannot be evaluated as printed "
