@@ -3,7 +3,7 @@
 Tolerances come from the physics and the measured discretisation order (docs/piezo.md):
 * linearity, symmetry and reciprocity of the coupled model: round-off;
 * piezotube, 12 straight-sided elements around the circumference: the O((2 pi / N)^2) error
-  is +4 % (lateral) and +2 % (axial) at N = 12 (measured order 2 from N = 24, 36, 48), so 6 %;
+  is +3 to +5 % (lateral) and +2 % (axial) at N = 12 (measured order 2 from N = 24, 36, 48), so 6 %;
 * duo-bimorph vertical range with a narrow gap: between the induced-potential factors of a
   plate (kp) and of a narrow beam (k31), the two limits of the layer's stress state.
 """
