@@ -326,6 +326,9 @@ class PiezoModel:
                  reference: str | None = None, tip: Any = None, fixed_dofs: Sequence[int] = ()) -> None:
         self.mech = mech
         self.mesh = mech.mesh
+        if self.mesh.t.shape[0] != 4:
+            raise SolverError(f"the piezoelectric FEM assembles P2 tetrahedra; this mesh has {self.mesh.t.shape[0]}-node "
+                              f"elements (build the probe with a tetrahedral mesh)")
         subs = self.mesh.subdomains or {}
         bnd = self.mesh.boundaries or {}
         if not piezo_regions:
