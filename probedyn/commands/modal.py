@@ -39,8 +39,13 @@ def _modes_text(res: dict[str, Any]) -> str:
 
 @app.command("modes")
 def modes_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_modes: int = NMODES_OPT,
+              electrodes: Optional[str] = typer.Option(None, "--electrodes", help="Smart probes: coupled piezo modes with the electrodes short, open, or both (k_eff^2)."),
               out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Lowest modes of a probe (3D FEM, P2 tetrahedra): frequency, family, effective masses."""
+    if electrodes is not None:
+        from probedyn.commands.piezo import modes_with_electrodes
+
+        return modes_with_electrodes(probe, set_, n_modes, electrodes, out, as_json)
     p, values, result = solve(probe, set_, n_modes)
     res = {"probe": p.name, "parameters": values, **result.to_dict()}
     if out is not None:
