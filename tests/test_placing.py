@@ -368,3 +368,14 @@ def test_cli_release_json_and_bad_input(capsys):
     assert main(["place", "release", "table-4.4", "--mass-source", "table", "--omega", "-5"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "omega must be positive" in err[0]
+
+
+def test_cli_release_writes_json_and_figure(tmp_path, capsys):
+    from probedyn.cli import main
+
+    out = tmp_path / "rel"
+    assert main(["place", "release", "table-4.4", "--mass-source", "table", "--omega", "1e8", "--amplitude", "5e-7",
+                 "--out", str(out)]) in (0, None)
+    assert "released" in capsys.readouterr().out
+    assert json.loads((out / "place_release.json").read_text())["outcome"] == "released"
+    assert (out / "place_release.png").stat().st_size > 10_000

@@ -89,3 +89,14 @@ def test_slow_approach_converges_to_the_fold():
     d = [ap.simulate_approach(v)["delay_m"] for v in (1e-6, 1e-7)]
     expo = math.log(d[0] / d[1]) / math.log(10.0)
     assert 0.6 < expo < 0.8  # closer to the fold-passage 2/3 at the lower speed
+
+
+def test_report_section_quick(tmp_path):
+    from probedyn.report.placing import section
+
+    md = section(tmp_path, quick=True)
+    for key in ("Approach (4.13-4.21)", "Capture (4.22-4.41)", "Release (4.42)", "Flight and landing",
+                "Several samples", "Table 4.4's mass"):
+        assert key in md
+    for name in ("approach", "capture", "release", "landing", "multi"):
+        assert (tmp_path / f"placing_{name}.png").stat().st_size > 20_000

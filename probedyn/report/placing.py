@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.plotting import axis_label, fmt_hz, pyplot, savefig
+from probedyn.report._tables import markdown_table
 from probedyn.schemes.placing.probe import TABLE
 
 OUTCOME_COLORS = {0: "#d9d9d9", 1: "#fdae61", 2: "#2b83ba", 3: "#d7191c", 4: "#000000", 5: "#8c510a",
@@ -63,23 +64,9 @@ def _save(fig, path: Path) -> Path:
 
 
 def _md(rows: list[dict[str, Any]], cols: list[tuple[str, str, str]]) -> str:
-    head = "| " + " | ".join(h for _, h, _ in cols) + " |"
-    sep = "|" + "|".join("---:" for _ in cols) + "|"
-    body = []
-    for r in rows:
-        cells = []
-        for k, _, spec in cols:
-            v = r.get(k)
-            if v is None or (isinstance(v, float) and math.isnan(v)):
-                cells.append("–")
-            elif spec == "hz":
-                cells.append(fmt_hz(float(v)))
-            elif spec and isinstance(v, (int, float, np.floating)) and not isinstance(v, bool):
-                cells.append(format(float(v), spec))
-            else:
-                cells.append(str(v))
-        body.append("| " + " | ".join(cells) + " |")
-    return "\n".join([head, sep, *body])
+    """:func:`probedyn.report._tables.markdown_table` with NaN shown as missing."""
+    clean = [{k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in r.items()} for r in rows]
+    return markdown_table(clean, cols)
 
 
 # ------------------------------------------------------------------------------------------
@@ -494,10 +481,12 @@ def section(outdir: Path, quick: bool) -> str:
         f"Probe: {pr['source']} of the Table 4.4 cantilever (L = 2 mm, k = {pr['k_n_per_m']:.4g} N/m, silicon "
         f"30 µm x 18.48 µm{'; Euler-Bernoulli' if quick else '; FEM reduced to 8 modes + static shapes'}), "
         f"f1 = {fmt_hz(pr['f1_hz'])}, equivalent mass k/omega1^2 = {pr['m_equivalent_kg']:.3g} kg "
-        f"({pl['masses']['ratio_equivalent_to_table']:.0f} x Table 4.4's m = 2e-12 kg: SOURCE-NOTES 10; the "
-        "table value is available as `--mass-source table`). Damping ratio 0.1 (Table 4.4's mu read as a ratio).",
+        f"({pl['masses']['ratio_equivalent_to_table']:.0f} x Table 4.4's m = 2e-12 kg: departure 35; the "
+        "table value is available as `--mass-source table`). Damping ratio 0.1 (Table 4.4's mu read as a ratio: "
+        "departure 24).",
         "",
-        "**Approach (4.13-4.21).** Force balance: the tip jumps into contact at "
+        "**Approach (4.13-4.21).** Linearised at the static equilibrium (departure 23). Force balance: the tip "
+        "jumps into contact at "
         f"z0* = zeta0 + 1.5 (H R / 3k)^(1/3) = {js['z0_star_m'] * 1e9:.4f} nm. Slow-approach simulations: "
         + "; ".join(f"{s['speed_m_s']:.0e} m/s -> {s['z0_jump_m'] * 1e9:.4f} nm" for s in sims)
         + f" (the delay falls as v^{ap['jump_delay_exponents'][0]:.2f} between these speeds; a slow passage through "
@@ -517,7 +506,7 @@ def section(outdir: Path, quick: bool) -> str:
              "Quick mode (beam probe): no FEM comparison here")
     parts += [
         "**Capture (4.22-4.41).** End condition EI U''' = (k1 - M omega^2) U (SOURCE-NOTES 4; printed "
-        "k1 + M omega^2): an attached mass lowers every frequency. " + check
+        "k1 + M omega^2; departure 25): an attached mass lowers every frequency. " + check
         + " (tests/test_placing_slow.py: full FEM re-solves over bL 1.25-10.0 within 0.12 %).",
         "",
         f"MD linearisation at zero load (4.28-4.29): k1 = {cp['md']['k1_n_per_m']:.4g} N/m, "
@@ -530,10 +519,10 @@ def section(outdir: Path, quick: bool) -> str:
     ]
     tp = rex["table_point"]
     parts += [
-        "**Release (4.42), full Maugis-Dugdale contact.** Table 4.4's point (M = 2e-18 kg, omega = 2.5 krad/s, "
+        "**Release (4.42), full Maugis-Dugdale contact (departure 27).** Table 4.4's point (M = 2e-18 kg, omega = 2.5 krad/s, "
         f"A = {tp['inputs']['A_m'] * 1e6:.3f} µm): {tp['outcome']}; inertia M omega^2 A = "
         f"{tp['physics']['inertial_force_n']:.2g} N against the pull-off force "
-        f"{abs(tp['physics']['F_pull_off_n']):.3g} N. The three outcomes of Fig 4.22 appear at omega = 1e8 rad/s "
+        f"{abs(tp['physics']['F_pull_off_n']):.3g} N (departure 28). The three outcomes of Fig 4.22 appear at omega = 1e8 rad/s "
         f"around M = |F_po| / (omega^2 A) = {rex['M_threshold_kg']:.3g} kg:",
         "",
                 "Maps (Dask, NetCDF with `probedyn place release fem --map ... --out DIR`): below the sample's contact "
@@ -547,7 +536,7 @@ def section(outdir: Path, quick: bool) -> str:
     ]
     ref = land["reference"]
     parts += [
-        "**Flight and landing (4.43-4.44).** Tilt theta = atan(A_tip/L) (SOURCE-NOTES 6). A released sample leaves "
+        "**Flight and landing (4.43-4.44).** Tilt theta = atan(A_tip/L) (departure 31). A released sample leaves "
         f"at ~omega A ({abs(ref['release_velocity_m_s']):.3g} m/s at the reference point) and flies ballistically: "
         f"gravity changes its speed by g t ~ 1e-6 m/s over the flight; the substrate's pull exceeds gravity only "
         f"within {land['gravity_crossover_m']['hamaker'] * 1e6:.2g} µm (full Hamaker law; "
@@ -569,7 +558,7 @@ def section(outdir: Path, quick: bool) -> str:
             [("basis", "basis", ""), ("n", "n", ""), ("e1", "mode 1", ".2e"), ("e2", "mode 2", ".2e"),
              ("e3", "mode 3", ".2e")]),
         "",
-                "Identifiability (masses 1 % of the beam; sd per unit relative frequency noise, SOURCE-NOTES 11):",
+                "Identifiability (masses 1 % of the beam; sd per unit relative frequency noise; departure 34):",
         "",
         _md([{"u": r["unknowns"], "n": r["n_frequencies"], "ok": "yes" if r["identifiable"] else "no",
               "sd": max(r["sd_per_unit_noise"].values()) if r["identifiable"] else None} for r in idn],
