@@ -497,6 +497,7 @@ def section(outdir: Path, quick: bool) -> str:
         _shift_text(ap),
         "",
         "![Approach: Fig 4.20 and the frequency shift](placing_approach.png)",
+        "*One-DOF first mode (static stiffness k, mass k/omega1^2, zeta = 0.1) with the van der Waals force (4.14): (a) net force against deflection, (b, c) gain and phase of the linearised response (4.19)-(4.20) at five gaps, (d) relative difference of each frequency-shift estimate from the exact orbit period (circles: DOP853 simulation).*",
         "",
     ]
     chk = cp["check"]
@@ -515,6 +516,7 @@ def section(outdir: Path, quick: bool) -> str:
         "nodes graded as (j/N)^4 towards the jump-out point.",
         "",
         "![Capture: Fig 4.21, mass effect, Fig 4.18](placing_capture.png)",
+        "*Euler-Bernoulli frequency equation (4.38) with the corrected end condition: mode shapes (4.40) for K = k1 L^3/EI from 0 to 3000 (lines) with the FEM probe's shapes where available (circles); first frequency against the sample mass, corrected and printed end condition; registry Maugis-Dugdale unloading branch (lambda = 2) with piecewise-linear approximations (4.29) and their maximum error.*",
         "",
     ]
     tp = rex["table_point"]
@@ -532,6 +534,7 @@ def section(outdir: Path, quick: bool) -> str:
         "no velocity and is recaptured.",
         "",
         "![Release: Fig 4.22 and outcome maps](placing_release.png)",
+        "*Sample on the full Maugis-Dugdale contact (lambda = 2, hysteretic) under the probe's first mode, compiled ode23s: penetration against time for three sample masses; outcome maps (Dask) with the linear pull-off threshold and the contact resonance.*",
         "",
     ]
     ref = land["reference"]
@@ -545,6 +548,7 @@ def section(outdir: Path, quick: bool) -> str:
         f"(without it {land['R_L_without_near_field']:.2g} m). Lighter samples and slower releases land farther.",
         "",
                 "![Landing: Figs 4.23, 4.27, 4.28](placing_landing.png)",
+        "*Flight model (4.43) with tilt atan(A/L), Derjaguin laws, started from the release simulation's decision state with the near-field lateral impulse: height for three release heights, lateral position for three H_sb (contact adhesion varied with it), landing radius against tip amplitude and sample mass.*",
         "",
     ]
     conv = [r for r in mul["convergence"] if r["n"] is not None]
@@ -565,6 +569,7 @@ def section(outdir: Path, quick: bool) -> str:
             [("u", "unknowns", ""), ("n", "frequencies", ""), ("ok", "determined", ""), ("sd", "max sd", ".3g")]),
         "",
         "![Several samples: Rayleigh-Ritz, Figs 4.25, 4.26](placing_multi.png)",
+        "*Rayleigh-Ritz (Legendre polynomials; FEM modes with and without static shapes) against the exact Euler-Bernoulli beam with point masses; frequencies against the position of one sample; selective release thresholds (quasi-static pull-off per sample, tip force drive) with release simulations at the starred points.*",
         "",
         _selective_text(mul),
         "",
