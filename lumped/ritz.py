@@ -257,9 +257,7 @@ class RitzBasis:
             F = np.column_stack(loads)
             fac = factorize(sysm.K, spd=True, solver=solver)
             try:
-                # one right-hand side at a time: Factorization.solve of fem/eigen.py passes a
-                # C-ordered (n, k) block to PARDISO, which reads it column-major (wrong for k > 1)
-                Psi = np.column_stack([np.asarray(fac.solve(F[:, j])).ravel() for j in range(F.shape[1])])
+                Psi = np.asarray(fac.solve(F)).reshape(sysm.n, -1)
             finally:
                 fac.release()
             if not np.all(np.isfinite(Psi)):
