@@ -18,7 +18,11 @@ for every N.  The measured FFM signal is the static-equivalent spring force ``k_
 
 Integrator: the linearly implicit Rosenbrock 2(3) W-method of :mod:`probedyn.schemes.ffm`
 generalised to ``2N + 1`` states, with the analytic Jacobian from the friction model's kernel
-(``kernel(p, x, v, z)``), numba-compiled.  For N = 1 without residual it is the same method on the
+(``kernel(p, x, v, z)``), numba-compiled.  The rate states are ``s_i = u_i' + V r_i`` (``r_i``
+the oscillator's share of the static compliance), whose sum is the tip velocity: they vanish
+while the tip sticks, so the relative error control resolves the slow pre-sliding creep as the
+one-mode integrator (state x') does; with the plain rates ``u_i'`` (= -V r_i while sticking) it
+cannot, and the step size collapses on the non-smooth |v| of the bristle law.  For N = 1 without residual it is the same method on the
 same equations as :func:`probedyn.schemes.ffm.line_scan` (tested).
 """
 
@@ -69,10 +73,12 @@ def _lu_solve(A, b):
 
 
 @njit(cache=True)
-def _rhs_jac(kern, p, m, c, k, V, t, y, f, J, Tt):
+def _rhs_jac(kern, p, m, c, k, sh, V, t, y, f, J, Tt):
+    # states: u_i (deflections), s_i = u_i' + V sh_i (rates relative to the static share of the
+    # base motion: sum_i s_i is the tip velocity, ~0 while sticking), z
     n = m.shape[0]
     x = V * t
-    vt = V
+    vt = 0.0
     for i in range(n):
         x += y[i]
         vt += y[n + i]
@@ -82,8 +88,8 @@ def _rhs_jac(kern, p, m, c, k, V, t, y, f, J, Tt):
         for b in range(2 * n + 1):
             J[a, b] = 0.0
     for i in range(n):
-        f[i] = y[n + i]
-        f[n + i] = (-c[i] * y[n + i] - k[i] * y[i] - F) / m[i]
+        f[i] = y[n + i] - V * sh[i]
+        f[n + i] = (-c[i] * (y[n + i] - V * sh[i]) - k[i] * y[i] - F) / m[i]
         J[i, n + i] = 1.0
         for j in range(n):
             J[n + i, j] = -dFx / m[i]
@@ -102,22 +108,22 @@ def _rhs_jac(kern, p, m, c, k, V, t, y, f, J, Tt):
 
 
 @njit(cache=True)
-def _rhs(kern, p, m, c, k, V, t, y, f):
+def _rhs(kern, p, m, c, k, sh, V, t, y, f):
     n = m.shape[0]
     x = V * t
-    vt = V
+    vt = 0.0
     for i in range(n):
         x += y[i]
         vt += y[n + i]
     r = kern(p, x, vt, y[2 * n])
     for i in range(n):
-        f[i] = y[n + i]
-        f[n + i] = (-c[i] * y[n + i] - k[i] * y[i] - r[0]) / m[i]
+        f[i] = y[n + i] - V * sh[i]
+        f[n + i] = (-c[i] * (y[n + i] - V * sh[i]) - k[i] * y[i] - r[0]) / m[i]
     f[2 * n] = r[1]
 
 
 @njit(cache=True)
-def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
+def _ros23(kern, p, m, c, k, sh, V, T, y0, rtol, atol, h0, hmax, max_steps):
     d = 1.0 / (2.0 + math.sqrt(2.0))
     e32 = 6.0 + math.sqrt(2.0)
     ns = y0.shape[0]
@@ -132,7 +138,7 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
     J = np.empty((ns, ns))
     W = np.empty((ns, ns))
     Tt = np.zeros(ns)
-    Fr = _rhs_jac(kern, p, m, c, k, V, t, y, f0, J, Tt)
+    Fr = _rhs_jac(kern, p, m, c, k, sh, V, t, y, f0, J, Tt)
     ts[0] = 0.0
     ys[0] = y
     Fs[0] = Fr
@@ -150,10 +156,10 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
             W[a, a] += 1.0
         k1 = _lu_solve(W, f0 + h * d * Tt)
         ym = y + 0.5 * h * k1
-        _rhs(kern, p, m, c, k, V, t + 0.5 * h, ym, f1)
+        _rhs(kern, p, m, c, k, sh, V, t + 0.5 * h, ym, f1)
         k2 = _lu_solve(W, f1 - k1) + k1
         yn = y + h * k2
-        _rhs(kern, p, m, c, k, V, t + h, yn, f2)
+        _rhs(kern, p, m, c, k, sh, V, t + h, yn, f2)
         k3 = _lu_solve(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
         err = 0.0
         for a in range(ns):
@@ -163,7 +169,7 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
         if err <= 1.0 or h < 1e-22:
             t = t + h
             y = yn
-            Fr = _rhs_jac(kern, p, m, c, k, V, t, y, f0, J, Tt)
+            Fr = _rhs_jac(kern, p, m, c, k, sh, V, t, y, f0, J, Tt)
             i += 1
             ts[i] = t
             ys[i] = y
@@ -281,17 +287,20 @@ def line_scan(ffm: ModalFFM, length: float, rtol: float = 1e-5, atol_rel: float 
     atol[2 * n] = atol_rel * zscale
     w_max = float(np.max(np.sqrt(ffm.stiffnesses / ffm.masses)))
     h0 = 1e-3 / w_max
+    comp = 1.0 / ffm.stiffnesses
+    share = comp / comp.sum()
+    # rate states s_i = u_i' + V share_i: zero for the tip at rest ("rest"), V share_i for the tip
+    # moving with the base ("moving")
     y0 = np.zeros(2 * n + 1)
-    if start == "rest":
-        comp = 1.0 / ffm.stiffnesses
-        y0[n:2 * n] = -V * comp / comp.sum()
-    ts, ys, Fr, nst, nrej = _ros23(fm.kernel, fm.pack(), ffm.masses, ffm.dampings, ffm.stiffnesses, V, T,
+    if start == "moving":
+        y0[n:2 * n] = V * share
+    ts, ys, Fr, nst, nrej = _ros23(fm.kernel, fm.pack(), ffm.masses, ffm.dampings, ffm.stiffnesses, share, V, T,
                                    y0, rtol, atol, h0, T / 50.0, max_steps)
     if nst < 0:
         raise SolverError(f"modal FFM line scan: more than {max_steps} steps (shorten the scan or loosen rtol)")
     u = ys[:, :n].T
     w = u.sum(axis=0)
-    return ModalScan(t=ts, base=V * ts, x=V * ts + w, v=V + ys[:, n:2 * n].sum(axis=1), z=ys[:, 2 * n],
+    return ModalScan(t=ts, base=V * ts, x=V * ts + w, v=ys[:, n:2 * n].sum(axis=1), z=ys[:, 2 * n],
                      lateral_force=-ffm.k_static * w, friction=Fr, u=u, n_steps=int(nst), n_rejected=int(nrej),
                      setup=dict(labels=ffm.labels, masses=ffm.masses, dampings=ffm.dampings,
                                 stiffnesses=ffm.stiffnesses, V=V, length=length, model=getattr(fm, "key", fm.name),
