@@ -17,7 +17,7 @@ from probedyn.core.errors import DataFormatError, ParameterError
 from probedyn.core.presets import preset
 from probedyn.lumped.reduced import DIRECTIONS, ReducedProbe
 from probedyn.lumped.ritz import direct_compliance
-from probedyn.probes.reduce import reduce_probe, resolve_probe
+from probedyn.probes.reduce import attach_model, reduce_probe, resolve_probe
 
 COARSE_TIP = {"tip_shape": "pyramid", "elements_through_thickness": 1}
 
@@ -99,6 +99,11 @@ def test_cache_save_load(rp, tmp_path):
     s2 = back.ritz.solve([("tip", 1e-12)], n=2).frequencies_hz
     np.testing.assert_allclose(s1, s2, rtol=1e-12)
     assert resolve_probe(str(p)).validity_hz == rp.validity_hz
+    # a loaded probe gets its FE model back (same mesh hash) for attachments at coordinates
+    attach_model(back)
+    pm = [((150e-6, 0.0, 0.0), 1e-12)]
+    np.testing.assert_allclose(back.ritz.solve(pm, n=2).frequencies_hz, rp.ritz.solve(pm, n=2).frequencies_hz,
+                               rtol=1e-10)
     # a Ritz file that does not match the recorded hash is refused
     npz = tmp_path / "probe.ritz.npz"
     npz.write_bytes(npz.read_bytes()[:-7] + b"garbage")

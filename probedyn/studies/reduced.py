@@ -171,13 +171,25 @@ def ffm_scan(probe: ReducedProbe, preset: str = "vamwcnt", n_modes: int | None =
     r = line_scan(ch, L, rtol=rtol)
     wall = time.perf_counter() - t0
     an = analyze(r.base, r.lateral_force)
-    amp = (an["static_friction_n"] - an["kinetic_friction_n"]) if an["n_slips"] else None
+    amp = _raw_amplitude(r.base, r.lateral_force, an) if an["n_slips"] else None
     return dict(preset=preset, V=V, k_scan=k, n_modes=n_modes, labels=ch.labels, damping_ratio=zeta,
                 predicted_period_m=(Fs - Fc) / k, predicted_amplitude_n=(Fs - Fc) * (1.0 + overshoot),
                 predicted_first_slip_m=Fs / k,
                 period_m=an["period_m"], amplitude_n=amp, first_slip_m=an["first_slip_m"], regime=an["regime"],
                 n_slips=an["n_slips"], max_force_n=an["max_force_n"], min_force_n=an.get("kinetic_friction_n"),
                 wall_s=wall, n_steps=r.n_steps, trace=r)
+
+
+def _raw_amplitude(base: np.ndarray, force: np.ndarray, an: Mapping[str, Any]) -> float:
+    """Mean peak-to-valley force of the slips on the integrator's own samples (the analysis
+    resamples the trace on a uniform base grid, which under-samples the fast slips' minima)."""
+    pk = list(an["peaks_m"]) + [float(base[-1])]
+    amps = []
+    for b0, b1 in zip(pk[:-1], pk[1:]):
+        seg = (base >= b0) & (base <= b1)
+        if seg.sum() >= 2:
+            amps.append(float(force[seg].max() - force[seg].min()))
+    return float(np.mean(amps)) if amps else math.nan
 
 
 def jump_to_contact(k_normal: float, model: str = "dmt") -> dict[str, Any]:
