@@ -16,13 +16,15 @@ def _check_ffm_rows(rows, rel):
     # friction: the sawtooth scales with the spring, so period * k_scan / (F_s - F_c) is the same
     # overshoot factor for every geometry (to the bristle's share of the compliance, k/sigma0 ~ 1e-3,
     # and the sampling of the trace: `rel`); the amplitude is the underdamped slip's
-    # (F_s - F_c)(1 + exp(-pi zeta / sqrt(1 - zeta^2))) (1 % for these traces).
+    # (F_s - F_c)(1 + exp(-pi zeta / sqrt(1 - zeta^2))) for a constant kinetic friction; the
+    # bristle's Stribeck rise while the slip turns round (|v| < V_s over a fraction ~V_s/v_max
+    # <= 0.05 of the slip, v_max = (F_s - F_c)/sqrt(k m)) takes up to ~2 % of the overshoot.
     factors = []
     for r in rows:
         f = r["ffm_vamwcnt"]
         assert f["regime"] == "regular"
         factors.append(f["period_m"] / f["predicted_period_m"])
-        assert f["amplitude_n"] == pytest.approx(f["predicted_amplitude_n"], rel=0.01)
+        assert f["amplitude_n"] == pytest.approx(f["predicted_amplitude_n"], rel=0.02)
         assert f["first_slip_m"] == pytest.approx(f["predicted_first_slip_m"], rel=0.02)
     factors = np.array(factors)
     assert np.ptp(factors) / factors.mean() < rel
