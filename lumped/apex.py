@@ -25,8 +25,6 @@ phi of eq 2.39): ``m = (rho A int_0^L phi^2 dx + m_tip phi(x_tip)^2) / phi(x)^2`
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from probedyn.core.errors import ParameterError

@@ -57,6 +57,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from probedyn import __version__
 from probedyn.core.errors import DataFormatError, ParameterError
 from probedyn.core.io import atomic_path, to_jsonable, write_json
 from probedyn.core.presets import preset as get_preset
@@ -72,10 +73,6 @@ MIN_PARTICIPATION = 1e-6
 
 
 def _version() -> str:
-    try:
-        from probedyn import __version__
-    except Exception:  # pragma: no cover
-        return "unknown"
     return __version__
 
 

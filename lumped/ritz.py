@@ -55,6 +55,7 @@ are the attachment ``"lumped_tip"``.
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping, Sequence, Union
@@ -63,7 +64,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from probedyn.core.errors import GeometryError, ParameterError, SolverError
+from probedyn.core.errors import DataFormatError, GeometryError, ParameterError, SolverError
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.model import PointMass, Spring
 
@@ -512,8 +513,6 @@ class RitzBasis:
         for i, (k, op) in enumerate(self._ops.items()):
             arr[f"op{i}"] = op
             names.append(k if isinstance(k, str) else list(k))
-        import json
-
         arr["op_names"] = np.array(json.dumps(names))
         arr["attachments"] = np.array(json.dumps(self.attachments))
         arr["static_coeffs"] = self.static_coeffs
@@ -523,8 +522,6 @@ class RitzBasis:
 
     @classmethod
     def from_arrays(cls, arr: Mapping[str, np.ndarray], model: Any = None, meta: Mapping[str, Any] | None = None) -> "RitzBasis":
-        import json
-
         try:
             names = json.loads(str(arr["op_names"]))
             ops = {(n if isinstance(n, str) else tuple(n)): np.asarray(arr[f"op{i}"]) for i, n in enumerate(names)}
@@ -534,8 +531,6 @@ class RitzBasis:
             if "static_coeffs" in arr:
                 b.static_coeffs = np.asarray(arr["static_coeffs"])
         except (KeyError, ValueError, TypeError) as exc:
-            from probedyn.core.errors import DataFormatError
-
             raise DataFormatError(f"not a probedyn Ritz basis ({exc})") from None
         return b
 

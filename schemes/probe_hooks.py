@@ -25,6 +25,7 @@ import math
 from typing import Any, Mapping
 
 from probedyn.core.errors import ParameterError
+from probedyn.core.presets import preset
 from probedyn.lumped.reduced import ReducedProbe
 
 
@@ -72,8 +73,6 @@ def stickslip_scaling(probe: ReducedProbe, U0: float, V: float = 0.0, x_s0: floa
 
     Returns the SI inputs, ``m``, ``k``, ``u0``, ``v``, ``psi``, ``zeta1``, ``zeta2``, the mass
     and stiffness ratios of eq 4.7, and ``derivation``: one line per formula with its numbers."""
-    from probedyn.core.presets import preset
-
     s = _lumped(probe, "scan")
     if s is None:
         raise ParameterError(f"the {probe.source} probe has no scan-direction spring for the stick-slip model")

@@ -16,11 +16,18 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from probedyn.core.errors import ParameterError
 from probedyn.lumped import apex as ax
 from probedyn.lumped.reduced import DIRECTIONS, ReducedProbe
 from probedyn.lumped.ritz import direct_compliance
 from probedyn.probes import get_probe
 from probedyn.probes.reduce import reduce_probe
+from probedyn.schemes import pushing as pu
+from probedyn.schemes.contact import get_contact_model
+from probedyn.schemes.contact.force_curve import force_curve
+from probedyn.schemes.ffm import FFM
+from probedyn.schemes.ffm_modal import ModalFFM, line_scan, modal_participation
+from probedyn.schemes.stickslip_analysis import analyze
 
 #: the default FFM cantilever: the registry's cantilever with its default pyramid tip
 FFM_CANTILEVER = {"tip_shape": "pyramid"}
@@ -37,8 +44,6 @@ def apex_check(overrides: Mapping[str, Any] | None = None, above_apex: Sequence[
     p, _ = get_probe("cantilever")
     v = p.resolve({**FFM_CANTILEVER, **dict(overrides or {})})
     if v["tip_shape"] == "none":
-        from probedyn.core.errors import ParameterError
-
         raise ParameterError("apex_check needs a tip (tip_shape pyramid or cone)")
     model = p.build(v)
     apex = np.asarray(p.tip_point(v), dtype=float)
@@ -84,8 +89,6 @@ def truncation_check(rp: ReducedProbe, fractions: Sequence[float] = (0.5, 0.9),
     the errors as fractions of the static compliance, and the rigorous bound of the corrected
     error ``R x^2 / (1 - x^2)`` (R: residual compliance, x = f / validity)."""
     if rp.ritz is None or rp.ritz.model is None:
-        from probedyn.core.errors import ParameterError
-
         raise ParameterError("truncation_check needs a FEM-reduced probe with its model attached")
     rows = []
     f = np.asarray(fractions, dtype=float) * rp.validity_hz
@@ -151,10 +154,6 @@ def ffm_scan(probe: ReducedProbe, preset: str = "vamwcnt", n_modes: int | None =
     amplitude ``(F_s - F_c)(1 + exp(-pi zeta/sqrt(1 - zeta^2)))`` (the overshoot of a slip of
     an oscillator of damping ratio zeta from F_s towards F_c) and the first slip ``F_s / k``.
     Returns them, the measured stick-slip (:func:`stickslip_analysis.analyze`) and the trace."""
-    from probedyn.schemes.ffm import FFM
-    from probedyn.schemes.ffm_modal import ModalFFM, line_scan
-    from probedyn.schemes.stickslip_analysis import analyze
-
     base = FFM.from_preset(preset)
     fm = base.friction
     Fs, Fc = fm.values["F_s"], fm.values["F_c"]
@@ -196,9 +195,6 @@ def jump_to_contact(k_normal: float, model: str = "dmt") -> dict[str, Any]:
     """Jump-to-contact of a cantilever of normal stiffness ``k_normal`` over a contact model of
     the registry (Table 4.1 tip/sample): the tail prediction ``d* = (H R / 3k)^(1/3)`` and the
     force-curve simulation."""
-    from probedyn.schemes.contact import get_contact_model
-    from probedyn.schemes.contact.force_curve import force_curve
-
     m = get_contact_model(model)
     fc = force_curve(m, k_normal)
     ji, jo = fc["jump_in"], fc["jump_out"]
@@ -217,8 +213,6 @@ def pushing_prediction(k_tip: float, substrate: str = "mica") -> dict[str, Any]:
     slip ``(F_s - F_c)/k_s``, reported, is about one lattice constant for every tip stiffness
     because the ~3 N/m contact dominates ``k_s``); the stick-slip -> sliding boundary from the
     quasi-static Prandtl–Tomlinson criterion ``eta(V) = 2 pi (F_s - F_c) exp(-(V/V_s)^2) / (a k_s) = 1``."""
-    from probedyn.schemes import pushing as pu
-
     m = pu.make_model(substrate, {"k_tx": float(k_tip)})
     p = m.p
     ks = m.k_series(p["F_c"])
@@ -269,8 +263,6 @@ def higher_modes_study(probe: ReducedProbe | None = None, speeds: Sequence[float
     reference; the slip duration (mean time per slip with the tip faster than twice the base)
     against the period of the first mode left out (``T_next``) and the step-response velocity
     ratio of the scan modes (:func:`probedyn.schemes.ffm_modal.modal_participation`)."""
-    from probedyn.schemes.ffm_modal import modal_participation
-
     if probe is None:
         probe = reduce_probe("cantilever", dict(FFM_CANTILEVER, **COARSE), n_modes=12, Q=STUDY_Q)
     part = modal_participation(probe, "scan")
