@@ -51,13 +51,13 @@ import hashlib
 import json
 import math
 import time
+from importlib import metadata
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from probedyn import __version__
 from probedyn.core.errors import DataFormatError, ParameterError
 from probedyn.core.io import atomic_path, to_jsonable, write_json
 from probedyn.core.presets import preset as get_preset
@@ -73,7 +73,12 @@ MIN_PARTICIPATION = 1e-6
 
 
 def _version() -> str:
-    return __version__
+    """probedyn's version from the installed distribution's metadata (``probedyn.__version__``
+    would be an import of the top package from a lower layer)."""
+    try:
+        return metadata.version("probedyn")
+    except metadata.PackageNotFoundError:  # pragma: no cover - running from a bare checkout
+        return "unknown"
 
 
 def frame_matrix(frame: Mapping[str, Sequence[float]] | None) -> np.ndarray:
