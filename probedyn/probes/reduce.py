@@ -84,7 +84,8 @@ def reduce_probe(probe: str | Path = "cantilever", overrides: Mapping[str, Any] 
 
     ``n_modes`` retained modes (validity limit = mode n_modes + 1); ``Q`` or ``mu`` (eq 3.2,
     needs a beam-like probe for rho A) set the modal damping; ``cache``: reuse/store the
-    reduction under its content hash (``provenance["cache"]`` says "hit" or "miss")."""
+    reduction under its content hash (``provenance["cache"]`` says "hit" or "miss"); a hit comes
+    with its FE model attached (the mesh from the mesh cache; nothing is assembled until used)."""
     t0 = time.perf_counter()
     damping_ratios(np.ones(1), Q=Q, mu=mu, mass_per_length=1.0)  # validate before any FEM work
     if frame is not None:
@@ -101,11 +102,17 @@ def reduce_probe(probe: str | Path = "cantilever", overrides: Mapping[str, Any] 
     if cache and path.exists():
         try:
             rp = ReducedProbe.load(path)
+        except Exception:  # corrupt or stale entry: rebuild below
+            rp = None
+        if rp is not None:
+            # the FE model (mesh from its cache, assembly deferred until used) comes back too, so a
+            # cached probe can attach masses at coordinates and be checked against the FEM
+            model = p.build(values)
+            if model.bundle.key == rp.provenance.get("mesh_key") and rp.ritz is not None:
+                rp.ritz.model = model
             rp.provenance = dict(rp.provenance, cache="hit", cache_file=str(path),
                                  load_s=time.perf_counter() - t0)
             return rp
-        except Exception:  # corrupt or stale entry: rebuild below
-            pass
     model = p.build(values)
     pt = point or default_point(model)
     mpl = _mass_per_length(p, values) if mu is not None else None
