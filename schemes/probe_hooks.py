@@ -27,6 +27,7 @@ from typing import Any, Mapping
 from probedyn.core.errors import ParameterError
 from probedyn.core.presets import preset
 from probedyn.lumped.reduced import ReducedProbe
+from probedyn.schemes.stickslip import TwoMassModel
 
 
 def _lumped(probe: ReducedProbe, direction: str):
@@ -113,4 +114,12 @@ def stickslip_scaling(probe: ReducedProbe, U0: float, V: float = 0.0, x_s0: floa
                 stiffness_ratios=(k1 / k, k2 / k), probe=probe.summary(), derivation=d)
 
 
-__all__ = ["ffm_cantilever", "pushing_tip", "normal_stiffness", "stickslip_scaling"]
+def two_mass_model(scaling: Mapping[str, Any]):
+    """The :class:`probedyn.schemes.stickslip.TwoMassModel` of a :func:`stickslip_scaling` result
+    (its parameter ranges apply: e.g. a probe damping far above Table 4.3's gives zeta1 > 100,
+    which is refused with the value in the message)."""
+    return TwoMassModel(m1=scaling["m1"], m2=scaling["m2"], k1=scaling["k1"], k2=scaling["k2"],
+                        zeta1=scaling["zeta1"], zeta2=scaling["zeta2"], a=scaling["a"])
+
+
+__all__ = ["ffm_cantilever", "pushing_tip", "normal_stiffness", "stickslip_scaling", "two_mass_model"]

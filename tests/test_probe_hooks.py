@@ -40,3 +40,29 @@ def test_stickslip_scaling_of_table_4_3_is_the_models():
     assert any("u0 = 4 pi^2" in line for line in s["derivation"])
     with pytest.raises(ParameterError):
         ph.stickslip_scaling(ReducedProbe.from_preset("table-4.3"), -1.0)
+
+
+def test_schemes_take_a_reduced_probe():
+    # the table probe through the FFM and pushing schemes gives exactly the preset's scheme
+    from probedyn.schemes import pushing as pu
+    from probedyn.schemes.ffm import FFM
+
+    a = FFM.from_preset("vamwcnt")
+    b = FFM.from_preset("vamwcnt", probe=ReducedProbe.from_preset("table-2.2"))
+    for n in ("m_x", "c_x", "k_x", "m_y", "c_y", "k_y"):
+        assert b.cantilever[n] == pytest.approx(a.cantilever[n], rel=1e-12)
+    assert b.probe.source == "Table 2.2"
+    # explicit overrides still win over the probe
+    c = FFM.from_preset("vamwcnt", overrides={"k_x": 0.3}, probe=ReducedProbe.from_preset("table-2.2"))
+    assert c.cantilever["k_x"] == 0.3
+    pa = pu.make_model("mica").p
+    pb = pu.make_model("mica", probe=ReducedProbe.from_preset("table-4.1")).p
+    for n in ("k_tx", "m_tx", "c_t", "k_ty", "m_ty"):
+        assert pb[n] == pytest.approx(pa[n], rel=1e-12)
+
+
+def test_two_mass_model_from_the_scaling():
+    tm = TwoMassModel()
+    s = ph.stickslip_scaling(ReducedProbe.from_preset("table-4.3"), tm.U0_from_u0(5.0))
+    m = ph.two_mass_model(s)
+    assert m.coefficients() == pytest.approx(tm.coefficients(), rel=1e-12)
