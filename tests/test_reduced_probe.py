@@ -141,3 +141,21 @@ def test_bad_input():
                                                                   "normal": (0, 0, 1)})
     with pytest.raises(ParameterError):
         resolve_probe("table-2.1", {"k_x": 1.0})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, over", [("duo-bimorph", {"holder": "point", "tip": "lumped"}), ("piezotube", {})])
+def test_smart_probes_reduce_at_their_lumped_tip(name, over):
+    # the augmented model (mesh + lumped tip DOFs) is reduced in its own coordinates: the retained
+    # modes are the augmented eigen-solution's, the point is the lumped tip, whose static stiffness
+    # along each axis is the holder's in series with the tip spring k_t (Table 3.1: k_y2 = 0.1 N/m
+    # along scan = y for the duo-bimorph, far softer than the body there)
+    rp = reduce_probe(name, over, n_modes=4, cache=False)
+    assert rp.point == "lumped_tip"
+    fem = rp.ritz.model.modes(5).frequencies_hz
+    np.testing.assert_allclose([m.frequency_hz for m in rp.modes], fem[:4], rtol=1e-8)
+    assert rp.validity_hz == pytest.approx(fem[4], rel=1e-8)
+    kt = rp.ritz.model.lumped_tip.stiffness
+    for i, d in enumerate(DIRECTIONS):
+        axis = int(np.argmax(np.abs(rp.frame[i])))
+        assert rp.static_stiffness(d) < kt[axis] * (1 + 1e-9)
