@@ -8,7 +8,11 @@ import math
 import numpy as np
 import pytest
 
+from probedyn.schemes.ffm import FFM
 from probedyn.studies import reduced as st
+
+_FV = FFM.from_preset("vamwcnt").friction.values
+G0 = _FV["F_s"] / _FV["sigma0"]
 
 
 def _check_ffm_rows(rows, rel):
@@ -25,7 +29,9 @@ def _check_ffm_rows(rows, rel):
         assert f["regime"] == "regular"
         factors.append(f["period_m"] / f["predicted_period_m"])
         assert f["amplitude_n"] == pytest.approx(f["predicted_amplitude_n"], rel=0.02)
-        assert f["first_slip_m"] == pytest.approx(f["predicted_first_slip_m"], rel=0.02)
+        # first slip: F_s / k plus the bristle's pre-sliding creep g0 ln(1/(1 - z/g0)), g0 = F_s/sigma0
+        # (0.5 pm for Table 2.2), a few g0 before the instability: bound 10 g0
+        assert abs(f["first_slip_m"] - f["predicted_first_slip_m"]) < 10 * G0
     factors = np.array(factors)
     assert np.ptp(factors) / factors.mean() < rel
     # ... and the period does change with the geometry: it follows 1 / k_scan
