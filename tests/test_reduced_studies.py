@@ -107,3 +107,13 @@ def test_higher_modes_converge():
     r_next = {r["n_modes"]: r["next_mode_velocity_ratio"] for r in hm["runs"] if r["n_modes"] in (1, 2, 4)}
     assert r_next[4] < r_next[2] < r_next[1] < 0.5
     assert all(math.isfinite(r["slip_time_s"]) for r in hm["runs"])
+
+
+@pytest.mark.slow
+def test_report_section_quick(tmp_path):
+    from probedyn.report.reduced import section
+
+    md = section(tmp_path, True)
+    assert "reduced-ffm-table-vs-fem.png" in md and (tmp_path / "reduced-ffm-table-vs-fem.png").stat().st_size > 10_000
+    for needle in ("Springs and masses at the apex", "Modal truncation", "Geometry matters", "Higher modes"):
+        assert needle in md

@@ -14,4 +14,5 @@ COMMAND_MODULES = [
     "probedyn.commands.push",
     "probedyn.commands.diagnose",
     "probedyn.commands.piezo",
+    "probedyn.commands.reduced",
 ]

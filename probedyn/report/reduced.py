@@ -20,22 +20,8 @@ from probedyn.lumped.reduced import ReducedProbe
 from probedyn.plotting import axis_label, fmt_hz, pyplot, savefig
 from probedyn.probes import get_probe
 from probedyn.probes.reduce import reduce_probe
+from probedyn.report._tables import markdown_table as _table
 from probedyn.studies import reduced as st
-
-
-def _table(rows: list[dict], cols: list[tuple[str, str, str]]) -> str:
-    def cell(v, spec):
-        if v is None:
-            return "–"
-        if spec == "hz":
-            return fmt_hz(float(v))
-        if spec and isinstance(v, (int, float)) and not isinstance(v, bool):
-            return format(v, spec)
-        return str(v)
-
-    head = "| " + " | ".join(h for _, h, _ in cols) + " |"
-    sep = "|" + "|".join("---:" for _ in cols) + "|"
-    return "\n".join([head, sep] + ["| " + " | ".join(cell(r.get(k), s) for k, _, s in cols) + " |" for r in rows])
 
 
 def _ffm_figure(outdir: Path, runs: list[tuple[str, object]], name: str, title: str) -> str:
