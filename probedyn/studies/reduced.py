@@ -136,7 +136,7 @@ STUDY_Q = 100.0
 #: the study geometries: one parameter of the default FFM cantilever changed at a time
 GEOMETRY_VARIANTS: tuple[tuple[str, float | None], ...] = (
     ("base", None), ("thickness", 3e-6), ("thickness", 5e-6), ("thickness", 15e-6), ("length", 200e-6),
-    ("length", 450e-6),
+    ("length", 400e-6),
     ("tip_height", 5e-6), ("tip_height", 20e-6),
 )
 QUICK_VARIANTS: tuple[tuple[str, float | None], ...] = (("base", None), ("thickness", 5e-6), ("tip_height", 20e-6))
