@@ -15,4 +15,5 @@ COMMAND_MODULES = [
     "probedyn.commands.diagnose",
     "probedyn.commands.piezo",
     "probedyn.commands.place",
+    "probedyn.commands.reduced",
 ]

@@ -10,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_table
+from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
 
 
 def _human(res: dict[str, Any]) -> str:
@@ -25,7 +26,19 @@ def _human(res: dict[str, Any]) -> str:
     if "pull_off_published_fit" in res:
         f = res["pull_off_published_fit"]
         rows.append(dict(q="COS (1999) fit / difference", v=f"{f['value']:.6f} / {100 * f['relative_difference']:+.2f} %"))
-    return format_table(rows, [("q", "quantity", ""), ("v", "value", "")])
+    fc = res.get("force_curve")
+    if fc:
+        ji, jo = fc["jump_in"], fc["jump_out"]
+        rows.append(dict(q="normal stiffness of the probe [N/m]", v=f"{fc['k']:.4g}"))
+        rows.append(dict(q="predicted jump-in gap (H R/3k)^(1/3) [m]",
+                         v=f"{fc['predicted_tail_jump_gap']:.4e}" + ("" if fc["predicted_tail_jump_gap"] > fc["tail_end_gap"]
+                                                                      else f" (< tail end {fc['tail_end_gap']:.3e}: no jump)")))
+        rows.append(dict(q="jump-in: gap before [m] / load before, after [N]",
+                         v="none (continuous approach)" if ji is None else
+                         f"{ji['gap_before']:.4e} / {ji['P_before']:.4e}, {ji['P_after']:.4e}"))
+        rows.append(dict(q="jump-out: load before [N]", v="none" if jo is None else f"{jo['P_before']:.4e}"))
+    text = format_table(rows, [("q", "quantity", ""), ("v", "value", "")])
+    return text + ("\n" + probe_line(res["probe"]) if res.get("probe") else "")
 
 
 @app.command("contact")
@@ -33,14 +46,32 @@ def contact(
     model: str = typer.Option("md", "--model", help="Contact model: dmt, jkr or md (Maugis-Dugdale)."),
     lam: Optional[float] = typer.Option(None, "--lambda", help="Maugis transition parameter (2.24); sets W."),
     sets: Optional[List[str]] = SET_OPT,
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[List[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
     as_json: bool = JSON_OPT,
     out: Optional[Path] = OUT_OPT,
 ) -> None:
-    """Tip-sample contact: pull-off force and normalised load-penetration curve (Fig 2.19)."""
+    """Tip-sample contact: pull-off force and normalised load-penetration curve (Fig 2.19); with
+    --probe, the force curve of its normal spring (jump-to-contact, jump-out)."""
     from probedyn.core.params import parse_sets
     from probedyn.schemes.contact.curves import contact_summary
 
-    res = contact_summary(model, lam, parse_sets(sets))
+    params = parse_sets(sets)
+    res = contact_summary(model, lam, params)
+    rp = load_probe(probe, probe_sets, probe_modes, probe_q)
+    if rp is not None:
+        from probedyn.schemes.contact import get_contact_model
+        from probedyn.schemes.contact.force_curve import force_curve
+        from probedyn.schemes.probe_hooks import normal_stiffness
+
+        kw = dict(params)
+        if lam is not None:
+            kw["lam"] = lam
+        fc = force_curve(get_contact_model(model, **kw), normal_stiffness(rp))
+        res["force_curve"] = {k: v for k, v in fc.items() if k not in ("delta", "P", "s")}
+        res["probe"] = rp.summary()
     if out is not None:
         from probedyn.core.io import write_json
         from probedyn.report.contact import plot_load_penetration

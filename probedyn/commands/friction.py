@@ -10,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import app, simulate_app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, save
+from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
 
 
 def _human(d: dict) -> str:
@@ -26,6 +27,8 @@ def _human(d: dict) -> str:
         f"period (F_s-F_c)/k_x = {nn(d['period_estimate_m'], 1e9, 'nm')}",
         f"max lateral force {nn(d['max_force_n'])}",
         *([f"note: {d['preset_scan']['note']}"] if d.get("preset_scan") else []),
+        *([f"note: {d['scan_note']}"] if d.get("scan_note") else []),
+        *([probe_line(d["probe"])] if d.get("probe") else [f"probe: {d.get('probe_source')}"]),
     ])
 
 
@@ -39,6 +42,10 @@ def ffm_cmd(
              "needed to the first slip plus four periods (F_s/k_x + 4 (F_s-F_c)/k_x), so that the "
              "stick-slip regime can be measured; the result for the preset's own range is reported too."),
     sets: Optional[list[str]] = SET_OPT,
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
     out: Optional[Path] = OUT_OPT,
     as_json: bool = JSON_OPT,
 ) -> None:
@@ -46,7 +53,8 @@ def ffm_cmd(
     from probedyn.core.params import parse_sets
     from probedyn.schemes.ffm_studies import run_ffm_to_regime
 
-    res, summary = run_ffm_to_regime(preset, model, parse_sets(sets), length=length)
+    rp = load_probe(probe, probe_sets, probe_modes, probe_q)
+    res, summary = run_ffm_to_regime(preset, model, parse_sets(sets), length=length, probe=rp)
     if out is not None:
         from probedyn.report.friction import plot_scan
 

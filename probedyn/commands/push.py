@@ -10,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import simulate_app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, save
+from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
 
 
 @simulate_app.command("push")
@@ -18,6 +19,10 @@ def push_cmd(
     speed: Optional[float] = typer.Option(None, "--speed", help="Base pushing speed V in m/s (default 3e-6)."),
     angle: Optional[float] = typer.Option(None, "--angle", help="Angle between push direction and main lattice axis, in degrees (2D if non-zero)."),
     sets: Optional[list[str]] = SET_OPT,
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
     out: Optional[Path] = OUT_OPT,
     as_json: bool = JSON_OPT,
 ) -> None:
@@ -30,8 +35,10 @@ def push_cmd(
         ov["V"] = speed
     if angle is not None:
         ov["angle"] = angle
-    res, r = P.push(substrate, ov)
-    r = dict(r)
+    rp = load_probe(probe, probe_sets, probe_modes, probe_q)
+    res, r = P.push(substrate, ov, probe=rp)
+    r = dict(r, probe=rp.summary() if rp is not None else None,
+             probe_source=rp.source if rp is not None else "Table 4.1")
     if out is not None:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
@@ -48,6 +55,7 @@ def push_cmd(
                          f"std {d['std_step_m']:.2g} m over {len(d['step_lengths_m'])} steps")
         lines.append(f"friction mean {d['friction_mean_N']:.4g} N (kinetic F_c + F_v V = {d['kinetic_expected_N']:.4g} N), "
                      f"pre-sliding peak {d['presliding']['peak_friction_N']:.4g} N")
+        lines.append(probe_line(d["probe"]) if d.get("probe") else f"probe: {d['probe_source']}")
         return "\n".join(lines)
 
     emit(r, as_json, human)

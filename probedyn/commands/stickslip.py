@@ -12,6 +12,7 @@ import typer
 
 from probedyn.commands._apps import stickslip_app, sweep_app
 from probedyn.commands._common import JSON_OPT, emit, format_table
+from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe
 
 WORKERS_OPT = typer.Option(2, "--workers", help="Workers of the local Dask cluster.")
 SCHED_OPT = typer.Option(None, "--scheduler", help="Address of an existing Dask scheduler (tcp://HOST:PORT).")
@@ -32,14 +33,40 @@ def _parse_values(spec: str, name: str):
 
 @stickslip_app.command("equilibria")
 def cmd_equilibria(
-    u0: float = typer.Option(..., "--u0", help="Non-dimensional potential amplitude u0 = 4 pi^2 U0/(k a^2)."),
+    u0: Optional[float] = typer.Option(None, "--u0", help="Non-dimensional potential amplitude u0 = 4 pi^2 U0/(k a^2) "
+                                                        "(or give --probe and --U0)."),
     psi: float = PSI_OPT,
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
+    U0: Optional[float] = typer.Option(None, "--U0", help="With --probe: substrate corrugation amplitude U0 of eq 4.1 [J]."),
+    x0: float = typer.Option(0.0, "--x0", help="With --probe: initial sample position in the potential [m] (psi = 2 pi x0/a)."),
+    speed: float = typer.Option(0.0, "--speed", help="With --probe: pushing speed V [m/s] (for v = (2 pi/a) sqrt(m/k) V)."),
+    sample: Optional[list[str]] = typer.Option(None, "--sample", help="With --probe: m2, k2, zeta2 or a as NAME=VALUE "
+                                                                      "(default Table 4.3). Repeatable."),
     as_json: bool = JSON_OPT,
 ) -> None:
-    """Quasi-static equilibria X = u0 sin(X + psi) (eq 4.11) and their stability (eq 4.12)."""
+    """Quasi-static equilibria X = u0 sin(X + psi) (eq 4.11) and their stability (eq 4.12); with
+    --probe, u0 and psi come from the probe and the substrate through the scaling of eqs 4.3-4.7."""
+    from probedyn.core.errors import ParameterError
     from probedyn.schemes.stickslip import equilibria
 
+    scaling = None
+    if probe is not None:
+        from probedyn.core.params import parse_sets
+        from probedyn.schemes.probe_hooks import stickslip_scaling
+
+        if U0 is None or u0 is not None:
+            raise ParameterError("with --probe give the corrugation --U0 [J] (u0 is then computed), not --u0")
+        rp = load_probe(probe, probe_sets, probe_modes, probe_q)
+        scaling = stickslip_scaling(rp, U0, V=speed, x_s0=x0, sample=parse_sets(sample))
+        u0, psi = scaling["u0"], scaling["psi"]
+    elif u0 is None:
+        raise ParameterError("give --u0, or --probe with --U0")
     res = equilibria(u0, psi).to_dict()
+    if scaling is not None:
+        res["scaling"] = scaling
 
     def human(r: dict[str, Any]) -> str:
         rows = [{"X": float(x), "L": float(l), "kind": "stable (node)"} for x, l in zip(r["stable_X"], r["stable_L"])]
@@ -48,7 +75,9 @@ def cmd_equilibria(
         head = f"u0 = {r['u0']:g}, psi = {r['psi']:g}: {r['stable']} stable, {r['unstable']} unstable"
         if r["marginal"]:
             head += f", {r['marginal']} marginal (fold)"
-        return head + "\n" + format_table(rows, [("X", "X", ".6f"), ("L", "1-u0 cos(X+psi)", ".4f"), ("kind", "kind", "")])
+        deriv = ("\n".join(["scaling of section 4.1.3:"] + ["  " + line for line in r["scaling"]["derivation"]]) + "\n"
+                 if r.get("scaling") else "")
+        return deriv + head + "\n" + format_table(rows, [("X", "X", ".6f"), ("L", "1-u0 cos(X+psi)", ".4f"), ("kind", "kind", "")])
 
     emit(res, as_json, human)
 

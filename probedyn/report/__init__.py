@@ -32,6 +32,7 @@ SECTIONS: list[tuple[str, str]] = [
     ("Tip-sample contact and adhesion-friction coupling", "probedyn.report.contact:section"),
     ("Nano-pushing", "probedyn.report.pushing:section"),
     ("Two-mass stick-slip dynamics", "probedyn.report.stickslip:section"),
+    ("Schemes on probes reduced from their FEM", "probedyn.report.reduced:section"),
     ("Vibrational nano-placing", "probedyn.report.placing:section"),
     ("Measured data: diagnosis", "probedyn.report.diagnose:section"),
 ]
