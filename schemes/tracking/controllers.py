@@ -199,26 +199,26 @@ class CompositeControl:
 class PID:
     """Plain per-axis PID on the tip error (no model feedforward, no Gamma^-1 decoupling), tuned
     on each axis's slow model for the bandwidth of the slow loop with the same ``stiffness_ratio``
-    (``omega_b = sqrt(1 + kappa) omega_0``) times ``scale``: closed-loop poles at
-    ``(s + omega_b)(s^2 + 2 zeta omega_b s + omega_b^2)``; negative P or D gains (a bandwidth
-    below the plant's own resonance) are clipped to zero."""
+    (``omega_b = sqrt(1 + kappa) omega_0``): closed-loop poles of the slow model at
+    ``(s + omega_b)(s^2 + 2 zeta omega_b s + omega_b^2)``. ``gain`` multiplies all three gains
+    (detuning: the loop gain falls uniformly, the low-frequency crossover with it)."""
 
     stiffness_ratio: float = 0.2
     zeta: float = 0.7
-    scale: float = 1.0
+    gain: float = 1.0
     name: str = "pid"
 
     def design(self, model: MechanicalPlant) -> Law:
         b = _blocks(model)
         s, _, _, _, bw = slow_gains(model, self.stiffness_ratio, self.zeta)
-        if not (math.isfinite(self.scale) and self.scale > 0):
-            raise ParameterError(f"PID bandwidth scale must be positive, got {self.scale:g}")
-        ws = 2 * math.pi * bw * self.scale
+        if not (math.isfinite(self.gain) and self.gain > 0):
+            raise ParameterError(f"PID gain factor must be positive, got {self.gain:g}")
+        ws = 2 * math.pi * bw
         d = b["K1"].shape[0]
         M, C, K, Bs = (np.diag(s[k]) for k in ("M", "C", "K", "B"))
-        kd = np.maximum(((2 * self.zeta + 1) * ws * M - C) / Bs, 0.0)
-        kp = np.maximum(((1 + 2 * self.zeta) * ws**2 * M - K) / Bs, 0.0)
-        ki = ws**3 * M / Bs
+        kd = self.gain * np.maximum(((2 * self.zeta + 1) * ws * M - C) / Bs, 0.0)
+        kp = self.gain * np.maximum(((1 + 2 * self.zeta) * ws**2 * M - K) / Bs, 0.0)
+        ki = self.gain * ws**3 * M / Bs
         Kx = np.zeros((d, 4 * d))
         Kx[:, :d] = -np.diag(kp)
         Kx[:, 2 * d:3 * d] = -np.diag(kd)
@@ -227,7 +227,10 @@ class PID:
         def w(R, t):
             return R[0] * kp + R[1] * kd
 
-        return Law("PID", Kx, Ki, w, {"bandwidth_hz": bw * self.scale, "scale": self.scale, "zeta": self.zeta,
+        # low-frequency crossover of the integral action on the slow model: ki b / (K + kp b)
+        f_i = ki * Bs / (K + kp * Bs) / (2 * math.pi)
+        return Law("PID", Kx, Ki, w, {"bandwidth_hz": bw if self.gain == 1 else f_i, "design_bandwidth_hz": bw,
+                                      "integral_crossover_hz": f_i, "gain": self.gain, "zeta": self.zeta,
                                       "kp_V_per_m": kp, "ki_V_per_m_s": ki, "kd_V_s_per_m": kd})
 
 

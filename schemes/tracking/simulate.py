@@ -51,9 +51,11 @@ from probedyn.schemes.tracking.plants import MechanicalPlant
 
 @dataclass(frozen=True)
 class SensorNoise:
-    """Band-limited Gaussian noise on the measured tip position: RMS ``rms`` [m] per axis, flat up
-    to ``bandwidth_hz`` (a sum of random-phase sinusoids on a 1/duration grid, so n(t) and its
-    derivative n'(t) are exact at any t), seed ``seed``."""
+    """Band-limited Gaussian noise on the measured tip position: RMS ``rms`` [m] per axis, flat
+    spectrum up to ``bandwidth_hz``, seed ``seed``. Synthesised by FFT on a uniform grid as a sum
+    of equal-amplitude random-phase sinusoids at the grid's Fourier frequencies below the band
+    (so its RMS over the record is exactly ``rms``), with its exact derivative n'(t) (spectral);
+    between grid points it is interpolated linearly."""
 
     rms: float
     bandwidth_hz: float = 10e3
@@ -65,27 +67,28 @@ class SensorNoise:
         if not (math.isfinite(self.bandwidth_hz) and self.bandwidth_hz > 0):
             raise ParameterError("sensor noise bandwidth must be positive")
 
-    def realise(self, duration: float, n_axes: int):
-        df = 1.0 / max(duration, 1e-6)
-        nf = max(int(self.bandwidth_hz / df), 1)
-        if nf > 200000:
-            raise ParameterError("sensor noise: bandwidth x duration too large (> 2e5 components)")
+    def realise(self, duration: float, n_axes: int, h: float):
+        """A function nu(t) -> (n, 2 n_axes) = (n, n') on [0, duration], synthesised on a grid of
+        step ``h``."""
+        N = int(math.ceil(duration / h)) + 1
         rng = np.random.default_rng(self.seed)
-        f = df * np.arange(1, nf + 1)
-        ph = rng.uniform(0, 2 * math.pi, size=(n_axes, nf))
-        amp = self.rms * math.sqrt(2.0 / nf)
-        w = 2 * math.pi * f
+        f = np.fft.rfftfreq(N, h)
+        band = (f > 0) & (f <= self.bandwidth_hz)
+        nb = int(band.sum())
+        if nb == 0:
+            raise ParameterError("sensor noise: the band holds no frequency of the record (too short?)")
+        ph = rng.uniform(0, 2 * math.pi, size=(nb, n_axes))
+        amp = self.rms * math.sqrt(2.0 / nb)
+        Z = np.zeros((f.size, n_axes), dtype=complex)
+        Z[band] = amp * np.exp(1j * ph) * (N / 2)
+        n = np.fft.irfft(Z, n=N, axis=0)
+        dn = np.fft.irfft(Z * (2j * math.pi * f)[:, None], n=N, axis=0)
+        tg = np.arange(N) * h
+        vals = np.hstack([n, dn])
 
         def nu(t: np.ndarray) -> np.ndarray:
             t = np.atleast_1d(t)
-            out = np.zeros((t.size, 2 * n_axes))
-            for j in range(0, t.size, 4096):
-                tt = t[j:j + 4096, None]
-                for a in range(n_axes):
-                    arg = w[None, :] * tt + ph[a][None, :]
-                    out[j:j + 4096, a] = amp * np.sin(arg).sum(axis=1)
-                    out[j:j + 4096, n_axes + a] = amp * (w[None, :] * np.cos(arg)).sum(axis=1)
-            return out
+            return np.stack([np.interp(t, tg, vals[:, j]) for j in range(vals.shape[1])], axis=1)
 
         return nu
 
@@ -139,7 +142,14 @@ class ClosedLoop:
             self.sub_idx = [plant.outputs.index(a) if a in plant.outputs else -1 for a in surface.axes]
         else:
             self.sub_idx = [-1, -1]
-        self._nu = noise.realise(path.duration * 1.5 + 1e-3, d) if noise is not None and noise.rms > 0 else None
+        self._nu = None
+        self.noise_step = None
+
+    def set_noise_grid(self, t_end: float, h: float) -> None:
+        """Synthesise the sensor noise on the simulation grid (step h up to t_end)."""
+        if self.noise is not None and self.noise.rms > 0:
+            self._nu = self.noise.realise(t_end, self.d, h)
+            self.noise_step = h
 
     # -- exogenous terms --------------------------------------------------------------------
     def reference(self, t: np.ndarray) -> np.ndarray:
@@ -412,6 +422,7 @@ def simulate(plant: MechanicalPlant, law: Law, path: Path, *, surface: PeriodicS
     hh = T / nsteps
     t = np.linspace(0.0, T, nsteps + 1)
     wall = time.perf_counter()
+    cl.set_noise_grid(T, hh)
     F, wu, R = cl.exogenous(t)
     X0 = cl.initial_state(F[0]) if x0 is None else np.asarray(x0, dtype=float)
     Phi, P1, P2 = phi_matrices(cl.A, hh)
