@@ -399,7 +399,7 @@ class CsvPath(Path):
 
     name = "csv"
 
-    def __init__(self, t: np.ndarray, r: np.ndarray, source: str = "<array>") -> None:
+    def __init__(self, t: np.ndarray, r: np.ndarray, source: str = "<array>", lines: Sequence[int] | None = None) -> None:
         from scipy.interpolate import make_interp_spline
 
         t = np.asarray(t, dtype=float)
@@ -413,7 +413,8 @@ class CsvPath(Path):
         dt = np.diff(t)
         if np.any(dt <= 0):
             i = int(np.nonzero(dt <= 0)[0][0])
-            raise DataFormatError(f"{source}: times must increase strictly (row {i + 2}: t = {t[i + 1]:g} s after {t[i]:g} s)")
+            where = f"{source}:{lines[i + 1]}" if lines is not None else f"{source}: row {i + 2}"
+            raise DataFormatError(f"{where}: times must increase strictly (t = {t[i + 1]:g} s after {t[i]:g} s)")
         if t[0] != 0:
             raise DataFormatError(f"{source}: the first time must be 0 s (got {t[0]:g} s)")
         big = float(np.max(np.abs(r)))
@@ -449,6 +450,7 @@ def read_csv_path(path: str | FsPath) -> CsvPath:
     if not p.is_file():
         raise DataFormatError(f"{p}: no such path file")
     rows: list[list[float]] = []
+    lines: list[int] = []
     try:
         text = p.read_text(encoding="utf-8")
     except (UnicodeDecodeError, OSError) as exc:
@@ -469,10 +471,11 @@ def read_csv_path(path: str | FsPath) -> CsvPath:
             bad = next(c for c in cells if not _is_float(c))
             raise DataFormatError(f"{p}:{lineno}: cannot read {bad!r} as a number") from None
         rows.append(vals)
+        lines.append(lineno)
     if not rows:
         raise DataFormatError(f"{p}: no data rows (expected t,x,y,z in s, m)")
     a = np.asarray(rows)
-    return CsvPath(a[:, 0], a[:, 1:], str(p))
+    return CsvPath(a[:, 0], a[:, 1:], str(p), lines)
 
 
 def _is_float(c: str) -> bool:

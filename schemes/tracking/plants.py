@@ -34,7 +34,7 @@ at the holder (source: diag(k_px, k_py, k_pz) of 3.3); Gamma as above.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
@@ -139,8 +139,12 @@ def with_blocks(plant: MechanicalPlant, **changes: np.ndarray) -> MechanicalPlan
     b = {**plant.blocks, **changes}
     prov = dict(plant.provenance)
     prov.setdefault("modified", []).extend(sorted(changes))
-    return two_body_plant(b["D"], b["C1"], b["K1"], b["J"], b["C2"], b["K2"], b["Gamma"], plant.outputs,
-                          plant.inputs, prov)
+    p = two_body_plant(b["D"], b["C1"], b["K1"], b["J"], b["C2"], b["K2"], b["Gamma"], plant.outputs,
+                       plant.inputs, prov)
+    for k, v in b.items():  # keep extra blocks (e.g. the stroke matrix G) unless Gamma changed
+        if k not in p.blocks and not (k == "G" and "Gamma" in changes):
+            p.blocks[k] = v
+    return p
 
 
 def scaled_stiffness(plant: MechanicalPlant, eps: float, scale_gamma: bool = True) -> MechanicalPlant:
@@ -208,9 +212,23 @@ def analytic_body(probe, v: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.
     return J, K2, C2, info
 
 
+_FEM_BODIES: dict[tuple, tuple] = {}
+_TIP_KEYS = ("tip", "tip_mass", "k_tx", "k_ty", "k_tz")
+
+
 def fem_body(probe, v: dict[str, Any], n_body: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     """(J, K2, C2, info) of the lumped model assembled from the FEM body modes
-    (:func:`probedyn.lumped.smart.reduce_from_fem`, the holder end face as reference point)."""
+    (:func:`probedyn.lumped.smart.reduce_from_fem`, the holder end face as reference point).
+    The body does not depend on the tip (mass, holder springs), so one FEM solve per probe
+    geometry is kept for the process (sweeps over k_t reuse it)."""
+    key = (probe.name, n_body, tuple(sorted((k, x) for k, x in v.items() if k not in _TIP_KEYS)))
+    if key not in _FEM_BODIES:
+        _FEM_BODIES[key] = _fem_body(probe, v, n_body)
+    J, K2, C2, info = _FEM_BODIES[key]
+    return J.copy(), K2.copy(), C2.copy(), dict(info)
+
+
+def _fem_body(probe, v: dict[str, Any], n_body: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     from probedyn.lumped.smart import PROBE_SETUP, _body_rho_A, reduce_from_fem
 
     vv = {**v, "tip": "lumped"}

@@ -525,21 +525,3 @@ class _Dummy:
 
     def describe(self) -> dict[str, Any]:
         return {"name": "none"}
-
-
-def impulse_l1_norm(A: np.ndarray, C: np.ndarray, t_max: float | None = None, n: int = 4000) -> float:
-    """``int_0^inf ||C e^{A t}||_2 dt`` (the L-infinity to L-infinity gain bound of the map from a
-    state forcing to the output), by the trapezoidal rule on [0, t_max] with t_max = 30 / (slowest
-    decay rate) - the neglected tail is below e^-30."""
-    lam = np.linalg.eigvals(A)
-    if lam.real.max() >= 0:
-        return math.inf
-    T = t_max if t_max is not None else 30.0 / float(-lam.real.max())
-    h = T / n
-    E = sla.expm(A * h)
-    M = np.eye(A.shape[0])
-    vals = np.empty(n + 1)
-    for k in range(n + 1):
-        vals[k] = np.linalg.norm(C @ M, 2)
-        M = E @ M
-    return float(h * (vals.sum() - 0.5 * (vals[0] + vals[-1])))
