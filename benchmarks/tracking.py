@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from probedyn.probes.tracking import control_plant
 from probedyn.schemes.tracking import controllers as ctl
 from probedyn.schemes.tracking import simulate as S
 from probedyn.schemes.tracking import studies
@@ -29,7 +30,7 @@ from probedyn.schemes.tracking.disturbance import kbr
 
 def main() -> None:
     kb = "--with-kbr" in sys.argv
-    plant = studies.control_plant(k_t=100.0)
+    plant = control_plant(k_t=100.0)
     law = ctl.CompositeControl(0.0, 0.7, 1.0).design(plant)
     st = ctl.stability(plant, law)
     path = studies.build_path("cone", "piezotube", duration=1.0)

@@ -10,17 +10,18 @@ import numpy as np
 import pytest
 
 from probedyn.core.errors import DataFormatError, ParameterError, ProbedynError
+from probedyn.probes.tracking import control_plant, plant_factory, smart_plant
 from probedyn.schemes.tracking import actuation as act
 from probedyn.schemes.tracking import controllers as ctl
 from probedyn.schemes.tracking import disturbance as dist
-from probedyn.schemes.tracking import inversion, paths, plants, simulate, studies
+from probedyn.schemes.tracking import inversion, paths, simulate, studies
 
 EPS = np.finfo(float).eps
 
 
 @pytest.fixture(scope="module")
 def tube():
-    return studies.control_plant()  # piezotube, k_t = 10 N/m, delta = 5 um, analytic body
+    return control_plant()  # piezotube, k_t = 10 N/m, delta = 5 um, analytic body
 
 
 # ------------------------------------------------------------------------------------- paths
@@ -87,9 +88,9 @@ def test_bad_paths_and_range():
     with pytest.raises(ParameterError, match="3D path"):
         studies.build_path("cone", "duo-bimorph")
     with pytest.raises(ParameterError, match="outside the actuator range"):
-        studies.track("piezotube", "cone", "open", size=5e-6)  # needs 270 V axially
+        studies.track(plant_factory(), "piezotube", "cone", "open", size=5e-6)  # needs 270 V axially
     with pytest.raises(ParameterError, match="cannot actuate"):
-        inversion.path_on_outputs(plants.smart_plant("duo-bimorph"),
+        inversion.path_on_outputs(smart_plant("duo-bimorph"),
                                   paths.make_path("circle", plane="xy").derivatives(np.linspace(0, 1, 5)))
 
 
@@ -253,7 +254,7 @@ def test_frequency_domain_inverse_agrees_with_the_exact_one(tube):
 def test_simulator_against_the_closed_loop_transfer_function(tube):
     """Item 7: the steady-state error of a circle from the closed-loop frequency response agrees
     with the time simulation within the first-order-hold bound of the integrator."""
-    r = studies.frequency_response_check(plant=tube, h=1e-5)
+    r = studies.frequency_response_check(tube, h=1e-5)
     assert r["agrees"], r
     assert r["tolerance_m"] < 0.3 * r["forced_error_amplitude_m"]  # the check discriminates
 
@@ -312,12 +313,12 @@ def test_saturation_and_noise(tube):
 
 
 def test_track_summary_and_provenance():
-    res, s = studies.track("duo-bimorph", "circle", "open", duration=0.2)
+    res, s = studies.track(plant_factory(), "duo-bimorph", "circle", "open", duration=0.2)
     assert set(s["metrics"]["axes"]) == {"y", "z"}
     assert "analytic gains" in s["provenance"]["gains"]
     assert s["metrics"]["relative_max_error_after_transient"] < 1e-3
     with pytest.raises(ProbedynError, match="unstable"):
-        studies.track("piezotube", "cone", "slow")
+        studies.track(plant_factory(), "piezotube", "cone", "slow")
 
 
 # ------------------------------------------------------------------------------------- CLI

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from probedyn.probes.tracking import control_plant, plant_factory
 from probedyn.schemes.tracking import controllers as ctl
 from probedyn.schemes.tracking import disturbance as dist
 from probedyn.schemes.tracking import paths, simulate, studies
@@ -19,7 +20,7 @@ pytestmark = pytest.mark.slow
 def test_nonlinear_integrator_against_solve_ivp():
     """ETD2 with the KBr disturbance vs DOP853 (rtol 1e-11): the difference is within the
     Richardson estimate of ETD2's error, |X_h - X_h/2| * 4/3, plus the reference's tolerance."""
-    tube = studies.control_plant()
+    tube = control_plant()
     p = paths.make_path("cylinder", size=2.5e-9, height=1e-8, duration=1e-3)
     law = ctl.CompositeControl(0.2, 0.7, 0.7).design(tube)
     surf = dist.kbr(1.0)
@@ -39,7 +40,7 @@ def test_epsilon_study_orders():
     a stiffness O(1/eps^2): O(eps^3) (observed 2.5-3.5). The quasi-static inverse errs by the
     damping and inertia terms, O(eps) to O(eps^2); the printed slow law (no feedforward) does not
     converge at all (its error is the stiffness ratio K_s / (K_s + Kp), independent of eps)."""
-    r = studies.epsilon_study()
+    r = studies.epsilon_study(control_plant())
     o = r["observed_order"]
     assert 2.5 <= o["composite (3.50-3.54)"] <= 3.5
     assert 1.0 <= o["open (quasi-static)"] <= 2.05
@@ -54,7 +55,7 @@ def test_holder_stiffness_residual_within_the_modal_bound():
     at most sum_j |Cq phi_j| |phi_j^T M Delta| / omega_j, plus the acceleration jump's share
     (relative f_path / f_lowest); damping only lowers it."""
     for probe in ("duo-bimorph", "piezotube"):
-        s = studies.holder_stiffness_study(probe, stiffnesses=(1, 10, 100), path_hz=(10.0, 100.0))
+        s = studies.holder_stiffness_study(plant_factory(), probe, stiffnesses=(1, 10, 100), path_hz=(10.0, 100.0))
         for row in s["rows"]:
             bound = row["modal_bound_m"] * (1 + row["path_hz"] / row["f_lowest_hz"])
             assert row["residual_m"] <= bound, row
@@ -65,7 +66,7 @@ def test_controller_comparison_claims():
     """Stable laws keep the error within 1 % of the path after 5 % of the run (the source's claim)
     on the nominal plant, with and without the KBr disturbance; composite control rejects the
     disturbance better than the open-loop inverse."""
-    r = studies.controller_comparison(paths=("cylinder",), disturbances=(0.0, 1.0))
+    r = studies.controller_comparison(control_plant(), paths=("cylinder",), disturbances=(0.0, 1.0))
     rows = {(x["disturbance_scale"], x["control"]): x for x in r["rows"]}
     for key in [(d, c) for d in (0.0, 1.0) for c in ("open (dynamic inverse)", "composite (3.50-3.54)")]:
         assert rows[key]["within_1_percent"]

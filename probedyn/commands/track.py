@@ -1,6 +1,7 @@
 """``probedyn track PROBE --path ... --control ...``: path tracking with the smart probes
 (source sections 3.2.3, 3.3.3, 3.5). A thin command: argument parsing, one library call
-(:func:`probedyn.schemes.tracking.studies.track`), output (``--json``, ``--out`` plots through
+(:func:`probedyn.schemes.tracking.studies.track` on the plants of
+:func:`probedyn.probes.tracking.plant_factory`), output (``--json``, ``--out`` plots through
 the report layer :mod:`probedyn.report.tracking`)."""
 
 from __future__ import annotations
@@ -36,9 +37,10 @@ def track_cmd(
 ) -> None:
     """Simulate the tip along a path: RMS and max error per axis, voltage peaks, gains' provenance."""
     from probedyn.core.params import parse_sets
+    from probedyn.probes.tracking import plant_factory
     from probedyn.schemes.tracking.studies import track
 
-    res, summary = track(probe, path, control, body=body, disturbance=disturbance,
+    res, summary = track(plant_factory(body), probe, path, control, disturbance=disturbance,
                          disturbance_scale=disturbance_scale, speed=speed, duration=duration, size=size, k_t=k_t,
                          v_max=v_max, eccentricity=eccentricity, noise_rms=noise, overrides=parse_sets(sets))
     if out is not None:

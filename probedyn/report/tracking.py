@@ -105,6 +105,7 @@ def section(outdir: Path, quick: bool) -> str:
     """Open-loop tracking of both probes, the holder-stiffness residual, the 3.5 control problem
     (stability of the four laws, conic path), the frequency-response check of the simulator.
     Analytic-body plants with analytic gains (fast); docs/tracking.md has the FEM-body numbers."""
+    from probedyn.probes.tracking import control_plant, plant_factory
     from probedyn.schemes.tracking import studies as S
 
     outdir = Path(outdir)
@@ -116,7 +117,7 @@ def section(outdir: Path, quick: bool) -> str:
           "Details and the FEM-body numbers: docs/tracking.md.", ""]
     rows = []
     for probe in ("duo-bimorph", "piezotube"):
-        st = S.open_loop_study(probe, durations=(1.0,) if quick else (1.0, 0.05))
+        st = S.open_loop_study(plant_factory("analytic"), probe, durations=(1.0,) if quick else (1.0, 0.05))
         for r in st["rows"]:
             rows.append({"probe": probe, **{k: r[k] for k in ("path", "duration_s", "inverse")},
                          "err": r["max_error_m"] * 1e9, "rel": r["relative_max_error"],
@@ -126,7 +127,7 @@ def section(outdir: Path, quick: bool) -> str:
            _md_table(rows, [("probe", "probe", ""), ("path", "path", ""), ("duration_s", "duration [s]", "g"),
                             ("inverse", "inverse", ""), ("err", "max error [nm]", ".3g"), ("rel", "max error / size", ".2e"),
                             ("v", "voltage peaks [V]", "")]), ""]
-    hs = S.holder_stiffness_study("piezotube", stiffnesses=(1, 10, 100), path_hz=(10.0,) if quick else (10.0, 100.0))
+    hs = S.holder_stiffness_study(plant_factory("analytic"), "piezotube", stiffnesses=(1, 10, 100), path_hz=(10.0,) if quick else (10.0, 100.0))
     holder_figure(hs, outdir / "tracking_holder.png")
     md += ["**Holder stiffness (Fig 3.16)**: sphere, quasi-static inverse started at full speed; the residual "
            "oscillation scales as v_jump / omega_lowest.", "",
@@ -134,13 +135,14 @@ def section(outdir: Path, quick: bool) -> str:
                      [("k_t", "k_t [N/m]", "g"), ("path_hz", "turns/s", "g"), ("f_lowest_hz", "lowest mode [Hz]", ".0f"),
                       ("res", "residual / size", ".2e"), ("forced", "forced error / size", ".2e")]), "",
            "![holder stiffness](tracking_holder.png)", ""]
-    cp = S.control_problem()
+    plant = control_plant()
+    cp = S.control_problem(plant)
     srows = [{"law": k, "stable": "yes" if v["stable"] else "**no**", "rate": v["max_real_per_s"],
               "zeta": v["min_damping_ratio"], "f": v["least_damped_hz"]} for k, v in cp["stability"].items()]
     md += ["**Control problem (3.5)**: piezotube, k_t = 10 N/m, delta_x = delta_y = 5 µm. Stability on the full model:", "",
            _md_table(srows, [("law", "law", ""), ("stable", "stable", ""), ("rate", "max Re(lambda) [1/s]", ".3g"),
                              ("zeta", "min damping ratio", ".3g"), ("f", "least damped mode [Hz]", ".4g")]), ""]
-    cmp_ = S.controller_comparison(paths=("cone",), disturbances=(0.0,) if quick else (0.0, 1.0), keep=True)
+    cmp_ = S.controller_comparison(plant, paths=("cone",), disturbances=(0.0,) if quick else (0.0, 1.0), keep=True)
     crow = []
     for r in cmp_["rows"]:
         if r["stable"]:
@@ -156,7 +158,7 @@ def section(outdir: Path, quick: bool) -> str:
            _md_table(crow, [("law", "law", ""), ("d", "KBr scale", "g"), ("max", "max error [nm]", ".3g"),
                             ("rel", "max error / extent after 5 %", ".2e"), ("v", "peak voltage [V]", ".3g")]), "",
            "![conic path](tracking_cone.png)", ""]
-    fr = S.frequency_response_check(h=1e-5)
+    fr = S.frequency_response_check(plant, h=1e-5)
     md += [f"**Simulator check**: circle at {fr['f_path_hz']:g} turns/s, composite control: simulated vs "
            f"transfer-function steady-state error differ by {fr['max_abs_difference_m']:.3g} m (tolerance from the "
            f"first-order hold {fr['tolerance_m']:.3g} m; forced error amplitude {fr['forced_error_amplitude_m']:.3g} m).",

@@ -41,8 +41,6 @@ import numpy as np
 import scipy.linalg as sla
 
 from probedyn.core.errors import ParameterError
-from probedyn.core.presets import preset
-from probedyn.schemes.tracking import actuation as act
 
 AX = {"x": 0, "y": 1, "z": 2}
 
@@ -162,141 +160,34 @@ def scaled_stiffness(plant: MechanicalPlant, eps: float, scale_gamma: bool = Tru
 
 
 # ---------------------------------------------------------------------------------------------
-# bodies (J, K2, C2 at the holder) and the smart probes' plants
+# the smart probes' two-body plant from plain data (the probe-dependent parts - resolving a
+# probe, its FEM body, its analytic strokes - live in probedyn/probes/tracking.py)
 # ---------------------------------------------------------------------------------------------
 
 SETUP = {"duo-bimorph": {"dirs": ["y", "z"], "inputs": ["V_y", "V_z"], "table": "table-3.1"},
          "piezotube": {"dirs": ["x", "y", "z"], "inputs": ["V_x", "V_y", "V_z"], "table": "table-3.2"}}
 
 
-def _probe_values(name: str, overrides: dict[str, Any] | None):
-    from probedyn.probes import get_probe
-
-    p, file_ov = get_probe(name)
-    if p.name not in SETUP:
-        raise ParameterError(f"path tracking needs a smart probe (duo-bimorph or piezotube), got '{p.name}'")
-    return p, p.resolve({**file_ov, **(overrides or {})})
-
-
-def analytic_body(probe, v: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-    """(J, K2, C2, info): one mode per direction, beam (or tube) + the holder as a point mass
-    m_h at the end (eqs 3.1-3.3, 3.24/3.29 without rotary inertia): ``end_body_first_mode_at``
-    (exact static end flexibility + one Hermite mass; tube with its Timoshenko shear
-    compliance) for bending, the rod ``A/(s11 L)`` with ``m_h + m_rod/3`` along the tube axis.
-    Damping (3.2): ``c = (mu / (rho A)) * (modal mass of the body without the holder)``."""
-    from probedyn.lumped.smart_analytic import end_body_first_mode_at
-
-    m_h = probe.holder_mass(v)
-    rows = {}
-    if probe.name == "duo-bimorph":
-        b = probe.beam(v)
-        rhoA = b.rho * b.A
-        for d in ("y", "z"):
-            M, k = end_body_first_mode_at(b.EI(d), rhoA, b.L, m_h, 0.0, 0.0, 0.0)
-            rows[d] = (M, k, v["mu"] / rhoA * (M - m_h))
-        info = {"body": "analytic: beam + holder point mass (3.1-3.3, exact static flexibility)"}
-    else:
-        t = probe.tube(v)
-        rhoA = t.rho * t.A
-        nu = float(np.clip(-probe.pzt(v).S[0, 1] / probe.pzt(v).S[0, 0], 0.0, 0.49))
-        cs = t.shear_compliance(probe.s66(v), nu)
-        M, k = end_body_first_mode_at(t.I(True) / t.s11, rhoA, t.L, m_h, 0.0, 0.0, 0.0, cs)
-        ka, Ma = t.A / (t.s11 * t.L), m_h + t.mass / 3
-        rows["x"] = (Ma, ka, v["mu"] / rhoA * (Ma - m_h))
-        rows["y"] = rows["z"] = (M, k, v["mu"] / rhoA * (M - m_h))
-        info = {"body": "analytic: tube (exact annulus, shear) + holder point mass; rod along the axis"}
-    dirs = SETUP[probe.name]["dirs"]
-    J = np.diag([rows[d][0] for d in dirs])
-    K2 = np.diag([rows[d][1] for d in dirs])
-    C2 = np.diag([rows[d][2] for d in dirs])
-    return J, K2, C2, info
-
-
-_FEM_BODIES: dict[tuple, tuple] = {}
-_TIP_KEYS = ("tip", "tip_mass", "k_tx", "k_ty", "k_tz")
-
-
-def fem_body(probe, v: dict[str, Any], n_body: int = 8) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-    """(J, K2, C2, info) of the lumped model assembled from the FEM body modes
-    (:func:`probedyn.lumped.smart.reduce_from_fem`, the holder end face as reference point).
-    The body does not depend on the tip (mass, holder springs), so one FEM solve per probe
-    geometry is kept for the process (sweeps over k_t reuse it)."""
-    key = (probe.name, n_body, tuple(sorted((k, x) for k, x in v.items() if k not in _TIP_KEYS)))
-    if key not in _FEM_BODIES:
-        _FEM_BODIES[key] = _fem_body(probe, v, n_body)
-    J, K2, C2, info = _FEM_BODIES[key]
-    return J.copy(), K2.copy(), C2.copy(), dict(info)
-
-
-def _fem_body(probe, v: dict[str, Any], n_body: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-    from probedyn.lumped.smart import PROBE_SETUP, _body_rho_A, reduce_from_fem
-
-    vv = {**v, "tip": "lumped"}
-    model = probe.build(vv)
-    setup = PROBE_SETUP[probe.name]
-    lm = reduce_from_fem(model, setup["directions"], model.lumped_tip.attach, mu=vv["mu"],
-                         rho_A=_body_rho_A(probe, vv), body_regions=setup["body"], n_body=n_body, residual=False)
-    desc = model.describe() if hasattr(model, "describe") else {}
-    info = {"body": "FEM lumped model (lumped/smart.py reduce_from_fem): first body mode per direction at the holder end face",
-            "body_modes": lm.body_modes, "validity_hz": lm.second_body_hz, "dofs": desc.get("dofs")}
-    return lm.J, lm.K2, lm.C2, info
-
-
-def stroke_matrix(probe, v: dict[str, Any], holder_face: bool) -> tuple[np.ndarray, dict[str, Any]]:
-    """Analytic free stroke per volt G [m/V] at the holder (end face if ``holder_face`` and the
-    holder is meshed, else the beam/tube end) and its provenance."""
-    d31 = preset(SETUP[probe.name]["table"])["d31"]
-    L_h = v["holder_length"] if (holder_face and v.get("holder") == "meshed") else 0.0
-    if probe.name == "duo-bimorph":
-        s = act.duo_bimorph_strokes(v["length"], v["width"], v["electrode_gap"], v["thickness"], d31)
-        f = act.holder_factor(v["length"], L_h)
-        G = np.diag([s["y"] * f, s["z"] * f])
-        src = "analytic gains: duo-bimorph (3.31), (3.32) as printed (piezo-moment derivation)"
-    else:
-        G = act.eccentric_tube_stroke(v["Re"], v["Ri"], v["length"], d31, v["delta_y"], v["delta_z"], L_h)
-        src = ("analytic gains: tube axial (3.35), lateral (3.34) with its factor 2 removed (exact annulus, "
-               "SOURCE-NOTES 8), eccentricity from the free piezo strain on the eccentric annulus (3.38-3.44 corrected)")
-    return G, {"gains": src, "d31": d31, "holder_length_in_stroke": L_h}
-
-
-def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str = "analytic", k_t: float | None = None,
-                tip_q: float = 100.0, gains: np.ndarray | None = None, gains_source: str | None = None) -> MechanicalPlant:
-    """The two-body tracking plant (3.37) of ``duo-bimorph`` or ``piezotube``.
-
-    ``body = "analytic" | "fem"`` selects J, K2, C2; ``k_t`` overrides the holder spring in every
-    modelled direction (section 3.4.1); ``tip_q``: quality factor of the tip on its spring (tip
-    damping ``c = sqrt(k_t m) / Q``, an assumption: Tables 3.1/3.2 give none); ``gains``: a stroke
-    matrix G [m/V] to use instead of the analytic one (e.g. from the piezo FEM), with
-    ``gains_source`` naming it - the one-line swap."""
-    probe, v = _probe_values(name, overrides)
-    dirs, inputs = SETUP[probe.name]["dirs"], SETUP[probe.name]["inputs"]
-    if body == "analytic":
-        J, K2, C2, info = analytic_body(probe, v)
-        holder_face = False
-    elif body == "fem":
-        J, K2, C2, info = fem_body(probe, v)
-        holder_face = True
-    else:
-        raise ParameterError(f"body must be 'analytic' or 'fem', got {body!r}")
-    if gains is None:
-        G, ginfo = stroke_matrix(probe, v, holder_face)
-    else:
-        G = np.asarray(gains, dtype=float)
-        if G.shape != (len(dirs), len(inputs)):
-            raise ParameterError(f"gains must be a ({len(dirs)}, {len(inputs)}) stroke matrix [m/V]")
-        ginfo = {"gains": gains_source or "user-supplied stroke matrix"}
+def smart_two_body(J: np.ndarray, K2: np.ndarray, C2: np.ndarray, G: np.ndarray, tip_mass: float, k_t: Sequence[float],
+                   dirs: Sequence[str], inputs: Sequence[str], tip_q: float = 100.0,
+                   provenance: dict[str, Any] | None = None) -> MechanicalPlant:
+    """The two-body plant (3.37) from the body at the holder (J, K2, C2), the free stroke matrix
+    G [m/V] at the holder, the tip mass and holder springs ``k_t`` (one per direction) and the tip
+    quality factor ``tip_q`` (tip damping ``c = sqrt(k_t m) / Q``; an assumption: the source's
+    tables give none). ``Gamma = K2 G``."""
     if not (math.isfinite(tip_q) and tip_q > 0):
         raise ParameterError(f"tip quality factor must be positive, got {tip_q:g}")
-    m = float(v["tip_mass"])
-    kt = np.array([float(k_t) if k_t is not None else float(v[f"k_t{d}"]) for d in dirs])
-    if np.any(~np.isfinite(kt)) or np.any(kt <= 0):
-        raise ParameterError(f"holder stiffness must be positive, got {kt}")
+    m = float(tip_mass)
+    kt = np.asarray(k_t, dtype=float)
+    if kt.shape != (len(dirs),) or np.any(~np.isfinite(kt)) or np.any(kt <= 0):
+        raise ParameterError(f"holder stiffness must be {len(dirs)} positive values, got {k_t}")
+    G = np.asarray(G, dtype=float)
+    if G.shape != (len(dirs), len(inputs)):
+        raise ParameterError(f"the stroke matrix must be ({len(dirs)}, {len(inputs)}) [m/V], got {G.shape}")
     D = m * np.eye(len(dirs))
     K1 = np.diag(kt)
     C1 = np.diag(np.sqrt(kt * m) / tip_q)
-    Gamma = K2 @ G
-    prov = {"probe": probe.name, **info, **ginfo, "tip_mass": m, "k_t": kt, "tip_q": tip_q,
-            "parameters": {k: v[k] for k in v if isinstance(v[k], (int, float, str))}}
-    p = two_body_plant(D, C1, K1, J, C2, K2, Gamma, dirs, inputs, prov)
+    prov = {**(provenance or {}), "tip_mass": m, "k_t": kt, "tip_q": tip_q}
+    p = two_body_plant(D, C1, K1, J, C2, K2, K2 @ G, dirs, inputs, prov)
     p.blocks["G"] = G
     return p

@@ -15,7 +15,7 @@ plain dict (SI) for the CLI, the report and docs/tracking.md; none prints or plo
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from probedyn.schemes.tracking import controllers as ctl
 from probedyn.schemes.tracking import inversion
 from probedyn.schemes.tracking.disturbance import kbr
 from probedyn.schemes.tracking.paths import Path, TimedPath, Timing, make_path, read_csv_path
-from probedyn.schemes.tracking.plants import MechanicalPlant, scaled_stiffness, smart_plant, with_blocks
+from probedyn.schemes.tracking.plants import MechanicalPlant, scaled_stiffness, with_blocks
 from probedyn.schemes.tracking.simulate import SensorNoise, TrackingResult, closed_loop_response, simulate
 
 #: amplifier limits [V]: tube scanners are driven by +-200..250 V high-voltage amplifiers (e.g. the
@@ -44,8 +44,9 @@ REF_PATHS = {
 }
 
 
-def _plant(probe: str, body: str, k_t: float | None = None, overrides: dict | None = None, **kw) -> MechanicalPlant:
-    return smart_plant(probe, overrides, body=body, k_t=k_t, **kw)
+#: a plant factory: ``factory(probe_name, k_t=None, overrides=None) -> MechanicalPlant``
+#: (``probedyn.probes.tracking.plant_factory(body)`` builds the smart probes' plants)
+PlantFactory = Callable[..., MechanicalPlant]
 
 
 def check_range(plant: MechanicalPlant, path: Path, v_max: float, n: int = 4001) -> dict[str, Any]:
@@ -82,7 +83,7 @@ def build_path(spec: str, probe: str, *, speed: float | None = None, duration: f
     raise ParameterError(f"unknown path {spec!r} (line, circle, square, cylinder, sphere, cone, or a CSV file t,x,y,z)")
 
 
-def track(probe: str, path_spec: str, control: str = "composite", *, body: str = "analytic",
+def track(factory: PlantFactory, probe: str, path_spec: str, control: str = "composite", *,
           disturbance: str | None = None, disturbance_scale: float = 1.0, speed: float | None = None,
           duration: float | None = None, size: float | None = None, k_t: float | None = None,
           v_max: float | None = None, eccentricity: float | None = None, noise_rms: float = 0.0,
@@ -93,7 +94,7 @@ def track(probe: str, path_spec: str, control: str = "composite", *, body: str =
         if probe != "piezotube":
             raise ParameterError("eccentricity applies to the piezotube")
         ov.update(delta_y=eccentricity, delta_z=eccentricity)
-    plant = _plant(probe, body, k_t, ov)
+    plant = factory(probe, k_t=k_t, overrides=ov)
     path = build_path(path_spec, probe, speed=speed, duration=duration, size=size)
     vm = V_AMP.get(probe, 200.0) if v_max is None else float(v_max)
     qs_peaks = check_range(plant, path, vm)
@@ -129,11 +130,11 @@ def track(probe: str, path_spec: str, control: str = "composite", *, body: str =
 # ---------------------------------------------------------------------------------------------
 
 
-def open_loop_study(probe: str, *, body: str = "analytic", durations: Sequence[float] = (1.0, 0.05),
+def open_loop_study(factory: PlantFactory, probe: str, *, durations: Sequence[float] = (1.0, 0.05),
                     keep: bool = False) -> dict[str, Any]:
     """Reference paths of ``probe`` tracked open loop with the quasi-static and the dynamic
     inverse at each duration: error metrics and voltage peaks (``keep``: the time histories)."""
-    plant = _plant(probe, body)
+    plant = factory(probe)
     rows, runs = [], {}
     for kind in REF_PATHS[probe]:
         for T in durations:
@@ -200,8 +201,8 @@ def abrupt_start_bound(plant: MechanicalPlant, path: Path) -> float:
     return float(np.sum(tip * np.abs(Phi.T @ plant.M @ Delta) / w))
 
 
-def holder_stiffness_study(probe: str, *, stiffnesses: Sequence[float] = (1, 2, 5, 10, 20, 50, 100),
-                           path_hz: Sequence[float] = (1.0, 10.0, 100.0), body: str = "analytic",
+def holder_stiffness_study(factory: PlantFactory, probe: str, *, stiffnesses: Sequence[float] = (1, 2, 5, 10, 20, 50, 100),
+                           path_hz: Sequence[float] = (1.0, 10.0, 100.0),
                            turns: float = 3.0, start: str = "abrupt") -> dict[str, Any]:
     """Section 3.4.1: the source's open-loop (quasi-static inverse) tracking of a circle
     (duo-bimorph, (y, z)) or a sphere (piezotube) for holder stiffness ``k_t`` in every direction
@@ -216,7 +217,7 @@ def holder_stiffness_study(probe: str, *, stiffnesses: Sequence[float] = (1, 2, 
     size = 0.5e-6
     rows = []
     for k in stiffnesses:
-        plant = _plant(probe, body, float(k))
+        plant = factory(probe, k_t=float(k))
         law = ctl.OpenLoop("quasi-static").design(plant)
         f_modes = plant.frequencies_hz()
         for fp in path_hz:
@@ -245,7 +246,8 @@ def holder_stiffness_study(probe: str, *, stiffnesses: Sequence[float] = (1, 2, 
                          "predicted_residual_m": v_jump / (2 * math.pi * f_tip) if start == "abrupt" else float("nan"),
                          "decay_time_s": plant.provenance.get("tip_q", 100.0) / (math.pi * f_tip),
                          "tip_q": plant.provenance.get("tip_q")})
-    return {"probe": probe, "path": kind, "size_m": size, "start": start, "rows": rows, "body": body}
+    return {"probe": probe, "path": kind, "size_m": size, "start": start, "rows": rows,
+            "body": getattr(factory, "body", None)}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -253,14 +255,14 @@ def holder_stiffness_study(probe: str, *, stiffnesses: Sequence[float] = (1, 2, 
 # ---------------------------------------------------------------------------------------------
 
 
-def range_study(body: str = "analytic") -> dict[str, Any]:
+def range_study(factory: PlantFactory) -> dict[str, Any]:
     """Range per volt of both probes: printed formulas (3.31, 3.32, 3.34, 3.35), the corrected
     3.34, and the reduced probes' static tip stroke per volt (``Cq K^-1 B``, the plant the
     simulations use, at the holder end face with ``body = "fem"``), plus the sweeps of Figs 3.17
     (w0, h) and 3.18 (L, Re) from the formulas. The piezo FEM (issue 12) will supply the FEM values."""
     out: dict[str, Any] = {}
     for probe in ("duo-bimorph", "piezotube"):
-        plant = _plant(probe, body)
+        plant = factory(probe)
         v = plant.provenance["parameters"]
         G = plant.static_gain()
         if probe == "duo-bimorph":
@@ -297,17 +299,8 @@ def range_study(body: str = "analytic") -> dict[str, Any]:
 # the 3.5 control problem
 # ---------------------------------------------------------------------------------------------
 
-CONTROL_DEFAULTS = {"k_t": 10.0, "delta": 5e-6, "stiffness_ratio": 0.2, "zeta": 0.7, "zeta_fast": 0.7}
-
-
-def control_plant(body: str = "analytic", k_t: float | None = None, delta: float | None = None,
-                  gains: np.ndarray | None = None, gains_source: str | None = None) -> MechanicalPlant:
-    """The piezotube of section 3.5: Re = 0.5 mm, Ri = 0.45 mm, delta_x = delta_y = 5 um (probedyn
-    delta_z = delta_y = delta), holder k_t (default 10 N/m, the probe's manipulation stiffness)."""
-    d = CONTROL_DEFAULTS["delta"] if delta is None else float(delta)
-    kt = CONTROL_DEFAULTS["k_t"] if k_t is None else float(k_t)
-    return smart_plant("piezotube", {"delta_y": d, "delta_z": d}, body=body, k_t=kt, gains=gains,
-                       gains_source=gains_source)
+#: the control design of section 3.5 (slow loop: Kp = kappa K_s, damping zeta; fast: zeta_f)
+CONTROL_DEFAULTS = {"stiffness_ratio": 0.2, "zeta": 0.7, "zeta_fast": 0.7}
 
 
 def default_laws(k: dict | None = None) -> dict[str, Any]:
@@ -318,11 +311,11 @@ def default_laws(k: dict | None = None) -> dict[str, Any]:
             "PID, same bandwidth": ctl.PID(c["stiffness_ratio"], c["zeta"], 1.0)}
 
 
-def control_problem(plant: MechanicalPlant | None = None) -> dict[str, Any]:
-    """Section 3.5 on ``plant`` (default :func:`control_plant`): the matrices of (3.37), Gamma
+def control_problem(plant: MechanicalPlant) -> dict[str, Any]:
+    """Section 3.5 on ``plant`` (``probedyn.probes.tracking.control_plant()``): the matrices of (3.37), Gamma
     (N/V and normalised), the slow model (3.49), the boundary layer (3.57) and the stability of
     every law on the full model, plus the largest stable PID bandwidth."""
-    p = plant or control_plant()
+    p = plant
     b = p.blocks
     s = ctl.slow_model(b)
     G = b["G"]
@@ -347,14 +340,14 @@ def control_problem(plant: MechanicalPlant | None = None) -> dict[str, Any]:
             "stability": stab, "pid_max_stable_gain": sc, "provenance": p.provenance}
 
 
-def controller_comparison(*, plant: MechanicalPlant | None = None, paths: Sequence[str] = ("cone", "cylinder"),
+def controller_comparison(plant: MechanicalPlant, *, paths: Sequence[str] = ("cone", "cylinder"),
                           disturbances: Sequence[float] = (0.0, 1.0), duration: float = 1.0, keep: bool = False,
                           laws: dict | None = None) -> dict[str, Any]:
     """Figs 3.21 and 3.22: every law on the full model along the conic and cylindrical paths,
     with the KBr disturbance scaled by each of ``disturbances`` (0: none). Unstable laws are
     reported with their growth rate, not simulated. Per run: RMS and max error per axis, the max
     error after the transient relative to the path extent ("within 1 %?"), peak voltages."""
-    p = plant or control_plant()
+    p = plant
     laws = laws or default_laws()
     rows, runs = [], {}
     designed = {}
@@ -389,8 +382,8 @@ def controller_comparison(*, plant: MechanicalPlant | None = None, paths: Sequen
 # ---------------------------------------------------------------------------------------------
 
 
-def epsilon_study(*, eps: Sequence[float] = (1.0, 0.5, 0.25, 0.125, 0.0625), duration: float = 0.02,
-                  plant: MechanicalPlant | None = None) -> dict[str, Any]:
+def epsilon_study(plant: MechanicalPlant, *, eps: Sequence[float] = (1.0, 0.5, 0.25, 0.125, 0.0625), duration: float = 0.02,
+                  ) -> dict[str, Any]:
     """Tracking error vs eps on the source's scaling (3.46): ``K1, K2 -> K/eps^2`` with Gamma
     scaled alike (the free stroke per volt is kept) and the damping matrices by 1/eps (so that
     every eps is the same probe in a time scaled by eps, the path is not); the laws are redesigned
@@ -399,7 +392,7 @@ def epsilon_study(*, eps: Sequence[float] = (1.0, 0.5, 0.25, 0.125, 0.0625), dur
     order ``p`` of max|e| ~ eps^p (least squares in log-log) per law; also reports the stability
     of composite control in the holder-only limit (K1 -> K1/eps^2 alone: the "infinitely rigid
     holder" of the text)."""
-    p0 = plant or control_plant()
+    p0 = plant
     path = build_path("cone", "piezotube", duration=duration)
     laws = {"composite (3.50-3.54)": ctl.CompositeControl(0.2, 0.7, 0.7),
             "open (quasi-static)": ctl.OpenLoop("quasi-static"),
@@ -440,14 +433,14 @@ def epsilon_study(*, eps: Sequence[float] = (1.0, 0.5, 0.25, 0.125, 0.0625), dur
 # ---------------------------------------------------------------------------------------------
 
 
-def robustness_study(*, plant: MechanicalPlant | None = None, fem_gains: np.ndarray | None = None,
+def robustness_study(plant: MechanicalPlant, *, fem_gains: np.ndarray | None = None,
                      fem_source: str | None = None, duration: float = 1.0) -> dict[str, Any]:
     """Composite control on the conic path (and the cylinder for the disturbance cases): nominal;
     designed on the centred tube's Gamma (no eccentricity) driving the eccentric plant - or on the
     analytic Gamma driving the plant with ``fem_gains`` (the piezo FEM's stroke matrix) when given;
     amplifier saturation at +-200 V and at the wall-field limit +-15 V; sensor noise 0.1 nm and
     2 nm RMS in 10 kHz (2 nm: a capacitive sensor's 20 pm/sqrt(Hz)); KBr disturbance 1x, 2x, 5x."""
-    p = plant or control_plant()
+    p = plant
     c = ctl.CompositeControl(CONTROL_DEFAULTS["stiffness_ratio"], CONTROL_DEFAULTS["zeta"], CONTROL_DEFAULTS["zeta_fast"])
     o = ctl.OpenLoop("dynamic")
     cone = build_path("cone", "piezotube", duration=duration)
@@ -517,7 +510,7 @@ def foh_error_bound(cl, omega: float, Fhat: np.ndarray, h: float, n_alias: int =
     return b
 
 
-def frequency_response_check(*, plant: MechanicalPlant | None = None, f_path: float = 50.0, radius: float = 0.5e-6,
+def frequency_response_check(plant: MechanicalPlant, *, f_path: float = 50.0, radius: float = 0.5e-6,
                              turns: float = 10.0, h: float = 2e-6, controller=None) -> dict[str, Any]:
     """For a linear closed loop (composite control on the piezotube) and a circle at ``f_path``
     turns/s in the (y, z) plane, compare the simulated error during one turn late in the
@@ -527,7 +520,7 @@ def frequency_response_check(*, plant: MechanicalPlant | None = None, f_path: fl
     forcing (:func:`foh_error_bound`, summed over the path's sinusoids), plus what is left of the
     start transient, ``max|e| exp(-sigma t)`` (sigma: the closed loop's slowest decay rate), plus
     the round-off of ``y - r`` (64 ulp of the path radius)."""
-    p = plant or control_plant()
+    p = plant
     law = (controller or ctl.CompositeControl(0.2, 0.7, 0.7)).design(p)
     from probedyn.schemes.tracking.paths import circle
     from probedyn.schemes.tracking.simulate import ClosedLoop
