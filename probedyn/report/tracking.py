@@ -88,6 +88,41 @@ def epsilon_figure(study: dict, path: str | Path) -> Path:
     return savefig(fig, path)
 
 
+def range_figure(study: dict, path: str | Path) -> Path:
+    """Figs 3.17 and 3.18: stroke per volt from the formulas vs w0, h (duo-bimorph) and L, Re
+    (piezotube), with the simulated plants' strokes at the default geometry."""
+    plt = pyplot()
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.8), constrained_layout=True)
+    f17 = study["fig_3_17"]
+    for i, h in enumerate(f17["h_m"]):
+        ax[0].plot(np.asarray(f17["w0_m"]) * 1e6, np.asarray(f17["y_m_per_V"][i]) * 1e9, "-", color=f"C{i}",
+                   label=f"y (3.31), h = {h * 1e6:g} µm")
+        ax[0].plot(np.asarray(f17["w0_m"]) * 1e6, np.asarray(f17["z_m_per_V"][i]) * 1e9, "--", color=f"C{i}",
+                   label=f"z (3.32), h = {h * 1e6:g} µm")
+    for r in study["duo-bimorph"]["rows"]:
+        ax[0].plot([5.0], [r["formula_m_per_V"] * 1e9], "ko", ms=4)
+    ax[0].plot([], [], "ko", ms=4, label="default probe (formula at the beam end)")
+    ax[0].set_yscale("log")
+    ax[0].set_xlabel(axis_label("electrode gap w0", "um"))
+    ax[0].set_ylabel(axis_label("stroke per volt", "nm/V"))
+    ax[0].set_title("duo-bimorph (Fig 3.17)")
+    ax[0].legend(fontsize="x-small", ncol=2)
+    f18 = study["fig_3_18"]
+    for i, Re in enumerate(f18["Re_m"]):
+        L = np.asarray(f18["L_m"]) * 1e3
+        ax[1].plot(L, np.asarray(f18["lateral_m_per_V"][i]) * 1e9, "-", color=f"C{i}",
+                   label=f"lateral, 3.34 corrected, Re = {Re * 1e3:g} mm")
+        ax[1].plot(L, np.asarray(f18["lateral_printed_m_per_V"][i]) * 1e9, ":", color=f"C{i}",
+                   label=f"lateral, 3.34 printed, Re = {Re * 1e3:g} mm")
+        ax[1].plot(L, np.asarray(f18["axial_m_per_V"][i]) * 1e9, "--", color=f"C{i}", label=f"axial 3.35, Re = {Re * 1e3:g} mm")
+    ax[1].set_yscale("log")
+    ax[1].set_xlabel(axis_label("tube length L", "mm"))
+    ax[1].set_ylabel(axis_label("stroke per volt", "nm/V"))
+    ax[1].set_title(f"piezotube (Fig 3.18), wall {f18['wall_m'] * 1e6:g} µm")
+    ax[1].legend(fontsize="xx-small", ncol=1)
+    return savefig(fig, path)
+
+
 def _md_table(rows, cols):
     head = "| " + " | ".join(h for _, h, _ in cols) + " |"
     sep = "|" + "|".join("---" if i == 0 else "---:" for i in range(len(cols))) + "|"
@@ -117,13 +152,13 @@ def section(outdir: Path, quick: bool) -> str:
           "Details and the FEM-body numbers: docs/tracking.md.", ""]
     rows = []
     for probe in ("duo-bimorph", "piezotube"):
-        st = S.open_loop_study(plant_factory("analytic"), probe, durations=(0.05,) if quick else (1.0, 0.05))
+        st = S.open_loop_study(plant_factory("analytic"), probe, durations=(0.05,))
         for r in st["rows"]:
             rows.append({"probe": probe, **{k: r[k] for k in ("path", "duration_s", "inverse")},
                          "err": r["max_error_m"] * 1e9, "rel": r["relative_max_error"],
                          "v": ", ".join(f"{k} {v:.3g}" for k, v in r["voltage_peak_V"].items())})
-    md += ["**Open-loop tracking (Figs 3.8, 3.14)**: reference paths of size 0.5 µm, quasi-static and exact dynamic "
-           "inverse of the plant.", "",
+    md += ["**Open-loop tracking (Figs 3.8, 3.14)**: reference paths of size 0.5 µm in 50 ms, quasi-static and "
+           "exact dynamic inverse of the plant (1 s paths: docs/tracking.md).", "",
            _md_table(rows, [("probe", "probe", ""), ("path", "path", ""), ("duration_s", "duration [s]", "g"),
                             ("inverse", "inverse", ""), ("err", "max error [nm]", ".3g"), ("rel", "max error / size", ".2e"),
                             ("v", "voltage peaks [V]", "")]), ""]
@@ -159,6 +194,20 @@ def section(outdir: Path, quick: bool) -> str:
            _md_table(crow, [("law", "law", ""), ("d", "KBr scale", "g"), ("max", "max error [nm]", ".3g"),
                             ("rel", "max error / extent after 5 %", ".2e"), ("v", "peak voltage [V]", ".3g")]), "",
            "![conic path](tracking_cone.png)", ""]
+    rg = S.range_study(plant_factory("analytic"))
+    range_figure(rg, outdir / "tracking_range.png")
+    rrows = [{"probe": p, **r} for p in ("duo-bimorph", "piezotube") for r in rg[p]["rows"]]
+    md += ["**Range per volt (Figs 3.17, 3.18)**: formulas (SOURCE-NOTES 8: 3.34 halved) and the simulated plants' "
+           "static tip stroke (analytic body: at the beam/tube end); the piezo FEM will replace the formulas.", "",
+           _md_table([{**r, "f": r["formula_m_per_V"] * 1e9, "p": r["plant_m_per_V"] * 1e9} for r in rrows],
+                     [("probe", "probe", ""), ("axis", "axis", ""), ("formula", "formula", ""), ("f", "formula [nm/V]", ".4g"),
+                      ("p", "plant [nm/V]", ".4g")]), "", "![range per volt](tracking_range.png)", ""]
+    if not quick:
+        es = S.epsilon_study(plant, eps=(1.0, 0.5, 0.25, 0.125), printed=False, holder_only=False)
+        epsilon_figure(es, outdir / "tracking_epsilon.png")
+        md += ["**Tikhonov's O(eps) (3.55-3.56)**: stiffness scaling K -> K/eps^2 (3.46), fast cone (20 ms); observed "
+               "orders " + ", ".join(f"{k}: {v:.2f}" for k, v in es["observed_order"].items()) + " (composite: O(eps^3) "
+               "with the slow model's feedforward; see docs/tracking.md).", "", "![epsilon study](tracking_epsilon.png)", ""]
     fr = S.frequency_response_check(plant, h=1e-5)
     md += [f"**Simulator check**: circle at {fr['f_path_hz']:g} turns/s, composite control: simulated vs "
            f"transfer-function steady-state error differ by {fr['max_abs_difference_m']:.3g} m (tolerance from the "

@@ -384,7 +384,7 @@ def controller_comparison(plant: MechanicalPlant, *, paths: Sequence[str] = ("co
 
 
 def epsilon_study(plant: MechanicalPlant, *, eps: Sequence[float] = (1.0, 0.5, 0.25, 0.125, 0.0625), duration: float = 0.02,
-                  ) -> dict[str, Any]:
+                  printed: bool = True, holder_only: bool = True) -> dict[str, Any]:
     """Tracking error vs eps on the source's scaling (3.46): ``K1, K2 -> K/eps^2`` with Gamma
     scaled alike (the free stroke per volt is kept) and the damping matrices by 1/eps (so that
     every eps is the same probe in a time scaled by eps, the path is not); the laws are redesigned
@@ -398,6 +398,8 @@ def epsilon_study(plant: MechanicalPlant, *, eps: Sequence[float] = (1.0, 0.5, 0
     laws = {"composite (3.50-3.54)": ctl.CompositeControl(0.2, 0.7, 0.7),
             "open (quasi-static)": ctl.OpenLoop("quasi-static"),
             "slow, as printed (no feedforward) + fast": ctl.CompositeControl(0.2, 0.7, 0.7, feedforward=False)}
+    if not printed:
+        laws.pop("slow, as printed (no feedforward) + fast")
     rows = []
     for e in eps:
         b = p0.blocks
@@ -419,7 +421,7 @@ def epsilon_study(plant: MechanicalPlant, *, eps: Sequence[float] = (1.0, 0.5, 0
             y = np.log([q["max_error_m"] for q in r])
             fits[name] = float(np.polyfit(x, y, 1)[0])
     holder = []
-    for e in eps:
+    for e in (eps if holder_only else ()):
         b = p0.blocks
         pe = with_blocks(p0, K1=b["K1"] / e**2, C1=b["C1"] / e)
         st = ctl.stability(pe, ctl.CompositeControl(0.2, 0.7, 0.7).design(pe))
