@@ -30,6 +30,8 @@ SOLVERS = ("auto", "pardiso", "superlu")
 
 
 def have_pardiso() -> bool:
+    # pypardiso is imported where it is used, not at module level: it is the optional fast
+    # backend (SuperLU is the fallback when MKL is missing) and importing it loads MKL (~0.6 s).
     try:
         import pypardiso  # noqa: F401
     except Exception:
