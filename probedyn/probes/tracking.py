@@ -13,22 +13,23 @@ simulator are in ``schemes/tracking``.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.presets import preset
+from probedyn.lumped.smart import reduce_from_fem
+from probedyn.lumped.smart_analytic import end_body_first_mode_at
+from probedyn.probes import get_probe
+from probedyn.probes._smart import SmartProbe
 from probedyn.schemes.tracking import actuation as act
 from probedyn.schemes.tracking.plants import SETUP, MechanicalPlant, smart_two_body
 
 
-def _probe_values(name: str, overrides: dict[str, Any] | None):
-    from probedyn.probes import get_probe
-
+def _probe_values(name: str, overrides: dict[str, Any] | None) -> tuple[SmartProbe, dict[str, Any]]:
     p, file_ov = get_probe(name)
-    if p.name not in SETUP:
+    if not isinstance(p, SmartProbe) or p.name not in SETUP:
         raise ParameterError(f"path tracking needs a smart probe (duo-bimorph or piezotube), got '{p.name}'")
     return p, p.resolve({**file_ov, **(overrides or {})})
 
@@ -39,8 +40,6 @@ def analytic_body(probe, v: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.
     (exact static end flexibility + one Hermite mass; tube with its Timoshenko shear
     compliance) for bending, the rod ``A/(s11 L)`` with ``m_h + m_rod/3`` along the tube axis.
     Damping (3.2): ``c = (mu / (rho A)) * (modal mass of the body without the holder)``."""
-    from probedyn.lumped.smart_analytic import end_body_first_mode_at
-
     m_h = probe.holder_mass(v)
     rows = {}
     if probe.name == "duo-bimorph":
@@ -83,17 +82,13 @@ def fem_body(probe, v: dict[str, Any], n_body: int = 8) -> tuple[np.ndarray, np.
     return J.copy(), K2.copy(), C2.copy(), dict(info)
 
 
-def _fem_body(probe, v: dict[str, Any], n_body: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-    from probedyn.lumped.smart import reduce_from_fem
-
+def _fem_body(probe: SmartProbe, v: dict[str, Any], n_body: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
     vv = {**v, "tip": "lumped"}
     model = probe.build(vv)
-    if probe.name == "duo-bimorph":
-        rho_A, regions = vv["density"] * vv["width"] * vv["thickness"], ("upper_layer", "lower_layer")
-    else:
-        rho_A, regions = vv["density"] * math.pi * (vv["Re"] ** 2 - vv["Ri"] ** 2), ("tube",)
-    lm = reduce_from_fem(model, SETUP[probe.name]["dirs"], model.lumped_tip.attach, mu=vv["mu"],
-                         rho_A=rho_A, body_regions=regions, n_body=n_body, residual=False)
+    lm = reduce_from_fem(model, list(probe.lumped_directions), model.lumped_tip.attach, mu=vv["mu"],
+                         rho_A=probe.body_rho_A(vv), body_regions=probe.body_regions, n_body=n_body, residual=False)
+    if list(probe.lumped_directions) != SETUP[probe.name]["dirs"]:
+        raise ParameterError(f"{probe.name}: lumped directions {probe.lumped_directions} differ from the tracking plant's")
     desc = model.describe() if hasattr(model, "describe") else {}
     info = {"body": "FEM lumped model (lumped/smart.py reduce_from_fem): first body mode per direction at the holder end face",
             "body_modes": lm.body_modes, "validity_hz": lm.second_body_hz, "dofs": desc.get("dofs")}

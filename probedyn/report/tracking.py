@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from probedyn.plotting import axis_label, pyplot, savefig
+from probedyn.probes.tracking import control_plant, plant_factory
+from probedyn.schemes.tracking import studies as S
 
 AX_COLORS = {"x": "C0", "y": "C1", "z": "C2"}
 
@@ -140,9 +142,6 @@ def section(outdir: Path, quick: bool) -> str:
     """Open-loop tracking of both probes, the holder-stiffness residual, the 3.5 control problem
     (stability of the four laws, conic path), the frequency-response check of the simulator.
     Analytic-body plants with analytic gains (fast); docs/tracking.md has the FEM-body numbers."""
-    from probedyn.probes.tracking import control_plant, plant_factory
-    from probedyn.schemes.tracking import studies as S
-
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     t0 = time.perf_counter()

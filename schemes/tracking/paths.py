@@ -36,6 +36,7 @@ from typing import Any, Sequence
 
 import numpy as np
 from numpy.polynomial import Polynomial
+from scipy.interpolate import make_interp_spline
 
 from probedyn.core.errors import DataFormatError, ParameterError
 
@@ -400,8 +401,6 @@ class CsvPath(Path):
     name = "csv"
 
     def __init__(self, t: np.ndarray, r: np.ndarray, source: str = "<array>", lines: Sequence[int] | None = None) -> None:
-        from scipy.interpolate import make_interp_spline
-
         t = np.asarray(t, dtype=float)
         r = np.asarray(r, dtype=float)
         if t.ndim != 1 or r.shape != (t.size, 3):

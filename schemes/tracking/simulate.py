@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 from numba import njit
+from scipy.integrate import solve_ivp
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.schemes.tracking import inversion
@@ -449,8 +450,6 @@ def simulate_ivp(plant: MechanicalPlant, law: Law, path: Path, *, surface: Perio
     """The same closed loop with ``scipy.integrate.solve_ivp`` (forcing evaluated exactly at every
     stage; ``jac=True`` passes the analytic Jacobian ``A_cl + dN/dX``). For cross-checks and the
     benchmark; sensor noise is not supported here."""
-    from scipy.integrate import solve_ivp
-
     if law.grid_only:
         raise ParameterError("solve_ivp needs a controller whose reference terms are defined at any time")
     cl = ClosedLoop(plant, law, path, surface, v_max, None)

@@ -18,15 +18,18 @@ import math
 from typing import Any, Callable, Sequence
 
 import numpy as np
+import scipy.linalg as sla
 
 from probedyn.core.errors import ParameterError
+from probedyn.core.presets import preset
 from probedyn.schemes.tracking import actuation as act
 from probedyn.schemes.tracking import controllers as ctl
 from probedyn.schemes.tracking import inversion
 from probedyn.schemes.tracking.disturbance import kbr
-from probedyn.schemes.tracking.paths import Path, TimedPath, Timing, make_path, read_csv_path
+from probedyn.schemes.tracking.paths import Path, TimedPath, Timing, circle, make_path, read_csv_path
 from probedyn.schemes.tracking.plants import MechanicalPlant, scaled_stiffness, with_blocks
-from probedyn.schemes.tracking.simulate import SensorNoise, TrackingResult, closed_loop_response, simulate
+from probedyn.schemes.tracking.simulate import (ClosedLoop, SensorNoise, TrackingResult, closed_loop_response,
+                                                simulate)
 
 #: amplifier limits [V]: tube scanners are driven by +-200..250 V high-voltage amplifiers (e.g. the
 #: PiezoDrive TD250, +-250 V); the duo-bimorph's 5 um layers by a low-voltage driver (+-20 V,
@@ -191,8 +194,6 @@ def abrupt_start_bound(plant: MechanicalPlant, path: Path) -> float:
     ``e = q - q_qs`` starts with ``e(0+) = 0``, ``e'(0+) = -Delta`` and (undamped) rings as
     ``-sum_j phi_j (phi_j^T M Delta) sin(omega_j t) / omega_j`` (mass-normalised modes). The tip
     part is bounded by ``sum_j |Cq phi_j| |phi_j^T M Delta| / omega_j``; damping only lowers it."""
-    import scipy.linalg as sla
-
     v0 = inversion.path_on_outputs(plant, path.derivatives(np.array([0.0]), 1))[1][0]
     Delta = np.linalg.solve(plant.K, plant.B @ np.linalg.solve(plant.static_gain(), v0))
     lam, Phi = sla.eigh(plant.K, plant.M)
@@ -278,8 +279,6 @@ def range_study(factory: PlantFactory) -> dict[str, Any]:
                     {"axis": "y, z (lateral)", "formula": "(3.34) / 2 (corrected)", "formula_m_per_V": f["lateral"],
                      "plant_m_per_V": G[1, 1]}]
         out[probe] = {"rows": rows, "gains": plant.provenance["gains"], "body": plant.provenance["body"]}
-    from probedyn.core.presets import preset
-
     t1, t2 = preset("table-3.1"), preset("table-3.2")
     w0s = np.linspace(1e-6, 25e-6, 25)
     hs = np.array([5e-6, 10e-6, 20e-6])
@@ -525,8 +524,6 @@ def frequency_response_check(plant: MechanicalPlant, *, f_path: float = 50.0, ra
     the round-off of ``y - r`` (64 ulp of the path radius)."""
     p = plant
     law = (controller or ctl.CompositeControl(0.2, 0.7, 0.7)).design(p)
-    from probedyn.schemes.tracking.paths import circle
-    from probedyn.schemes.tracking.simulate import ClosedLoop
 
     T = turns / f_path
     ramp = 2.0 / f_path
