@@ -27,9 +27,10 @@ commute), and the slow model (3.49, exact as printed once q1'' is used, plus C2)
   probedyn uses ``-Kp``. **Feedforward** ``ff = M_s r'' + C_s r' + K_s r`` (the slow model's
   inverse): without it (``feedforward=False``, the law as printed) the tip stops short by
   ``(K_s + Kp)^-1 K_s r`` - the slow model has the stiffness ``K_s = K* K2`` that a rigid robot
-  arm (the source's refs 112-114, where 3.50-3.54 come from) does not have. Gains place the
-  slow error dynamics ``M_s e'' + (C_s + Kd) e' + (K_s + Kp) e = 0`` at natural frequency
-  ``omega_s`` and damping ``zeta_s``: ``Kp = omega_s^2 M_s - K_s``, ``Kd = 2 zeta_s omega_s M_s - C_s``.
+  arm (the source's refs 112-114, where 3.50-3.54 come from) does not have. Gains
+  (:func:`slow_gains`): ``Kp = kappa K_s`` (kappa >= 0: the feedback adds stiffness, never
+  cancels the plant's) and ``Kd`` giving the slow error dynamics
+  ``M_s e'' + (C_s + Kd) e' + (K_s + Kp) e = 0`` the damping ratio ``zeta_s``.
 * :class:`CompositeControl` (3.50-3.54): ``u = u_s + u_f``, ``u_f = K_v (q1' - q2')`` with
   ``Gamma K_v = C_f``, the damping added to the relative coordinate ``w = q2 - q1``:
   ``J w'' + (C2 + C_f) w' + (K1 + K2) w = ...``. The printed (3.52)
