@@ -138,8 +138,10 @@ def eccentric_tube_stroke(Re: float, Ri: float, L: float, d31: float, delta_y: f
     Statics of the free tube under its piezo strain (module docstring): axial strain at the
     centroid ``eps0 = N / A``, gradient ``kappa = I_c^-1 m`` (the elastic modulus cancels);
     lateral deflection ``-kappa (L^2/2 + L L_h)`` (end deflection + holder rotation), axial
-    displacement of the outer axis (where the holder face is centred) ``L (eps0 - kappa . c)``.
-    For ``delta = 0`` this is ``diag(tube_strokes x, lateral (1 + 2 L_h/L), same)``."""
+    displacement ``L eps0`` of the end section's centroid - the face average of a plane section,
+    as the FEM's face-averaged holder attachment sees it (the outer axis, 4.3 delta away, would
+    add ``-L kappa . c``). For ``delta = 0`` this is ``diag(tube_strokes x, lateral (1 + 2 L_h/L),
+    same)``."""
     L = _pos("L", L)
     s = eccentric_section_loads(Re, Ri, delta_y, delta_z, n_quad)
     dd = abs(float(d31))
@@ -149,7 +151,7 @@ def eccentric_tube_stroke(Re: float, Ri: float, L: float, d31: float, delta_y: f
         N, m = s["loads"][k]["N"], s["loads"][k]["m"]
         eps0 = dd * N / s["A"]
         kap = dd * (Icinv @ m)
-        G[0, j] = L * (eps0 - float(kap @ s["centroid"]))
+        G[0, j] = L * eps0
         G[1:, j] = -kap * (L**2 / 2 + L * holder_length)
     return G
 
