@@ -353,3 +353,21 @@ def test_track_cli_out(tmp_path, capsys):
 
     assert main(["track", "piezotube", "--path", "cone", "--duration", "0.1", "--out", str(tmp_path)]) == 0
     assert (tmp_path / "track.png").stat().st_size > 10000 and (tmp_path / "track.json").exists()
+
+
+def test_modal_body_plant_is_the_two_body_model_in_other_coordinates(tube):
+    """r = d retained modes with Phi = U reproduce the two-body plant (3.37) exactly: same
+    frequencies (1e-9 relative, eigen-solver round-off) and static stroke."""
+    import scipy.linalg as sla
+
+    from probedyn.schemes.tracking.plants import modal_body_plant, with_blocks
+
+    b = tube.blocks
+    lam, V = sla.eigh(b["K2"], b["J"])  # J-orthonormal body modes in holder coordinates: q2 = V eta
+    omega = np.sqrt(lam)
+    Act = V.T @ b["Gamma"]
+    p = modal_body_plant(omega, 0.0, V, Act, b["D"][0, 0], np.diag(b["K1"]), tube.outputs, tube.inputs)
+    tube0 = with_blocks(tube, C2=np.zeros_like(b["C2"]))  # the modal plant was built without body damping
+    assert np.allclose(np.sort(p.frequencies_hz()), np.sort(tube0.frequencies_hz()), rtol=1e-9, atol=0)
+    assert np.allclose(p.static_gain(), tube.static_gain(), rtol=1e-9, atol=1e-9 * np.max(np.abs(tube.static_gain())))
+

@@ -191,3 +191,42 @@ def smart_two_body(J: np.ndarray, K2: np.ndarray, C2: np.ndarray, G: np.ndarray,
     p = two_body_plant(D, C1, K1, J, C2, K2, K2 @ G, dirs, inputs, prov)
     p.blocks["G"] = G
     return p
+
+
+def modal_body_plant(omega: np.ndarray, zeta: np.ndarray, Phi: np.ndarray, actuation: np.ndarray, tip_mass: float,
+                     k_t: Sequence[float], dirs: Sequence[str], inputs: Sequence[str], tip_q: float = 100.0,
+                     provenance: dict[str, Any] | None = None) -> MechanicalPlant:
+    """A body with any number r of retained modes (a reduced probe: several modes per direction)
+    carrying the tip on the holder springs. Modal coordinates ``eta`` (mass-normalised modes,
+    ``omega`` [rad/s], damping ratios ``zeta``), holder displacement ``Phi eta`` (``Phi``: (d, r)
+    participation of each mode at the holder point along ``dirs``), modal force per volt
+    ``actuation`` (r, n_in) [N/V]; ``q = [q_tip (d); eta (r)]``::
+
+        M = [[m I, 0], [0, I]],  K = [[Kt, -Kt Phi], [-Phi^T Kt, Omega^2 + Phi^T Kt Phi]],
+        C = [[C1, 0], [0, diag(2 zeta omega)]],  B = [[0], [actuation]].
+
+    With r = d modes and ``Phi = U`` this is the two-body model (3.37) in other coordinates
+    (``J = U^-T U^-1``, ``K2 = U^-T Omega^2 U^-1``). Controllers are designed on a two-body model
+    and may drive this plant (the retained higher modes are then unmodelled dynamics); the open
+    loop uses the frequency-domain inverse."""
+    omega = np.asarray(omega, dtype=float)
+    zeta = np.broadcast_to(np.asarray(zeta, dtype=float), omega.shape)
+    Phi = np.asarray(Phi, dtype=float)
+    Act = np.asarray(actuation, dtype=float)
+    r, d = omega.size, len(dirs)
+    if Phi.shape != (d, r) or Act.shape != (r, len(inputs)):
+        raise ParameterError(f"modal plant: Phi must be ({d}, {r}) and actuation ({r}, {len(inputs)})")
+    if np.any(~np.isfinite(omega)) or np.any(omega <= 0):
+        raise ParameterError("modal plant: natural frequencies must be positive")
+    kt = np.asarray(k_t, dtype=float)
+    if kt.shape != (d,) or np.any(kt <= 0):
+        raise ParameterError(f"holder stiffness must be {d} positive values, got {k_t}")
+    m = float(tip_mass)
+    Kt = np.diag(kt)
+    M = np.block([[m * np.eye(d), np.zeros((d, r))], [np.zeros((r, d)), np.eye(r)]])
+    K = np.block([[Kt, -Kt @ Phi], [-Phi.T @ Kt, np.diag(omega**2) + Phi.T @ Kt @ Phi]])
+    C = np.block([[np.diag(np.sqrt(kt * m) / tip_q), np.zeros((d, r))], [np.zeros((r, d)), np.diag(2 * zeta * omega)]])
+    B = np.vstack([np.zeros((d, Act.shape[1])), Act])
+    Cq = np.hstack([np.eye(d), np.zeros((d, r))])
+    prov = {**(provenance or {}), "tip_mass": m, "k_t": kt, "tip_q": tip_q, "retained_modes": r}
+    return MechanicalPlant(M, C, K, B, Cq, list(dirs), list(inputs), None, prov, {})
