@@ -13,5 +13,6 @@ COMMAND_MODULES = [
     "probedyn.commands.stickslip",
     "probedyn.commands.push",
     "probedyn.commands.diagnose",
+    "probedyn.commands.piezo",
     "probedyn.commands.track",
 ]
