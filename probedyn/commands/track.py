@@ -28,6 +28,7 @@ def track_cmd(
     size: Optional[float] = typer.Option(None, "--size", help="path radius or side [m]"),
     k_t: Optional[float] = typer.Option(None, "--k-t", help="holder stiffness in every direction [N/m]"),
     body: str = typer.Option("analytic", "--body", help="analytic | fem: where the body's J, K2, C2 come from"),
+    gains: str = typer.Option("analytic", "--gains", help="analytic | fem: actuation gains (formulas or the piezo FEM)"),
     v_max: Optional[float] = typer.Option(None, "--v-max", help="amplifier limit [V] (default 200 tube, 20 duo-bimorph)"),
     eccentricity: Optional[float] = typer.Option(None, "--eccentricity", help="tube bore offset delta_x = delta_y [m]"),
     noise: float = typer.Option(0.0, "--noise", help="sensor noise RMS on the measured tip [m] (10 kHz band)"),
@@ -40,7 +41,7 @@ def track_cmd(
     from probedyn.probes.tracking import plant_factory
     from probedyn.schemes.tracking.studies import track
 
-    res, summary = track(plant_factory(body), probe, path, control, disturbance=disturbance,
+    res, summary = track(plant_factory(body, gains=gains), probe, path, control, disturbance=disturbance,
                          disturbance_scale=disturbance_scale, speed=speed, duration=duration, size=size, k_t=k_t,
                          v_max=v_max, eccentricity=eccentricity, noise_rms=noise, overrides=parse_sets(sets))
     if out is not None:

@@ -23,6 +23,8 @@ from probedyn.lumped.smart import reduce_from_fem
 from probedyn.lumped.smart_analytic import end_body_first_mode_at
 from probedyn.probes import get_probe
 from probedyn.probes._smart import SmartProbe
+from probedyn.fem.piezo_materials import get_piezo_material
+from probedyn.probes.piezo import gamma_matrix_fem, piezo_model
 from probedyn.schemes.tracking import actuation as act
 from probedyn.schemes.tracking.plants import SETUP, MechanicalPlant, smart_two_body
 
@@ -95,32 +97,66 @@ def _fem_body(probe: SmartProbe, v: dict[str, Any], n_body: int) -> tuple[np.nda
     return lm.J, lm.K2, lm.C2, info
 
 
-def stroke_matrix(probe, v: dict[str, Any], holder_face: bool) -> tuple[np.ndarray, dict[str, Any]]:
+def stroke_matrix(probe: SmartProbe, v: dict[str, Any], holder_face: bool,
+                  d31: float | None = None) -> tuple[np.ndarray, dict[str, Any]]:
     """Analytic free stroke per volt G [m/V] at the holder (end face if ``holder_face`` and the
-    holder is meshed, else the beam/tube end) and its provenance."""
-    d31 = preset(SETUP[probe.name]["table"])["d31"]
+    holder is meshed, else the beam/tube end) and its provenance. ``d31``: default the table's
+    (Tables 3.1/3.2, |d31| = 185e-12 C/N); the piezo FEM uses the material's (-274e-12 C/N)."""
+    d31 = preset(SETUP[probe.name]["table"])["d31"] if d31 is None else float(d31)
     L_h = v["holder_length"] if (holder_face and v.get("holder") == "meshed") else 0.0
     if probe.name == "duo-bimorph":
         s = act.duo_bimorph_strokes(v["length"], v["width"], v["electrode_gap"], v["thickness"], d31)
         f = act.holder_factor(v["length"], L_h)
         G = np.diag([s["y"] * f, s["z"] * f])
-        src = "analytic gains: duo-bimorph (3.31), (3.32) as printed (piezo-moment derivation)"
+        src = "analytic gains: duo-bimorph (3.31), (3.32) (lumped.actuation.duo_bimorph_range)"
     else:
         G = act.eccentric_tube_stroke(v["Re"], v["Ri"], v["length"], d31, v["delta_y"], v["delta_z"], L_h)
-        src = ("analytic gains: tube axial (3.35), lateral (3.34) with its factor 2 removed (exact annulus, "
-               "SOURCE-NOTES 8), eccentricity from the free piezo strain on the eccentric annulus (3.38-3.44 corrected)")
-    return G, {"gains": src, "d31": d31, "holder_length_in_stroke": L_h}
+        src = ("analytic gains: corrected 3.34/3.35 and eccentric tube 3.38-3.44 (lumped.actuation.gamma_matrix, "
+               "departures 17, 21)")
+    return G, {"gains": f"{src}, |d31| = {abs(d31):.4g} C/N", "d31": d31, "holder_length_in_stroke": L_h}
+
+
+_FEM_GAINS: dict[tuple, tuple] = {}
+
+
+def fem_stroke_matrix(probe: SmartProbe, v: dict[str, Any], holder_face: bool) -> tuple[np.ndarray, dict[str, Any]]:
+    """Free stroke per volt G [m/V] from the coupled piezoelectric FEM (``probes/piezo.py``, the
+    material's d31): the tube's ``gamma_matrix_fem`` (quarters) and the duo-bimorph's ``V_y``,
+    ``V_z`` patterns, at the holder end face (meshed holder) or the actuator's end (point holder),
+    columns signed so that the diagonal is positive. Cached per geometry for the process."""
+    key = (probe.name, holder_face, tuple(sorted((k, x) for k, x in v.items() if k not in _TIP_KEYS)))
+    if key not in _FEM_GAINS:
+        ov = {k: x for k, x in v.items() if k not in _TIP_KEYS}
+        ov["tip"] = "none"
+        if probe.name == "piezotube":
+            where = "holder_end" if (holder_face and v.get("holder") == "meshed") else "tube_end"
+            g = gamma_matrix_fem(ov, where=where)
+            G = act.to_probedyn(g)
+            info = {"gains": f"piezo FEM gains ({g.source})", "gains_where": where}
+        else:
+            where = "holder_end"
+            _, _, pm, setup = piezo_model(probe.name, ov)
+            res = pm.static_many([setup.pattern(None, "V_y"), setup.pattern(None, "V_z")], others="ground")
+            G = np.array([[r.displacement_at(where)[i] for r in res] for i in (1, 2)])
+            info = {"gains": f"piezo FEM gains (coupled P2 model, {res[0].dofs} DOFs, patterns V_y, V_z, face '{where}')",
+                    "gains_where": where}
+        G = G * np.sign(np.diag(G))[None, :]
+        info["d31"] = float(get_piezo_material(v["material"]).d[2, 0])
+        _FEM_GAINS[key] = (G, info)
+    G, info = _FEM_GAINS[key]
+    return G.copy(), dict(info)
 
 
 def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str = "analytic", k_t: float | None = None,
-                tip_q: float = 100.0, gains: np.ndarray | None = None, gains_source: str | None = None) -> MechanicalPlant:
+                tip_q: float = 100.0, gains: str | np.ndarray = "analytic", gains_source: str | None = None,
+                d31: float | None = None) -> MechanicalPlant:
     """The two-body tracking plant (3.37) of ``duo-bimorph`` or ``piezotube``.
 
     ``body = "analytic" | "fem"`` selects J, K2, C2; ``k_t`` overrides the holder spring in every
     modelled direction (section 3.4.1); ``tip_q``: quality factor of the tip on its spring (tip
-    damping ``c = sqrt(k_t m) / Q``, an assumption: Tables 3.1/3.2 give none); ``gains``: a stroke
-    matrix G [m/V] to use instead of the analytic one (e.g. from the piezo FEM), with
-    ``gains_source`` naming it - the one-line swap."""
+    damping ``c = sqrt(k_t m) / Q``, an assumption: Tables 3.1/3.2 give none); ``gains``:
+    ``"analytic"`` (:func:`stroke_matrix`, ``d31`` default the table's), ``"fem"`` (the coupled
+    piezo FEM, :func:`fem_stroke_matrix`) or a stroke matrix G [m/V] named by ``gains_source``."""
     probe, v = _probe_values(name, overrides)
     dirs, inputs = SETUP[probe.name]["dirs"], SETUP[probe.name]["inputs"]
     if body == "analytic":
@@ -131,40 +167,49 @@ def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str
         holder_face = True
     else:
         raise ParameterError(f"body must be 'analytic' or 'fem', got {body!r}")
-    if gains is None:
-        G, ginfo = stroke_matrix(probe, v, holder_face)
+    if isinstance(gains, str) and gains == "analytic":
+        G, ginfo = stroke_matrix(probe, v, holder_face, d31)
+    elif isinstance(gains, str) and gains == "fem":
+        G, ginfo = fem_stroke_matrix(probe, v, holder_face)
+    elif isinstance(gains, str):
+        raise ParameterError(f"gains must be 'analytic', 'fem' or a stroke matrix, got {gains!r}")
     else:
         G = np.asarray(gains, dtype=float)
         if G.shape != (len(dirs), len(inputs)):
             raise ParameterError(f"gains must be a ({len(dirs)}, {len(inputs)}) stroke matrix [m/V]")
         ginfo = {"gains": gains_source or "user-supplied stroke matrix"}
     kt = [float(k_t) if k_t is not None else float(v[f"k_t{d}"]) for d in dirs]
-    prov = {"probe": probe.name, **info, **ginfo,
+    prov = {"probe": probe.name, **info, **ginfo, "input_source_names": INPUT_NAMES[probe.name],
             "parameters": {k: v[k] for k in v if isinstance(v[k], (int, float, str))}}
     return smart_two_body(J, K2, C2, G, v["tip_mass"], kt, dirs, inputs, tip_q, prov)
 
 
-def plant_factory(body: str = "analytic", tip_q: float = 100.0, gains: dict[str, np.ndarray] | None = None,
-                  gains_source: str | None = None):
+def plant_factory(body: str = "analytic", tip_q: float = 100.0, gains: str = "analytic"):
     """A ``factory(probe, k_t=None, overrides=None) -> MechanicalPlant`` for the studies of
-    :mod:`probedyn.schemes.tracking.studies` (``gains``: stroke matrices per probe name)."""
+    :mod:`probedyn.schemes.tracking.studies` (``gains``: "analytic" or "fem")."""
     def factory(probe: str, k_t: float | None = None, overrides: dict[str, Any] | None = None) -> MechanicalPlant:
-        g = (gains or {}).get(probe)
-        return smart_plant(probe, overrides, body=body, k_t=k_t, tip_q=tip_q, gains=g, gains_source=gains_source)
+        return smart_plant(probe, overrides, body=body, k_t=k_t, tip_q=tip_q, gains=gains)
 
     factory.body = body  # type: ignore[attr-defined]
+    factory.gains = gains  # type: ignore[attr-defined]
     return factory
 
+
+#: the tracking inputs in the source's and probes/piezo.py's names
+INPUT_NAMES = {"duo-bimorph": {"V_y": "V_y", "V_z": "V_z"},
+               "piezotube": {"V_x": "u_z (all quarters, axial; piezo pattern V_z)", "V_y": "u_y (piezo pattern V_y)",
+                             "V_z": "u_x (piezo pattern V_x)"}}
 
 #: the piezotube of section 3.5 (Re = 0.5 mm, Ri = 0.45 mm, delta_x = delta_y = 5 um, k_t = 10 N/m)
 CONTROL_PLANT = {"delta": 5e-6, "k_t": 10.0}
 
 
 def control_plant(body: str = "analytic", k_t: float | None = None, delta: float | None = None,
-                  gains: np.ndarray | None = None, gains_source: str | None = None) -> MechanicalPlant:
+                  gains: str | np.ndarray = "analytic", gains_source: str | None = None,
+                  d31: float | None = None) -> MechanicalPlant:
     """The piezotube of section 3.5: Re = 0.5 mm, Ri = 0.45 mm, delta_x = delta_y = 5 um (probedyn
     delta_z = delta_y = delta), holder k_t (default 10 N/m, the probe's manipulation stiffness)."""
     d = CONTROL_PLANT["delta"] if delta is None else float(delta)
     kt = CONTROL_PLANT["k_t"] if k_t is None else float(k_t)
     return smart_plant("piezotube", {"delta_y": d, "delta_z": d}, body=body, k_t=kt, gains=gains,
-                       gains_source=gains_source)
+                       gains_source=gains_source, d31=d31)

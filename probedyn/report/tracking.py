@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from probedyn.plotting import axis_label, pyplot, savefig
+from probedyn.report._tables import markdown_table
 from probedyn.probes.tracking import control_plant, plant_factory
 from probedyn.schemes.tracking import studies as S
 
@@ -125,19 +126,6 @@ def range_figure(study: dict, path: str | Path) -> Path:
     return savefig(fig, path)
 
 
-def _md_table(rows, cols):
-    head = "| " + " | ".join(h for _, h, _ in cols) + " |"
-    sep = "|" + "|".join("---" if i == 0 else "---:" for i in range(len(cols))) + "|"
-    body = []
-    for r in rows:
-        cells = []
-        for k, _, f in cols:
-            v = r.get(k)
-            cells.append("–" if v is None else (format(v, f) if f and isinstance(v, (int, float)) else str(v)))
-        body.append("| " + " | ".join(cells) + " |")
-    return "\n".join([head, sep, *body])
-
-
 def section(outdir: Path, quick: bool) -> str:
     """Open-loop tracking of both probes, the holder-stiffness residual, the 3.5 control problem
     (stability of the four laws, conic path), the frequency-response check of the simulator.
@@ -158,15 +146,15 @@ def section(outdir: Path, quick: bool) -> str:
                          "v": ", ".join(f"{k} {v:.3g}" for k, v in r["voltage_peak_V"].items())})
     md += ["**Open-loop tracking (Figs 3.8, 3.14)**: reference paths of size 0.5 µm in 50 ms, quasi-static and "
            "exact dynamic inverse of the plant (1 s paths: docs/tracking.md).", "",
-           _md_table(rows, [("probe", "probe", ""), ("path", "path", ""), ("duration_s", "duration [s]", "g"),
+           markdown_table(rows, [("probe", "probe", ""), ("path", "path", ""), ("duration_s", "duration [s]", "g"),
                             ("inverse", "inverse", ""), ("err", "max error [nm]", ".3g"), ("rel", "max error / size", ".2e"),
                             ("v", "voltage peaks [V]", "")]), ""]
     hs = S.holder_stiffness_study(plant_factory("analytic"), "piezotube", stiffnesses=(1, 10, 100), path_hz=(10.0,) if quick else (10.0, 100.0))
     holder_figure(hs, outdir / "tracking_holder.png")
     md += ["**Holder stiffness (Fig 3.16)**: sphere, quasi-static inverse started at full speed; the residual "
            "oscillation scales as v_jump / omega_lowest.", "",
-           _md_table([{**r, "res": r["residual_rel"], "forced": r["forced_rel"]} for r in hs["rows"]],
-                     [("k_t", "k_t [N/m]", "g"), ("path_hz", "turns/s", "g"), ("f_lowest_hz", "lowest mode [Hz]", ".0f"),
+           markdown_table([{**r, "res": r["residual_rel"], "forced": r["forced_rel"]} for r in hs["rows"]],
+                     [("k_t", "k_t [N/m]", "g"), ("path_hz", "turns/s", "g"), ("f_lowest_hz", "lowest mode", "hz4"),
                       ("res", "residual / size", ".2e"), ("forced", "forced error / size", ".2e")]), "",
            "![holder stiffness](tracking_holder.png)", ""]
     plant = control_plant()
@@ -174,8 +162,8 @@ def section(outdir: Path, quick: bool) -> str:
     srows = [{"law": k, "stable": "yes" if v["stable"] else "**no**", "rate": v["max_real_per_s"],
               "zeta": v["min_damping_ratio"], "f": v["least_damped_hz"]} for k, v in cp["stability"].items()]
     md += ["**Control problem (3.5)**: piezotube, k_t = 10 N/m, delta_x = delta_y = 5 µm. Stability on the full model:", "",
-           _md_table(srows, [("law", "law", ""), ("stable", "stable", ""), ("rate", "max Re(lambda) [1/s]", ".3g"),
-                             ("zeta", "min damping ratio", ".3g"), ("f", "least damped mode [Hz]", ".4g")]), ""]
+           markdown_table(srows, [("law", "law", ""), ("stable", "stable", ""), ("rate", "max Re(lambda) [1/s]", ".3g"),
+                             ("zeta", "min damping ratio", ".3g"), ("f", "least damped mode", "hz4")]), ""]
     cmp_ = S.controller_comparison(plant, paths=("cone",), disturbances=(0.0,), keep=True)
     crow = []
     for r in cmp_["rows"]:
@@ -190,7 +178,7 @@ def section(outdir: Path, quick: bool) -> str:
         tracking_figure(run, outdir / "tracking_cone.png", "piezotube, conic path, composite control (3.50-3.54)")
     md += ["**Conic path (Fig 3.21)** (unstable laws not simulated; the KBr disturbance runs are in "
            "docs/tracking.md):", "",
-           _md_table(crow, [("law", "law", ""), ("d", "KBr scale", "g"), ("max", "max error [nm]", ".3g"),
+           markdown_table(crow, [("law", "law", ""), ("d", "KBr scale", "g"), ("max", "max error [nm]", ".3g"),
                             ("rel", "max error / extent after 5 %", ".2e"), ("v", "peak voltage [V]", ".3g")]), "",
            "![conic path](tracking_cone.png)", ""]
     rg = S.range_study(plant_factory("analytic"))
@@ -198,7 +186,7 @@ def section(outdir: Path, quick: bool) -> str:
     rrows = [{"probe": p, **r} for p in ("duo-bimorph", "piezotube") for r in rg[p]["rows"]]
     md += ["**Range per volt (Figs 3.17, 3.18)**: formulas (SOURCE-NOTES 8: 3.34 halved) and the simulated plants' "
            "static tip stroke (analytic body: at the beam/tube end); the piezo FEM will replace the formulas.", "",
-           _md_table([{**r, "f": r["formula_m_per_V"] * 1e9, "p": r["plant_m_per_V"] * 1e9} for r in rrows],
+           markdown_table([{**r, "f": r["formula_m_per_V"] * 1e9, "p": r["plant_m_per_V"] * 1e9} for r in rrows],
                      [("probe", "probe", ""), ("axis", "axis", ""), ("formula", "formula", ""), ("f", "formula [nm/V]", ".4g"),
                       ("p", "plant [nm/V]", ".4g")]), "", "![range per volt](tracking_range.png)", ""]
     if not quick:

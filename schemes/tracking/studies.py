@@ -277,9 +277,14 @@ def range_study(factory: PlantFactory) -> dict[str, Any]:
             rows = [{"axis": "x (axial)", "formula": "(3.35)", "formula_m_per_V": f["x"], "plant_m_per_V": G[0, 0]},
                     {"axis": "y, z (lateral)", "formula": "(3.34) printed", "formula_m_per_V": f["lateral_printed"],
                      "plant_m_per_V": G[1, 1]},
-                    {"axis": "y, z (lateral)", "formula": "(3.34) / 2 (corrected)", "formula_m_per_V": f["lateral"],
-                     "plant_m_per_V": G[1, 1]}]
-        out[probe] = {"rows": rows, "gains": plant.provenance["gains"], "body": plant.provenance["body"]}
+                    {"axis": "y, z (lateral)", "formula": "(3.34) corrected, thin wall", "formula_m_per_V": f["lateral_thin"],
+                     "plant_m_per_V": G[1, 1]},
+                    {"axis": "y, z (lateral)", "formula": "thick wall (1/r field)", "formula_m_per_V": f["lateral_thick"],
+                     "plant_m_per_V": G[1, 1]},
+                    {"axis": "y, z (lateral)", "formula": "uniform field, exact annulus (gamma_matrix)",
+                     "formula_m_per_V": f["lateral"], "plant_m_per_V": G[1, 1]}]
+        out[probe] = {"rows": rows, "gains": plant.provenance["gains"], "body": plant.provenance["body"],
+                      "d31": plant.provenance.get("d31")}
     t1, t2 = preset("table-3.1"), preset("table-3.2")
     w0s = np.linspace(1e-6, 25e-6, 25)
     hs = np.array([5e-6, 10e-6, 20e-6])
