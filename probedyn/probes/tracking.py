@@ -134,7 +134,9 @@ def fem_stroke_matrix(probe: SmartProbe, v: dict[str, Any], holder_face: bool) -
             G = act.to_probedyn(g)
             info = {"gains": f"piezo FEM gains ({g.source})", "gains_where": where}
         else:
-            where = "holder_end"
+            where = "holder_end"  # the holder's end face, or the beam's end face for a point holder
+            if not holder_face:
+                ov["holder"] = "point"
             _, _, pm, setup = piezo_model(probe.name, ov)
             res = pm.static_many([setup.pattern(None, "V_y"), setup.pattern(None, "V_z")], others="ground")
             G = np.array([[r.displacement_at(where)[i] for r in res] for i in (1, 2)])

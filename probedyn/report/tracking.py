@@ -188,7 +188,8 @@ def section(outdir: Path, quick: bool) -> str:
            "static tip stroke (analytic body: at the beam/tube end); the piezo FEM will replace the formulas.", "",
            markdown_table([{**r, "f": r["formula_m_per_V"] * 1e9, "p": r["plant_m_per_V"] * 1e9} for r in rrows],
                      [("probe", "probe", ""), ("axis", "axis", ""), ("formula", "formula", ""), ("f", "formula [nm/V]", ".4g"),
-                      ("p", "plant [nm/V]", ".4g")]), "", "![range per volt](tracking_range.png)", ""]
+                      ("p", "plant [nm/V]", ".4g"), ("plant_over_formula", "plant / formula", ".4f")]), "",
+           "![range per volt](tracking_range.png)", ""]
     if not quick:
         es = S.epsilon_study(plant, eps=(1.0, 0.5, 0.25, 0.125), printed=False, holder_only=False)
         epsilon_figure(es, outdir / "tracking_epsilon.png")
