@@ -16,4 +16,5 @@ COMMAND_MODULES = [
     "probedyn.commands.piezo",
     "probedyn.commands.place",
     "probedyn.commands.reduced",
+    "probedyn.commands.track",
 ]

@@ -28,6 +28,7 @@ SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.report.cantilever:section"),
     ("The smart probes: duo-bimorph and piezotube", "probedyn.report.smart_probes:section"),
     ("Piezoelectric actuation of the smart probes", "probedyn.report.piezo:section"),
+    ("Path tracking and probe control", "probedyn.report.tracking:section"),
     ("Nano-friction and FFM line scans", "probedyn.report.friction:section"),
     ("Tip-sample contact and adhesion-friction coupling", "probedyn.report.contact:section"),
     ("Nano-pushing", "probedyn.report.pushing:section"),
