@@ -19,6 +19,9 @@ Exit codes and messages (one line on stderr, never a traceback for anything a us
 * ``141`` quietly when stdout is closed early (``probedyn ... | head``);
 * ``1`` with a traceback: a bug.
 
+Long work reported by the library through :mod:`probedyn.core.progress` (model-size estimates,
+stages that take more than a few seconds) is shown on stderr while a command runs.
+
 Usage errors are recognised by what they are (a ``ClickException``/``Exit``/``Abort`` class in
 the exception's MRO), whether typer uses the ``click`` package or its own bundled copy
 (``typer._click``, typer >= 0.2x); the range tested is pinned in ``pyproject.toml``.
@@ -35,8 +38,24 @@ import sys
 import threading
 from typing import Any
 
+
+def _early_interrupt(signum: int, frame: Any) -> None:  # pragma: no cover - timing dependent
+    """Until :func:`main` installs its handlers (while the commands are imported): nothing is
+    written yet, so leave at once with the same line and code as later."""
+    os.write(2, b"probedyn: interrupted\n")
+    os._exit(128 + signum)
+
+
+# Run as the program (console script or ``python -m probedyn.cli``), not imported by a host
+# process (tests, notebooks): an interrupt during the imports below is already clean.
+if __name__ == "__main__" or os.path.basename(sys.argv[0] if sys.argv else "") == "probedyn":
+    for _s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
+        if _s is not None:
+            signal.signal(_s, _early_interrupt)
+
 from probedyn.commands import COMMAND_MODULES
 from probedyn.commands._apps import app
+from probedyn.core import progress
 from probedyn.core.errors import ProbedynError
 
 for _name in COMMAND_MODULES:
@@ -297,7 +316,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         try:
             guard.install()
-            code, msg = _dispatch(argv)
+            with progress.listening(progress.stderr_listener()):
+                code, msg = _dispatch(argv)
         except KeyboardInterrupt as exc:
             if guard.signum is None:  # a KeyboardInterrupt raised without our handler
                 guard.signum = getattr(exc, "signum", signal.SIGINT)
