@@ -48,7 +48,8 @@ def _early_interrupt(signum: int, frame: Any) -> None:  # pragma: no cover - tim
 
 # Run as the program (console script or ``python -m probedyn.cli``), not imported by a host
 # process (tests, notebooks): an interrupt during the imports below is already clean.
-if __name__ == "__main__" or os.path.basename(sys.argv[0] if sys.argv else "") == "probedyn":
+_AS_PROGRAM = __name__ == "__main__" or os.path.basename(sys.argv[0] if sys.argv else "") == "probedyn"
+if _AS_PROGRAM:
     for _s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
         if _s is not None:
             signal.signal(_s, _early_interrupt)
@@ -70,6 +71,7 @@ for _name in COMMAND_MODULES:
 PROG = "probedyn"
 EXIT_USAGE = 2
 #: seconds the main thread gets to unwind (remove temporaries, close Dask) after an interrupt
+#: before the watchdog forces the exit (``PROBEDYN_INTERRUPT_GRACE_S`` overrides)
 GRACE_S = 10.0
 _SIGNALS = tuple(s for s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)) if s is not None)
 
@@ -110,13 +112,16 @@ class _SignalGuard:
         self._pipe: tuple[int, int] | None = None
         self._stop: tuple[int, int] | None = None
         self._thread: threading.Thread | None = None
+        self.closing = False
         self.active = threading.current_thread() is threading.main_thread()
 
     def _handler(self, signum: int, frame: Any) -> None:
         if self.signum is None:
             self.signum = signum
-            raise Interrupted(signum)
-        # later signals: let the unwinding finish; the watchdog forces the exit if needed
+            if not self.closing:
+                raise Interrupted(signum)
+        # later signals, or a signal while the handlers are being removed: let the unwinding
+        # finish (the exit code still says "interrupted"); the watchdog forces the exit if needed
 
     def install(self) -> None:
         if not self.active:
@@ -160,7 +165,7 @@ class _SignalGuard:
                     continue
                 seen += new
                 if deadline is None:
-                    deadline = _monotonic() + GRACE_S
+                    deadline = _monotonic() + _grace_s()
                 if len(seen) >= 2:  # a second interrupt: do not wait any longer
                     self._force(seen[0])
             elif deadline is not None and _monotonic() >= deadline:
@@ -174,6 +179,7 @@ class _SignalGuard:
         os._exit(128 + signum)
 
     def uninstall(self) -> None:
+        self.closing = True
         if not self.active:
             return
         for s, h in self._old.items():
@@ -196,6 +202,14 @@ class _SignalGuard:
                     os.close(fd)
                 except OSError:
                     pass
+
+
+def _grace_s() -> float:
+    try:
+        g = float(os.environ.get("PROBEDYN_INTERRUPT_GRACE_S", GRACE_S))
+    except ValueError:
+        return GRACE_S
+    return g if g >= 0 else GRACE_S
 
 
 def _monotonic() -> float:
@@ -321,8 +335,19 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt as exc:
             if guard.signum is None:  # a KeyboardInterrupt raised without our handler
                 guard.signum = getattr(exc, "signum", signal.SIGINT)
+        except BaseException:
+            if guard.signum is None:
+                raise
+            # an interrupt turned into another exception on its way up (a library that wraps
+            # what it catches): the signal decides the exit code
     finally:
         guard.uninstall()
+        if _AS_PROGRAM:
+            # the work is over: an interrupt while the interpreter shuts down (which resets
+            # Python's handlers to the default action) must not turn a finished run into a
+            # death by signal; ignored signals stay ignored through the shutdown
+            for s in _SIGNALS:
+                signal.signal(s, signal.SIG_IGN)
     if guard.signum is not None:
         _say("interrupted")
         return 128 + guard.signum

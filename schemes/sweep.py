@@ -420,7 +420,7 @@ def _connect(scheduler: str | None, workers: int, processes: bool, threads_per_w
     if scheduler:
         addr = check_scheduler_address(scheduler, timeout=connect_timeout)
         security = _tls_security() if addr.startswith("tls://") else None
-        probe_scheduler(addr, timeout=max(connect_timeout, 2.0), security=security)
+        probe_scheduler(addr, timeout=connect_timeout, security=security)
         try:
             client = Client(addr, timeout=connect_timeout, set_as_default=False,
                             **({"security": security} if security is not None else {}))

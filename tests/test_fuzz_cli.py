@@ -220,7 +220,13 @@ def _cells_module(tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
 
 
-@pytest.mark.parametrize("case", CASES, ids=str)
+def _param(case: Case):
+    # a case waiting for another branch runs in a child process (its behaviour is unknown: it
+    # may hang or read without bound), which is slow: only with -m slow until the fix lands
+    return pytest.param(case, id=case.id, marks=[pytest.mark.slow] if case.pending else [])
+
+
+@pytest.mark.parametrize("case", [_param(c) for c in CASES])
 def test_fuzz_case(case: Case, tmp_path):
     cat, detail, o = run_case(case, tmp_path)
     if case.pending and cat in BAD:
