@@ -29,8 +29,10 @@ import scipy.sparse as sp
 
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
+from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
+from probedyn.meshes._gmsh import element_volumes
 
 Where = Union[str, Sequence[float], np.ndarray]
 
@@ -214,8 +216,6 @@ class ElasticModel:
         return float(r @ (M @ r))
 
     def region_masses(self) -> dict[str, float]:
-        from probedyn.meshes._gmsh import element_volumes
-
         vol = element_volumes(self.mesh)
         return {n: float((vol[self.elem_region == i] * self.materials[i].density).sum())
                 for i, n in enumerate(self.region_names)}
@@ -223,8 +223,6 @@ class ElasticModel:
     # ---- solutions ----------------------------------------------------------------------
     def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto") -> ModalResult:
         """The lowest ``n_modes`` modes by shift-invert (see :mod:`probedyn.fem.eigen`)."""
-        from probedyn.fem.eigen import shift_invert_eigsh
-
         if int(n_modes) != n_modes or n_modes < 1:
             raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
         self.check_resolution(int(n_modes))
@@ -344,8 +342,6 @@ class ElasticModel:
         """Full displacement vector [m] for static forces [N] at attachments
         (``{"free_end": (0, 0, 1e-6)}``: uniform traction over that face; keys may also be
         named points or coordinate tuples)."""
-        from probedyn.fem.eigen import factorize
-
         if not self.clamp and not self.springs:
             raise SolverError("static solve needs a clamp or a grounded spring (the model floats freely)")
         K, _ = self.assemble()

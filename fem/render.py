@@ -32,6 +32,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from probedyn.core.errors import ParameterError, SystemLibraryError
+from probedyn.core.io import atomic_path
 
 #: Off-screen GL back-ends VTK can use without a display: (name, VTK window class, sonames).
 _GL_CANDIDATES: list[tuple[str, str, tuple[str, ...]]] = [
@@ -273,8 +274,6 @@ def render_mode(result: Any, index: int, path: str | Path, window_size: tuple[in
     if not 0 <= index < len(result.modes):
         raise ParameterError(f"mode {index} not in the result (it has {len(result.modes)} modes)")
     pv = _pyvista()
-    from probedyn.core.io import atomic_path
-
     pl = pv.Plotter(off_screen=True, window_size=list(window_size))
     pl.set_background("white")
     _draw(pl, pv, result, index, title, 16, "horizontal")
@@ -298,8 +297,6 @@ def render_panel(result: Any, path: str | Path, modes: Sequence[int] = (0, 1, 2,
     if not modes:
         raise ParameterError("render_panel: no valid mode index")
     pv = _pyvista()
-    from probedyn.core.io import atomic_path
-
     shape = (1, len(modes)) if len(modes) <= 2 else (2, 2)
     pl = pv.Plotter(off_screen=True, window_size=list(window_size), shape=shape, border=False)
     for k, m in enumerate(modes):

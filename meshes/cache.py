@@ -17,6 +17,11 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from skfem import MeshTet
+
+from probedyn.core.errors import DataFormatError, ParameterError
+from probedyn.core.io import atomic_path, to_jsonable
+from probedyn.meshes._gmsh import element_volumes, export_meshio
 
 #: Bump when the mesh format or a builder's meaning changes (invalidates old cache entries).
 CACHE_VERSION = 2
@@ -37,8 +42,6 @@ class MeshOptions:
     optimize: bool = True
 
     def size_for(self, thinnest: float) -> float:
-        from probedyn.core.errors import ParameterError
-
         if self.elements_through_thickness < 1:
             raise ParameterError("elements_through_thickness must be at least 1")
         h = thinnest / self.elements_through_thickness
@@ -83,20 +86,14 @@ class MeshBundle:
 
     def element_volumes(self) -> np.ndarray:
         """Volumes [m^3] of the tetrahedra."""
-        from probedyn.meshes._gmsh import element_volumes
-
         return element_volumes(self.mesh)
 
     def export(self, path: str | Path) -> Path:
         """Write the mesh (with a ``region`` cell field) through meshio; format by suffix."""
-        from probedyn.meshes._gmsh import export_meshio
-
         return export_meshio(self.mesh, path)
 
     # ---- persistence -------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
-        from probedyn.core.io import atomic_path
-
         path = Path(path)
         arrays: dict[str, np.ndarray] = {"p": self.mesh.p, "t": self.mesh.t}
         for name, idx in (self.mesh.subdomains or {}).items():
@@ -105,8 +102,6 @@ class MeshBundle:
             arrays[f"bnd::{name}"] = np.asarray(idx)
         for name, x in self.points.items():
             arrays[f"pt::{name}"] = np.asarray(x, dtype=float)
-        from probedyn.core.io import to_jsonable
-
         arrays["meta"] = np.array(json.dumps(to_jsonable({"key": self.key, "meta": self.meta, "version": CACHE_VERSION})))
         with atomic_path(path) as tmp:
             with open(tmp, "wb") as fh:
@@ -115,10 +110,6 @@ class MeshBundle:
 
     @classmethod
     def load(cls, path: str | Path) -> "MeshBundle":
-        from skfem import MeshTet
-
-        from probedyn.core.errors import DataFormatError
-
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as z:
@@ -145,8 +136,6 @@ def cache_dir() -> Path:
 
 def params_key(builder_name: str, params: dict[str, Any]) -> str:
     """Stable hash of a builder name and its (JSON-able) parameters."""
-    from probedyn.core.io import to_jsonable
-
     blob = json.dumps(
         {"builder": builder_name, "params": to_jsonable(params), "v": CACHE_VERSION},
         sort_keys=True, separators=(",", ":"),

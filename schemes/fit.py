@@ -26,8 +26,12 @@ from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from probedyn.core.errors import DataFormatError, ParameterError, SolverError
+from probedyn.core.io import MAX_DATA_BYTES, read_text, write_text
+from probedyn.schemes.ffm import FFM, line_scan
+from probedyn.schemes.stickslip_analysis import analyze
 
 REQUIRED_META = ("speed", "k_x")
 
@@ -42,8 +46,6 @@ class Trace:
 
 def read_trace(path: str | Path) -> Trace:
     """Read a trace CSV; malformed content raises DataFormatError naming file, line and column."""
-    from probedyn.core.io import MAX_DATA_BYTES, read_text
-
     path = Path(path)
     # a regular file of bounded size (no FIFO, device or endless stream), UTF-8; messages name
     # positions, never the file's content
@@ -112,8 +114,6 @@ def read_trace(path: str | Path) -> Trace:
 def write_trace(path: str | Path, base: np.ndarray, force: np.ndarray, speed: float, k_x: float,
                 **meta: Any) -> Path:
     """Write a trace CSV in the format read by :func:`read_trace` (atomically)."""
-    from probedyn.core.io import write_text
-
     head = [f"# speed = {speed!r}", f"# k_x = {k_x!r}"] + [f"# {k} = {v}" for k, v in meta.items()]
     body = "\n".join(f"{b:.9e},{f:.9e}" for b, f in zip(base, force))
     return write_text(Path(path), "\n".join(head + ["base_m,lateral_force_n", body]) + "\n")
@@ -126,11 +126,6 @@ def fit_trace(trace: Trace, free: Sequence[str] = ("F_s", "F_c"), preset: str | 
 
     Returns best values, 1-sigma uncertainties, correlation matrix, residual RMS and the
     residual vector, the number of evaluations, and the model trace."""
-    from scipy.optimize import least_squares
-
-    from probedyn.schemes.ffm import FFM, line_scan
-    from probedyn.schemes.stickslip_analysis import analyze
-
     preset = preset or trace.meta.get("preset", "mica")
     model = model or trace.meta.get("model", "bristle")
     free = list(free)

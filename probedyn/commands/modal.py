@@ -61,7 +61,7 @@ def modes_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mod
 
 
 def compare_rows(p, values, result) -> list[dict[str, Any]]:
-    from probedyn.fem.compare import comparison_rows
+    from probedyn.lumped.compare import comparison_rows
 
     return comparison_rows(p, values, result)
 

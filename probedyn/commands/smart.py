@@ -160,7 +160,7 @@ def lumped_sweep_curves(lm_dict: dict, ks: list[float], sweep_dirs) -> dict:
 def cmd_lumped(probe: str = PROBE_ARG, set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT,
                out: Optional[Path] = OUT_OPT) -> None:
     """Lumped model (3.4 / 3.20 / 3.37) from FEM body modes vs FEM of the assembled probe."""
-    from probedyn.lumped.smart import study_lumped
+    from probedyn.probes.studies import study_lumped
 
     r = study_lumped(probe, _sets(set_))
     res = {"probe": r["probe"], "lumped": r["lumped"], "rows": r["rows"]}
@@ -173,7 +173,7 @@ def cmd_lumped(probe: str = PROBE_ARG, set_: Optional[list[str]] = SET_OPT, as_j
 def cmd_localisation(probe: str = PROBE_ARG, k: str = typer.Option("1,2,5,10,20,50,100", "--k", help="Holder stiffnesses [N/m]."),
                      set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT, out: Optional[Path] = OUT_OPT) -> None:
     """Section 3.4.1: FEM modes over the holder stiffness, energy shares per mode."""
-    from probedyn.lumped.smart import study_localisation
+    from probedyn.probes.studies import study_localisation
 
     r = study_localisation(probe, _floats(k, "k"), _sets(set_))
     res = {"probe": r["probe"], "rows": r["rows"]}
@@ -190,7 +190,7 @@ def cmd_eccentricity(probe: str = typer.Argument("piezotube", help="piezotube (o
                      set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT, out: Optional[Path] = OUT_OPT) -> None:
     """Eccentric piezotube: split and tilt of the lateral pair (FEM counterpart of Gamma, 3.38-3.44)."""
     from probedyn.core.errors import ParameterError
-    from probedyn.lumped.smart import study_eccentricity
+    from probedyn.probes.studies import study_eccentricity
 
     if probe != "piezotube" and not probe.endswith(".toml"):
         raise ParameterError("eccentricity applies to the piezotube")
@@ -207,7 +207,7 @@ def cmd_eccentricity(probe: str = typer.Argument("piezotube", help="piezotube (o
 @app.command("smart-materials")
 def cmd_materials(probe: str = PROBE_ARG, set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT) -> None:
     """First four modes with transversely isotropic PZT-5H vs the isotropic E = 1/s11 option."""
-    from probedyn.lumped.smart import study_materials
+    from probedyn.probes.studies import study_materials
 
     r = study_materials(probe, _sets(set_))
     emit(r, as_json, lambda x: format_table(x["rows"], MAT_COLS))
@@ -217,7 +217,7 @@ def cmd_materials(probe: str = PROBE_ARG, set_: Optional[list[str]] = SET_OPT, a
 def cmd_convergence(probe: str = PROBE_ARG, sizes: str = typer.Option(None, "--sizes", help="Element sizes [m], constant ratio."),
                     set_: Optional[list[str]] = SET_OPT, as_json: bool = JSON_OPT) -> None:
     """Mesh convergence of the first four frequencies (observed order, extrapolated values)."""
-    from probedyn.lumped.smart import study_convergence
+    from probedyn.probes.studies import study_convergence
 
     default = {"duo-bimorph": "10e-6,6.6667e-6,4.4444e-6", "piezotube": "300e-6,200e-6,133.33e-6"}
     spec = sizes or default.get(probe, default["duo-bimorph"])
@@ -257,7 +257,7 @@ def report_section(outdir: Path, quick: bool = False) -> str:
     """Per probe: Fig 3.15 panel, analytic comparison, lumped vs FEM, localisation table and
     plot; the piezotube eccentricity table; isotropic vs anisotropic PZT."""
     from probedyn.core.io import write_json
-    from probedyn.lumped import smart as S
+    from probedyn.probes import studies as S
     from probedyn.probes import get_probe
 
     outdir = Path(outdir)
@@ -286,7 +286,7 @@ def report_section(outdir: Path, quick: bool = False) -> str:
                   markdown_table(lum["lumped"]["parameters"], PAR_COLS), "",
                   markdown_table(lum["rows"], LUMPED_COLS), ""]
         loc = S.study_localisation(probe, ks, ov)
-        curves = lumped_sweep_curves(lum["lumped"], ks, S.PROBE_SETUP[probe]["sweep_dirs"])
+        curves = lumped_sweep_curves(lum["lumped"], ks, get_probe(probe)[0].sweep_directions)
         fig = plot_localisation(loc["rows"], outdir / f"{probe}-localisation.png", probe, curves)
         parts += ["Section 3.4.1, holder stiffness sweep (KE = kinetic energy share, SE = strain energy share):", "",
                   markdown_table(loc["rows"], LOC_COLS), "", f"![localisation]({fig.name})", ""]
