@@ -175,6 +175,10 @@ CASES: list[Case] = [
          match=r"needs about .* of memory; .* available", timeout=60,
          check=lambda tmp, o: None if not list(tmp.glob("b.nc*")) else f"left {sorted(p.name for p in tmp.iterdir())}"),
 
+    # ---- class 10: long work is estimated first; what cannot fit is refused before meshing --------
+    Case("c10-cantilever-5cm", 10, ["modes", "cantilever", "--set", "length=0.05"], timeout=30,
+         match=r"about 3\.\d million DOFs\) needs about \d+(\.\d+)? GB .* of memory; .* available"),
+
     # ---- class 9: other tracebacks -------------------------------------------------------------
     Case("c9-probe-toml-not-utf8", 9, ["modes", "{tmp}/p.toml"],
          setup=_w("p.toml", b'probe = "cantilever"\nlength = 3e-4 # \xff\xfe\n'), match=r"p\.toml:2:\d+: not UTF-8"),
@@ -356,6 +360,20 @@ def test_progress_listener_prints_notes_and_heartbeats():
 # --------------------------------------------------------------------------------------------
 # the counts
 # --------------------------------------------------------------------------------------------
+
+
+def test_model_size_estimate_against_a_built_model():
+    """fem.size before meshing vs the DOFs the mesh really has (default cantilever, 2 and 3
+    elements through the thickness): within the 30 % the measured coefficients spread over."""
+    from probedyn.fem.size import dofs_for_volume
+    from probedyn.probes import get_probe
+
+    p, _ = get_probe("cantilever")
+    for ett in (2, 3):
+        v = p.resolve({"elements_through_thickness": ett})
+        m = p.build(v)
+        est = dofs_for_volume(v["length"] * v["width"] * v["thickness"], v["thickness"] / ett)
+        assert abs(est / m.dofs - 1) < 0.3, (ett, est, m.dofs)
 
 
 def test_zz_fuzz_summary(capsys):
