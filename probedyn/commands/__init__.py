@@ -13,4 +13,5 @@ COMMAND_MODULES = [
     "probedyn.commands.stickslip",
     "probedyn.commands.push",
     "probedyn.commands.diagnose",
+    "probedyn.commands.piezo",
 ]

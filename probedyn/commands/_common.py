@@ -55,17 +55,3 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
         if j == 0:
             out.append("  ".join("-" * w for w in widths))
     return "\n".join(out)
-
-
-def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> str:
-    """The same table as Markdown (for reports)."""
-    head = "| " + " | ".join(h for _, h, _ in columns) + " |"
-    sep = "|" + "|".join("---:" for _ in columns) + "|"
-    body = []
-    for r in rows:
-        vals = []
-        for key, _, spec in columns:
-            v = r.get(key)
-            vals.append("–" if v is None else (format(v, spec) if spec and isinstance(v, (int, float)) else str(v)))
-        body.append("| " + " | ".join(vals) + " |")
-    return "\n".join([head, sep, *body])

@@ -109,6 +109,16 @@ class Cantilever(Probe):
             E, nu = 1.0 / S[0, 0], float(np.clip(-S[0, 1] / S[0, 0], -0.99, 0.49))
         return bm.RectBeam(values["length"], values["width"], values["thickness"], E, nu, mat.density)
 
+    def static_stiffness(self, values: dict[str, Any], model) -> dict[str, Any]:
+        """FEM static stiffness of the free end (face-averaged, z) beside 3EI/L^3 with and
+        without the Timoshenko shear correction."""
+        from probedyn.lumped import beam as bm
+
+        b = self.beam(values)
+        return {"fem_n_per_m": float(model.static_stiffness("free_end", (0, 0, 1))),
+                "euler_bernoulli_3EI_L3": bm.static_tip_stiffness(b, "flapwise", shear=False),
+                "with_shear_correction": bm.static_tip_stiffness(b, "flapwise", shear=True)}
+
     def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
         """Per FEM mode, the beam formula of its family and order: Euler–Bernoulli (2.40–2.41)
         and Timoshenko bending, Saint-Venant torsion, axial rod; with a tip mass the two forms
