@@ -19,6 +19,10 @@ Exit codes and messages (one line on stderr, never a traceback for anything a us
 * ``141`` quietly when stdout is closed early (``probedyn ... | head``);
 * ``1`` with a traceback: a bug.
 
+Outputs: every command runs in one :func:`probedyn.core.io.transaction`, so the files it writes
+(``--out`` folders, the report, plots, NetCDF files) appear when it succeeds, all together, and
+never when it fails or is interrupted.
+
 Long work reported by the library through :mod:`probedyn.core.progress` (model-size estimates,
 stages that take more than a few seconds) is shown on stderr while a command runs.
 
@@ -56,7 +60,7 @@ if _AS_PROGRAM:
 
 from probedyn.commands import COMMAND_MODULES
 from probedyn.commands._apps import app
-from probedyn.core import progress
+from probedyn.core import io, progress
 from probedyn.core.errors import ProbedynError
 
 for _name in COMMAND_MODULES:
@@ -172,8 +176,6 @@ class _SignalGuard:
                 self._force(seen[0])
 
     def _force(self, signum: int) -> None:
-        from probedyn.core import io
-
         _say("interrupted", raw=True)
         io.discard_active()
         os._exit(128 + signum)
@@ -323,6 +325,27 @@ def _dispatch(argv: list[str] | None) -> tuple[int, str | None]:
     return 0, None
 
 
+class _Failed(Exception):
+    """Internal: the command failed; roll its outputs back."""
+
+
+def _run_in_transaction(argv: list[str] | None) -> tuple[int, str | None]:
+    """Run the command in one output transaction (:func:`probedyn.core.io.transaction`): every
+    file it writes appears when it succeeds, all together; when it fails or is interrupted,
+    none does and the previous outputs stay as they were."""
+    result: tuple[int, str | None] = (1, None)
+    try:
+        with io.transaction():
+            result = _dispatch(argv)
+            if result[0] != 0:
+                raise _Failed
+    except _Failed:
+        pass
+    except ProbedynError as exc:  # the commit itself failed (a full disk at the last moment)
+        result = (exc.exit_code, f"error: {exc}")
+    return result
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``probedyn ARGV``; return the exit code (see the module docstring)."""
     guard = _SignalGuard()
@@ -331,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             guard.install()
             with progress.listening(progress.stderr_listener()):
-                code, msg = _dispatch(argv)
+                code, msg = _run_in_transaction(argv)
         except KeyboardInterrupt as exc:
             if guard.signum is None:  # a KeyboardInterrupt raised without our handler
                 guard.signum = getattr(exc, "signum", signal.SIGINT)

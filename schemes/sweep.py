@@ -51,7 +51,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, OutputError, ParameterError, ProbedynError, SolverError
-from probedyn.core.io import as_output_error, atomic_path, write_json
+from probedyn.core.io import after_commit, as_output_error, atomic_path, write_json
 from probedyn.core.resources import check_memory, fmt_bytes
 
 __all__ = [
@@ -251,7 +251,7 @@ def _write_chunk(res: dict[str, np.ndarray], path: Path) -> None:
     for k, a in res.items():
         if a.dtype.kind == "O":
             raise SolverError(f"sweep output '{k}' has dtype object; return numeric or string arrays")
-    with atomic_path(path) as tmp:
+    with atomic_path(path, defer=False) as tmp:  # resumable state: kept even if the run fails
         with open(tmp, "wb") as fh:
             np.savez(fh, **{f"v_{k}": a for k, a in res.items()})
 
@@ -683,7 +683,7 @@ def _run_locked(func, g, fixed, out, vectorized, chunk_size, workers, scheduler,
                         parts.mkdir(parents=True, exist_ok=True)
                     except OSError as exc:
                         raise as_output_error(exc, parts) from None
-                    write_json(parts / "manifest.json",
+                    write_json(parts / "manifest.json", defer=False, obj=
                                {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
                                 "chunk_size": chunk_size, "shape": list(shape), "names": names})
                 _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n_cells, chunk_size,
@@ -722,7 +722,9 @@ def _run_locked(func, g, fixed, out, vectorized, chunk_size, workers, scheduler,
             ds.attrs[k] = v if isinstance(v, (str, int, float)) else json.dumps(_jsonable(v))
     if out is not None:
         _write_nc(ds, out)
-        shutil.rmtree(parts, ignore_errors=True)
+        # the chunks go only once the NetCDF file is in place (at the end of the command's
+        # transaction: an interrupt before that keeps them for resumption)
+        after_commit(lambda: shutil.rmtree(parts, ignore_errors=True))
     return SweepResult(ds, out, n_chunks, chunks_run=todo, chunks_skipped=sorted(done),
                        elapsed=time.perf_counter() - t0)
 

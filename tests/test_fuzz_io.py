@@ -4,6 +4,7 @@ stale temporaries, confined bounded reads, schema errors, memory refusals (fast,
 from __future__ import annotations
 
 import errno
+import json
 import os
 import signal
 import stat
@@ -36,9 +37,10 @@ def _names(folder):
 def test_output_set_appears_all_at_once_or_not_at_all(tmp_path):
     out = tmp_path / "o"
     with pio.output_set(out) as d:
+        assert d == out
         pio.write_json(d / "modes.json", {"v": 1})
-        (d / "modes.vtu").write_text("old vtu")
-        assert not out.exists()  # nothing visible while the set is written
+        pio.write_text(d / "modes.vtu", "old vtu")
+        assert _names(out) == sorted(n for n in _names(out) if "probedyn-tmp" in n)  # nothing visible yet
     assert _names(out) == ["modes.json", "modes.vtu"]
     # a second run killed (any exception, KeyboardInterrupt included) between its two files:
     # the old set stays, complete; no temporary is left
@@ -47,17 +49,36 @@ def test_output_set_appears_all_at_once_or_not_at_all(tmp_path):
             pio.write_json(d / "modes.json", {"v": 2})
             raise KeyboardInterrupt
     assert (out / "modes.vtu").read_text() == "old vtu" and '"v": 1' in (out / "modes.json").read_text()
-    assert _names(tmp_path) == ["o"]
+    assert _names(tmp_path) == ["o"] and _names(out) == ["modes.json", "modes.vtu"]
     # a complete second run replaces both files and keeps a user's own file beside them
     (out / "notes.txt").write_text("mine")
     with pio.output_set(out) as d:
         pio.write_json(d / "modes.json", {"v": 3})
-        (d / "modes.vtu").write_text("new vtu")
-        (d / "sub").mkdir()
-        (d / "sub" / "x.png").write_bytes(b"png")
+        pio.write_text(d / "modes.vtu", "new vtu")
+        pio.write_bytes(d / "sub" / "x.png", b"png")
     assert _names(out) == ["modes.json", "modes.vtu", "notes.txt", "sub"]
     assert (out / "modes.vtu").read_text() == "new vtu" and (out / "notes.txt").read_text() == "mine"
     assert _names(tmp_path) == ["o"]
+
+
+def test_a_failed_set_removes_the_folders_it_created(tmp_path):
+    with pytest.raises(RuntimeError):
+        with pio.output_set(tmp_path / "a" / "b") as d:
+            pio.write_json(d / "c" / "x.json", 1)
+            raise RuntimeError("solver failed")
+    assert _names(tmp_path) == []
+
+
+def test_transaction_defers_every_write_and_after_commit_waits(tmp_path):
+    done = []
+    with pio.transaction():
+        pio.write_json(tmp_path / "a.json", 1)
+        pio.write_json(tmp_path / "x" / "b.json", 2)
+        pio.write_json(tmp_path / "cache.json", 3, defer=False)  # state: at once
+        pio.after_commit(lambda: done.append(sorted(p.name for p in tmp_path.rglob("*.json"))))
+        assert not (tmp_path / "a.json").exists() and (tmp_path / "cache.json").exists()
+        assert done == []
+    assert done == [["a.json", "b.json", "cache.json"]]
 
 
 def test_signal_during_commit_is_delivered_after_the_set_is_complete(tmp_path):
@@ -65,41 +86,39 @@ def test_signal_during_commit_is_delivered_after_the_set_is_complete(tmp_path):
     out.mkdir()
     (out / "a.json").write_text("old a")
     (out / "b.json").write_text("old b")
-    seen = []
-    real = pio._move_into
+    real = os.replace
+    calls = []
 
-    def move_then_signal(stage, target):
-        # SIGINT arrives in the middle of the commit: it must wait until the set is in place
-        signal.raise_signal(signal.SIGINT)
-        seen.append("after raise")
-        real(stage, target)
+    def replace_then_signal(src, dst):
+        if not calls:  # SIGINT arrives after the first rename of the commit
+            signal.raise_signal(signal.SIGINT)
+        calls.append(dst)
+        real(src, dst)
 
-    pio._move_into = move_then_signal
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            with pio.output_set(out) as d:
-                (d / "a.json").write_text("new a")
-                (d / "b.json").write_text("new b")
-    finally:
-        pio._move_into = real
-    assert seen == ["after raise"]
+    with pytest.raises(KeyboardInterrupt):
+        with pio.output_set(out) as d:
+            pio.write_text(d / "a.json", "new a")
+            pio.write_text(d / "b.json", "new b")
+            os.replace = replace_then_signal  # for the commit that follows the block
+    os.replace = real
+    assert len(calls) == 2
     assert (out / "a.json").read_text() == "new a" and (out / "b.json").read_text() == "new b"
 
 
 def test_commit_killed_half_way_is_rolled_forward_by_the_next_run(tmp_path):
-    """SIGKILL between two renames of a commit: the marker lets the next run finish the move."""
+    """SIGKILL between two renames of a commit: the journal lets the next run finish them."""
     out = tmp_path / "o"
     out.mkdir()
-    (out / "a.json").write_text("old a")
+    (out / "a.json").write_text("new a")  # renamed before the kill
     (out / "b.json").write_text("old b")
-    stage = tmp_path / f".o.probedyn-tmp-{pio._HOST}-999999-deadbeef"  # a dead process's staging
-    stage.mkdir()
-    (stage / "b.json").write_text("new b")  # a.json was already moved when the run died
-    (out / "a.json").write_text("new a")
-    (stage / ".probedyn-commit").write_text(str(out.absolute()) + "\n")
-    removed = pio.clean_stale(tmp_path)
-    assert removed == [stage] and not stage.exists()
+    tmp_b = out / f".b.json.probedyn-tmp-{pio._HOST}-999999-0badc0de.json"  # pid 999999: dead
+    tmp_b.write_text("new b")
+    journal = out / f".probedyn-commit.probedyn-tmp-{pio._HOST}-999999-0badc0de.json"
+    journal.write_text(json.dumps([[str(out / "gone-a.tmp"), str(out / "a.json")], [str(tmp_b), str(out / "b.json")]]))
+    removed = pio.clean_stale(out)
+    assert sorted(p.name for p in removed) == sorted([journal.name, tmp_b.name])
     assert (out / "a.json").read_text() == "new a" and (out / "b.json").read_text() == "new b"
+    assert _names(out) == ["a.json", "b.json"]
 
 
 def test_stale_temporaries_of_dead_processes_are_removed_live_ones_kept(tmp_path):
@@ -124,7 +143,9 @@ def test_files_honour_the_umask(tmp_path):
         pio.write_json(tmp_path / "a.json", 1)
         with pio.output_set(tmp_path / "s") as d:
             pio.write_text(d / "b.txt", "x")
-            (d / "c.txt").write_text("y")  # a library writing with open(): umask as well
+            with pio.atomic_path(d / "c.txt") as tmp:  # a library writing with open(): umask as well
+                with open(tmp, "w") as fh:
+                    fh.write("y")
         os.umask(0o077)
         pio._UMASK = None
         pio.write_json(tmp_path / "p.json", 1)
@@ -156,13 +177,11 @@ def test_misplaced_files_are_one_line_output_errors(tmp_path, where):
 @pytest.mark.parametrize("err_no,phrase", [(errno.ENOSPC, "no space left"), (errno.EROFS, "read-only"),
                                            (errno.EDQUOT, "quota"), (errno.EACCES, "permission denied")])
 def test_write_errors_inside_a_set_become_output_errors(tmp_path, err_no, phrase):
-    def failing_writer(stage):
-        raise OSError(err_no, os.strerror(err_no), str(stage / "big.vtu"))
-
     with pytest.raises(OutputError, match=phrase):
         with pio.output_set(tmp_path / "o") as d:
-            (d / "small.json").write_text("{}")
-            failing_writer(d)
+            pio.write_json(d / "small.json", {})
+            with pio.atomic_path(d / "big.vtu") as tmp:  # a writer failing half-way
+                raise OSError(err_no, os.strerror(err_no), str(tmp))
     assert _names(tmp_path) == []
 
 
@@ -182,7 +201,7 @@ def test_concurrent_sets_into_one_folder_never_mix(tmp_path):
             for _ in range(15):
                 with pio.output_set(out) as d:
                     for name in ("a", "b", "c"):
-                        (d / name).write_text(str(k))
+                        pio.write_text(d / name, str(k))
         except Exception as exc:  # pragma: no cover
             errors.append(exc)
 

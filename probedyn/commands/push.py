@@ -10,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import simulate_app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, save
+from probedyn.core.io import make_dirs
 
 
 @simulate_app.command("push")
@@ -34,7 +35,7 @@ def push_cmd(
     r = dict(r)
     if out is not None:
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         from probedyn.report.pushing import plot_push
 
         r["plot"] = str(plot_push(res, r, out / "push.png", f"{substrate}, V = {res.model.p['V'] * 1e6:g} µm/s"))

@@ -1,19 +1,25 @@
 """Every file probedyn writes or reads on a user's behalf goes through here.
 
-Writing (one mechanism for single files, one for output *sets*):
+Writing: one mechanism for one file and for sets of files.
 
-* :func:`atomic_path` / :func:`write_text` / :func:`write_json` / :func:`write_bytes`: one file,
-  written to a temporary name beside the target and renamed into place (``os.replace`` is
+* :func:`atomic_path` / :func:`write_text` / :func:`write_json` / :func:`write_bytes`: a file is
+  written to a temporary name beside its target, then renamed into place (``os.replace`` is
   atomic on POSIX): a reader sees the old file or the new one, never half of one.
-* :func:`output_set`: several files that belong together (``modes.json`` + ``modes.vtu``, a
-  report and its figures). They are written into a *staging folder* beside the target folder;
-  on success the staging folder is renamed into place (target absent) or its files are moved
-  in under a commit marker (target present). A run that fails or is interrupted removes its
-  staging folder, so the target keeps its previous, consistent content. A run killed with
-  SIGKILL in the (sub-millisecond) move phase leaves the marker; the next probedyn run that
-  writes beside the target finishes the move ("roll forward").
-* Temporaries are named ``.<name>.probedyn-tmp-<host>-<pid>-<random>``; :func:`clean_stale`
-  removes those of dead processes (called automatically once per folder per process).
+* A **transaction** (:func:`transaction`, or :func:`output_set` for one folder) defers those
+  renames: every file written while it is open stays under its temporary name until the block
+  ends. Without an exception, all of them are renamed into place together (a journal listing
+  the renames is written first, SIGINT/SIGTERM/SIGHUP are held until the renames are done);
+  with an exception, KeyboardInterrupt included, all temporaries are removed and folders the
+  transaction created are removed again when empty. So ``modes.json`` and ``modes.vtu``, or a
+  report and its figures, appear together or not at all, and an interrupted run leaves the
+  previous outputs untouched. The command line runs every command in one transaction
+  (:mod:`probedyn.cli`). A run killed with SIGKILL during the renames (microseconds) leaves
+  its journal; the next probedyn run writing into that folder completes them ("roll forward").
+  Caches and resumable state (mesh cache, a sweep's finished chunks) are written with
+  ``defer=False``: they are kept even when the run fails.
+* Temporaries and journals are named ``.<name>.probedyn-tmp-<host>-<pid>-<random>``;
+  :func:`clean_stale` removes those of dead processes (automatically, once per folder per
+  process, before anything is written there).
 * Permissions honour the umask (``mkstemp`` would leave 0600 files nobody else can read).
 * ``OSError`` while writing (read-only or full file system, permission, a file where a folder
   should be) becomes :class:`~probedyn.core.errors.OutputError` with a one-line message.
@@ -46,17 +52,19 @@ import stat
 import threading
 import time
 import tomllib
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, OutputError
 
 __all__ = [
-    "to_jsonable", "dumps", "atomic_path", "write_text", "write_json", "write_bytes", "output_set",
-    "as_output_error", "clean_stale", "file_mode", "discard_active", "read_bytes", "read_text", "load_toml",
-    "resolve_input", "MAX_TEXT_BYTES", "MAX_DATA_BYTES",
+    "to_jsonable", "dumps", "atomic_path", "write_text", "write_json", "write_bytes", "transaction",
+    "output_set", "make_dirs", "check_output_folder", "check_output_file", "after_commit", "as_output_error", "clean_stale", "file_mode",
+    "discard_active", "read_bytes", "read_text", "load_toml", "resolve_input", "MAX_TEXT_BYTES",
+    "MAX_DATA_BYTES",
 ]
 
 
@@ -100,13 +108,13 @@ def dumps(obj: Any, indent: int | None = 2) -> str:
 _TAG = ".probedyn-tmp-"
 _HOST = hashlib.sha256(socket.gethostname().encode()).hexdigest()[:6]
 _TMP_RE = re.compile(r"^\.(?P<name>.*)\.probedyn-tmp-(?P<host>[0-9a-f]{6})-(?P<pid>\d+)-[0-9a-f]{8}(?P<suffix>.*)$")
-_COMMIT_MARKER = ".probedyn-commit"
+_JOURNAL = "probedyn-commit"  # the <name> of a journal: .probedyn-commit.probedyn-tmp-...
 #: a temporary of another host (or a recycled pid) is stale after this long without change
 STALE_AFTER_S = 24 * 3600.0
 
 _active: set[Path] = set()
 _active_lock = threading.Lock()
-_commit_lock = threading.Lock()  # held while an output set is moved into place
+_commit_lock = threading.Lock()  # held while a transaction renames its files into place
 _cleaned: set[Path] = set()
 
 
@@ -133,7 +141,7 @@ def _remove(p: Path) -> None:
 
 
 def discard_active() -> None:
-    """Remove every temporary file and staging folder this process is writing (best effort).
+    """Remove every temporary this process is writing or holding for a commit (best effort).
 
     Used by the command line before a forced exit on an interrupt; normal exits (including
     exceptions and KeyboardInterrupt) clean up through the context managers themselves.
@@ -182,25 +190,33 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+def _replay(journal: Path) -> None:
+    """Finish the renames a killed commit listed in ``journal`` (those whose temporary remains)."""
+    with contextlib.suppress(OSError, ValueError, TypeError):
+        for tmp, final in json.loads(journal.read_text(encoding="utf-8")):
+            if os.path.exists(tmp):
+                os.replace(tmp, final)
+
+
 def clean_stale(folder: str | Path, force: bool = False) -> list[Path]:
     """Remove temporaries left in ``folder`` by killed probedyn runs; finish interrupted commits.
 
     A temporary is stale when it was made on this host by a process that no longer exists, or
-    when it has not changed for :data:`STALE_AFTER_S`. A stale staging folder holding a commit
-    marker is moved into place first (the run was killed while committing). Returns what was
-    removed or committed. Runs once per folder per process unless ``force``.
+    when it has not changed for :data:`STALE_AFTER_S`. A stale commit journal is replayed first
+    (the run was killed while renaming its files into place). Returns what was removed. Runs
+    once per folder per process unless ``force``.
     """
     folder = Path(folder)
     key = folder.absolute()
     if key in _cleaned and not force:
         return []
     _cleaned.add(key)
-    done: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:
-        return done
+        return []
     now = time.time()
+    stale = []
     for e in entries:
         m = _TMP_RE.match(e.name)
         if not m:
@@ -213,17 +229,13 @@ def clean_stale(folder: str | Path, force: bool = False) -> list[Path]:
         except OSError:
             continue
         dead = m.group("host") == _HOST and not _pid_alive(pid)
-        if not dead and age < STALE_AFTER_S:
-            continue
-        p = Path(e.path)
-        if e.is_dir(follow_symlinks=False) and (p / _COMMIT_MARKER).exists():
-            with contextlib.suppress(OSError, OutputError):
-                target = Path((p / _COMMIT_MARKER).read_text(encoding="utf-8").strip())
-                if target.parent.absolute() == folder.absolute():
-                    _move_into(p, target)
+        if dead or age >= STALE_AFTER_S:
+            stale.append((m.group("name") == _JOURNAL, Path(e.path)))
+    for is_journal, p in sorted(stale, key=lambda t: not t[0]):  # journals first
+        if is_journal:
+            _replay(p)
         _remove(p)
-        done.append(p)
-    return done
+    return [p for _, p in stale]
 
 
 # ------------------------------------------------------------------------------------------
@@ -245,6 +257,7 @@ _WRITE_ERRNOS = {
     errno.ELOOP: "too many symbolic links",
     errno.ENOTEMPTY: "a folder of that name is in the way",
 }
+_ALWAYS_WRITE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG}
 
 
 def as_output_error(exc: OSError, target: Path) -> OutputError:
@@ -253,18 +266,14 @@ def as_output_error(exc: OSError, target: Path) -> OutputError:
     return OutputError(f"cannot write {target}: {reason}")
 
 
-_ALWAYS_WRITE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG}
-
-
 def _is_write_error(exc: BaseException, where: Path) -> bool:
-    """An OSError that comes from writing below ``where`` (full or read-only file systems always do)."""
+    """An OSError that comes from writing ``where`` (full or read-only file systems always do)."""
     if not isinstance(exc, OSError) or exc.errno not in _WRITE_ERRNOS:
         return False
     if exc.errno in _ALWAYS_WRITE:
         return True
     names = [n for n in (exc.filename, getattr(exc, "filename2", None)) if n]
-    return any(_within(Path(os.path.abspath(n)), where.absolute()) or Path(n).absolute() == where.absolute()
-               for n in names)
+    return any(Path(os.path.abspath(n)) == where.absolute() for n in names)
 
 
 @contextlib.contextmanager
@@ -278,9 +287,8 @@ def _signals_deferred() -> Iterator[None]:
         yield
         return
     pending: list[int] = []
-    sigs = [s for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)]
     old = {}
-    for s in sigs:
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
         try:
             old[s] = signal.signal(s, lambda signum, frame: pending.append(signum))
         except (ValueError, OSError):  # pragma: no cover
@@ -295,30 +303,247 @@ def _signals_deferred() -> Iterator[None]:
 
 
 # ------------------------------------------------------------------------------------------
+# Transactions
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Transaction:
+    roots: list[Path] | None                       # None: every deferred write
+    pending: dict[Path, Path] = field(default_factory=dict)   # final -> temporary
+    created: list[Path] = field(default_factory=list)         # folders made, outermost first
+    after: list[Callable[[], Any]] = field(default_factory=list)
+
+    def covers(self, path: Path) -> bool:
+        if self.roots is None:
+            return True
+        a = path.absolute()
+        return any(a == r or _within(a, r) for r in self.roots)
+
+
+_local = threading.local()  # each thread has its own stack of open transactions
+
+
+def _stack() -> list[_Transaction]:
+    st = getattr(_local, "stack", None)
+    if st is None:
+        st = _local.stack = []
+    return st
+
+
+def _current(path: Path) -> _Transaction | None:
+    for tx in reversed(_stack()):
+        if tx.covers(path):
+            return tx
+    return None
+
+
+def make_dirs(folder: str | Path) -> Path:
+    """``mkdir -p`` for outputs: inside a transaction, folders it creates are removed again (when
+    empty) if the transaction fails. A file in the way is :class:`OutputError`."""
+    folder = Path(folder)
+    missing = []
+    p = folder.absolute()
+    while not p.exists() and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    if p.exists() and not p.is_dir():
+        raise OutputError(f"cannot write into {folder}: {p} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise OutputError(f"cannot write into {folder}: it is a file, not a folder") from None
+    except OSError as exc:
+        raise as_output_error(exc, folder) from None
+    if not folder.is_dir():
+        raise OutputError(f"cannot write into {folder}: it is a file, not a folder")
+    tx = _current(folder)
+    if tx is not None:
+        tx.created.extend(reversed(missing))
+    return folder
+
+
+def _writable_ancestor(path: Path, what: Path) -> None:
+    """The nearest existing ancestor of ``path`` must be a folder this process can write in."""
+    p = path.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    if not p.is_dir():
+        raise OutputError(f"cannot write {what}: {p} is a file, not a folder")
+    if not os.access(p, os.W_OK | os.X_OK):
+        try:  # access() says why only through errno: EROFS or EACCES
+            os.statvfs(p)
+            ro = bool(os.statvfs(p).f_flag & os.ST_RDONLY)
+        except OSError:
+            ro = False
+        raise OutputError(f"cannot write {what}: {'read-only file system' if ro else 'permission denied'} ({p})")
+
+
+def check_output_folder(folder: str | Path) -> Path:
+    """Fail early (before any work) if ``folder`` cannot become an output folder; creates nothing."""
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"cannot write into {folder}: it is a file, not a folder")
+    _writable_ancestor(folder, folder)
+    return folder
+
+
+def check_output_file(path: str | Path) -> Path:
+    """Fail early (before any work) if the file ``path`` cannot be written; creates nothing."""
+    path = Path(path)
+    if path.is_dir():
+        raise OutputError(f"cannot write {path}: a folder of that name is in the way")
+    if path.parent.exists() and not path.parent.is_dir():
+        raise OutputError(f"cannot write {path}: {path.parent} is a file, not a folder")
+    _writable_ancestor(path.parent, path)
+    return path
+
+
+def after_commit(action: Callable[[], Any]) -> None:
+    """Run ``action`` once the current transaction has put its files in place (at once without one).
+
+    For clean-ups that must not happen unless the outputs exist (a sweep removes its chunks
+    only once the merged NetCDF file is in place).
+    """
+    st = _stack()
+    tx = st[-1] if st else None
+    if tx is None:
+        action()
+    else:
+        tx.after.append(action)
+
+
+def _rollback(tx: _Transaction) -> None:
+    for tmp in tx.pending.values():
+        _remove(tmp)
+        _unregister(tmp)
+    tx.pending.clear()
+    for d in reversed(tx.created):  # innermost first; only if empty
+        with contextlib.suppress(OSError):
+            d.rmdir()
+
+
+@contextlib.contextmanager
+def _folder_locks(folders: Iterable[Path]) -> Iterator[None]:
+    """Exclusive advisory locks on folders, in a fixed order: commits into the same folders by
+    several processes happen one after the other, never interleaved."""
+    with contextlib.ExitStack() as stack:
+        for d in sorted({Path(f).absolute() for f in folders}):
+            try:
+                fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+            except OSError:
+                continue
+            stack.callback(os.close, fd)
+            fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+
+
+def _commit(tx: _Transaction) -> None:
+    if tx.pending:
+        items = list(tx.pending.items())
+        first = items[0][0]
+        with _signals_deferred(), _commit_lock, _folder_locks(f.parent for f, _ in items):
+            journal = None
+            try:
+                if len(items) > 1:  # one rename is atomic by itself
+                    journal = first.parent / _tmp_name(_JOURNAL, ".json")
+                    fd = os.open(journal, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o600)
+                    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+                        json.dump([[str(t.absolute()), str(f.absolute())] for f, t in items], fh)
+                        fh.flush()
+                        os.fsync(fh.fileno())
+                for final, tmp in items:
+                    if final.is_dir() and not final.is_symlink():
+                        raise OutputError(f"cannot write {final}: a folder of that name is in the way")
+                    os.replace(tmp, final)
+                    _unregister(tmp)
+            except OSError as exc:
+                _rollback(tx)
+                raise as_output_error(exc, first) from None
+            except BaseException:
+                _rollback(tx)
+                raise
+            finally:
+                if journal is not None:
+                    with contextlib.suppress(OSError):
+                        journal.unlink()
+        tx.pending.clear()
+    for action in tx.after:
+        action()
+
+
+@contextlib.contextmanager
+def transaction(roots: Iterable[str | Path] | None = None) -> Iterator[_Transaction]:
+    """Defer the renames of files written while the block runs (below ``roots``, or all); see
+    the module docstring. Nested transactions covering a path join the outer one."""
+    tx = _Transaction([Path(r).absolute() for r in roots] if roots is not None else None)
+    st = _stack()
+    st.append(tx)
+    try:
+        try:
+            yield tx
+        finally:
+            st.remove(tx)
+    except BaseException:
+        _rollback(tx)
+        raise
+    outer = None
+    if tx.pending or tx.after or tx.created:
+        outer = next((o for o in reversed(st)
+                      if all(o.covers(f) for f in tx.pending) and (tx.roots is None) <= (o.roots is None)), None)
+    if outer is not None:  # nested: the outer transaction commits (or rolls back) everything
+        outer.pending.update(tx.pending)
+        outer.created.extend(tx.created)
+        outer.after.extend(tx.after)
+        return
+    _commit(tx)
+
+
+@contextlib.contextmanager
+def output_set(out: str | Path) -> Iterator[Path]:
+    """Write a set of files into folder ``out``, all at once or not at all; yields ``out``.
+
+    ``out`` is checked and created first (a file in its place, an unwritable parent raise
+    :class:`OutputError` before any work is done). Files written below ``out`` through this
+    module appear when the block ends without an exception, together; other files already in
+    ``out`` are left alone (files of the same name are replaced).
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise OutputError(f"cannot write into {out}: it is a file, not a folder")
+    with transaction([out]):
+        make_dirs(out)
+        clean_stale(out)
+        yield out
+
+
+# ------------------------------------------------------------------------------------------
 # One file
 # ------------------------------------------------------------------------------------------
 
 
 def _prepare_folder(folder: Path, target: Path) -> None:
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except FileExistsError:
-        raise OutputError(f"cannot write {target}: {folder} is a file, not a folder") from None
-    except OSError as exc:
-        raise as_output_error(exc, target) from None
-    if not folder.is_dir():
+    if folder.exists() and not folder.is_dir():
         raise OutputError(f"cannot write {target}: {folder} is a file, not a folder")
+    p = folder.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    if not p.is_dir():
+        raise OutputError(f"cannot write {target}: {p} is a file, not a folder")
+    make_dirs(folder)
     clean_stale(folder)
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; on success rename it to ``path``.
+def atomic_path(path: str | Path, defer: bool = True) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; when the block ends, rename it to ``path``.
 
     The temporary keeps the target's suffix (writers that choose a format by suffix work) and
-    exists as an empty file when yielded. On success its mode is set from the umask, it is
-    flushed to disk and renamed over ``path``; on any exception (KeyboardInterrupt included) it
-    is removed. ``OSError`` from the file system becomes :class:`OutputError`.
+    exists as an empty file when yielded. On success its mode is set from the umask and it is
+    flushed to disk; inside a :func:`transaction` covering ``path`` (and ``defer``) the rename
+    waits for the transaction's end, otherwise it happens at once. On any exception
+    (KeyboardInterrupt included) the temporary is removed. ``OSError`` from the file system
+    becomes :class:`OutputError`.
     """
     path = Path(path)
     if path.is_dir():
@@ -331,6 +556,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     except OSError as exc:
         raise as_output_error(exc, path) from None
     _register(tmp)
+    keep = False
     try:
         yield tmp
         try:
@@ -341,7 +567,16 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
                     os.fsync(fd)
                 finally:
                     os.close(fd)
-            os.replace(tmp, path)
+            tx = _current(path) if defer else None
+            if tx is not None:
+                old = tx.pending.pop(path.absolute(), None)
+                if old is not None:  # written twice in one transaction: the last one counts
+                    _remove(old)
+                    _unregister(old)
+                tx.pending[path.absolute()] = tmp
+                keep = True
+            else:
+                os.replace(tmp, path)
         except OSError as exc:
             raise as_output_error(exc, path) from None
     except BaseException as exc:
@@ -350,116 +585,23 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
             raise as_output_error(exc, path) from None  # type: ignore[arg-type]
         raise
     finally:
-        _unregister(tmp)
+        if not keep:
+            _unregister(tmp)
 
 
-def write_bytes(path: str | Path, data: bytes) -> Path:
-    with atomic_path(path) as tmp:
+def write_bytes(path: str | Path, data: bytes, defer: bool = True) -> Path:
+    with atomic_path(path, defer=defer) as tmp:
         with open(tmp, "wb") as fh:
             fh.write(data)
     return Path(path)
 
 
-def write_text(path: str | Path, text: str) -> Path:
-    return write_bytes(path, text.encode("utf-8"))
+def write_text(path: str | Path, text: str, defer: bool = True) -> Path:
+    return write_bytes(path, text.encode("utf-8"), defer=defer)
 
 
-def write_json(path: str | Path, obj: Any) -> Path:
-    return write_text(path, dumps(obj) + "\n")
-
-
-# ------------------------------------------------------------------------------------------
-# A set of files
-# ------------------------------------------------------------------------------------------
-
-
-def _files_below(folder: Path) -> list[Path]:
-    out = []
-    for root, _dirs, files in os.walk(folder):
-        for f in files:
-            if f != _COMMIT_MARKER:
-                out.append(Path(root) / f)
-    return sorted(out)
-
-
-def _move_into(stage: Path, target: Path) -> None:
-    """Move every file of ``stage`` to the same relative place in ``target`` (replacing)."""
-    for src in _files_below(stage):
-        rel = src.relative_to(stage)
-        dst = target / rel
-        if dst.parent != target:
-            if dst.parent.exists() and not dst.parent.is_dir():
-                raise OutputError(f"cannot write {dst}: {dst.parent} is a file, not a folder")
-            dst.parent.mkdir(parents=True, exist_ok=True)
-        if dst.is_dir() and not dst.is_symlink():
-            raise OutputError(f"cannot write {dst}: a folder of that name is in the way")
-        os.replace(src, dst)
-
-
-@contextlib.contextmanager
-def _dir_lock(folder: Path) -> Iterator[None]:
-    """Exclusive advisory lock on a folder (serialises commits into the same parent)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)
-
-
-@contextlib.contextmanager
-def output_set(out: str | Path) -> Iterator[Path]:
-    """Write a set of files into folder ``out`` all at once: yields the staging folder to write in.
-
-    ``out`` is checked first (a file in its place, an unwritable parent raise
-    :class:`OutputError` before any work is done). Files written below the staging folder
-    appear in ``out`` only when the block ends without an exception, all together; other
-    files already in ``out`` are left alone (files of the same name are replaced).
-    """
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"cannot write into {out}: it is a file, not a folder")
-    parent = out.absolute().parent
-    _prepare_folder(parent, out)
-    stage = parent / _tmp_name(out.name)
-    try:
-        os.mkdir(stage, 0o777)
-    except OSError as exc:
-        raise as_output_error(exc, out) from None
-    _register(stage)
-    try:
-        try:
-            yield stage
-        except BaseException as exc:
-            _remove(stage)
-            if _is_write_error(exc, stage):
-                raise as_output_error(exc, out) from None  # type: ignore[arg-type]
-            raise
-        with _signals_deferred(), _commit_lock, _dir_lock(parent):
-            try:
-                if out.exists() and not out.is_dir():
-                    raise OutputError(f"cannot write into {out}: it is a file, not a folder")
-                try:
-                    os.rename(stage, out)  # target absent (or an empty folder): one atomic step
-                except OSError as exc:
-                    if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
-                        raise
-                    marker = stage / _COMMIT_MARKER
-                    marker.write_text(str(out.absolute()) + "\n", encoding="utf-8")
-                    _move_into(stage, out)
-                    _remove(stage)
-            except OSError as exc:
-                _remove(stage)
-                raise as_output_error(exc, out) from None
-            except BaseException:
-                _remove(stage)
-                raise
-    finally:
-        _unregister(stage)
+def write_json(path: str | Path, obj: Any, defer: bool = True) -> Path:
+    return write_text(path, dumps(obj) + "\n", defer=defer)
 
 
 # ------------------------------------------------------------------------------------------

@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 from probedyn import __version__
-from probedyn.core.io import write_text
+from probedyn.core.io import make_dirs, write_text
 
 SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.report.cantilever:section"),
@@ -40,7 +40,7 @@ def build_report(outdir: Path, quick: bool = False, only: list[str] | None = Non
     """Run every section (or those whose title contains one of ``only``) and write
     ``outdir/report.md``; return its path."""
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     parts = [
         "# probedyn report",
         "",
