@@ -444,6 +444,12 @@ def _commit(tx: _Transaction) -> None:
         first = items[0][0]
         with _signals_deferred(), _commit_lock, _folder_locks(f.parent for f, _ in items):
             journal = None
+
+            def drop_journal() -> None:
+                if journal is not None:
+                    with contextlib.suppress(OSError):
+                        journal.unlink()
+
             try:
                 if len(items) > 1:  # one rename is atomic by itself
                     journal = first.parent / _tmp_name(_JOURNAL, ".json")
@@ -458,15 +464,14 @@ def _commit(tx: _Transaction) -> None:
                     os.replace(tmp, final)
                     _unregister(tmp)
             except OSError as exc:
+                drop_journal()
                 _rollback(tx)
                 raise as_output_error(exc, first) from None
             except BaseException:
+                drop_journal()
                 _rollback(tx)
                 raise
-            finally:
-                if journal is not None:
-                    with contextlib.suppress(OSError):
-                        journal.unlink()
+            drop_journal()
         tx.pending.clear()
     for action in tx.after:
         action()
