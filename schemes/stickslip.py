@@ -204,6 +204,10 @@ class TwoMassModel:
 DEFAULT_MODEL = TwoMassModel()
 
 
+#: largest |psi| accepted: beyond, X + psi (|X| <= u0 <= 1e4) keeps fewer than ~6 significant digits of X
+PSI_MAX = 1e6
+
+
 def _check_u0_psi(u0: float, psi: float) -> None:
     if not (isinstance(u0, (int, float, np.floating, np.integer)) and math.isfinite(u0)):
         raise ParameterError(f"u0 must be a finite number, got {u0!r}")
@@ -213,6 +217,9 @@ def _check_u0_psi(u0: float, psi: float) -> None:
         raise ParameterError(f"u0 = {u0:g} is too large (more than ~3000 equilibria); use u0 <= 1e4")
     if not math.isfinite(psi):
         raise ParameterError(f"psi must be finite, got {psi!r}")
+    if abs(psi) > PSI_MAX:
+        raise ParameterError(f"psi = {psi:g} rad: a phase beyond +-{PSI_MAX:g} rad loses its value in floating point "
+                             "(X + psi); give it modulo 2 pi")
 
 
 # --------------------------------------------------------------------------------------
@@ -765,6 +772,8 @@ def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 
     Also returns the number of distinct periodic attractors, the period of the attractor
     reached from x3(0) = 0 (0 = irregular), the extreme lab-speed ratios and its mean friction.
     """
+    if isinstance(n_ic, bool) or int(n_ic) != n_ic or n_ic < 1:
+        raise ParameterError(f"n_ic (initial conditions per cell) must be a positive integer, got {n_ic!r}")
     out = _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_periods, record_periods,
                        model_params)
     redo = np.nonzero((out["regime"] == 2) | (out["regime"] == 4))[0]

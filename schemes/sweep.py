@@ -134,6 +134,10 @@ def parse_axis(spec: str) -> tuple[str, np.ndarray]:
         vals = np.array([float(x) for x in rhs.split(",") if x.strip()])
     except ValueError:
         raise GridError(form) from None
+    if vals.size == 0:
+        raise GridError(f"grid spec {spec!r}: no values (zero points); {form.split(': ', 1)[1]}")
+    if not np.all(np.isfinite(vals)):
+        raise GridError(f"grid spec {spec!r}: values must be finite numbers")
     return name, vals
 
 
