@@ -204,6 +204,9 @@ class TwoMassModel:
 DEFAULT_MODEL = TwoMassModel()
 
 
+#: largest non-dimensional speed of the moving-base dynamics: the transient (t >= 300) is integrated
+#: with 128 steps per forcing period 2 pi / v, i.e. ~6000 v steps per cell
+V_MAX = 1e3
 #: largest |psi| accepted: beyond, X + psi (|X| <= u0 <= 1e4) keeps fewer than ~6 significant digits of X
 PSI_MAX = 1e6
 
@@ -591,6 +594,9 @@ def attractor_stats(
     u0f, vf, x3f, x4f = (q.ravel() for q in (u0a, va, x3a, x4a))
     if np.any(~np.isfinite(vf)) or np.any(vf <= 0):
         raise ParameterError("speed v must be positive and finite for the moving-base dynamics (use basins for v = 0)")
+    if np.any(vf > V_MAX):
+        raise ParameterError(f"speed v = {vf.max():g} is beyond {V_MAX:g}: the transient alone would take about "
+                             f"6000 v integration steps per cell (give v <= {V_MAX:g})")
     if np.any(~np.isfinite(u0f)) or np.any(u0f < 0):
         raise ParameterError("u0 must be finite and >= 0")
     n = u0f.size

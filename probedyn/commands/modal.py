@@ -80,8 +80,9 @@ def reduce_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mo
                q: Optional[float] = typer.Option(None, "--q", help="Quality factor (c = sqrt(k m)/Q)."),
                out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Lumped model per mode at the tip (eqs 3.1-3.3 generalised) and the static tip stiffness."""
-    from probedyn.lumped.reduce import reduce_modes
+    from probedyn.lumped.reduce import check_damping, reduce_modes
 
+    check_damping(mu, q)  # before the FEM solve
     p, values, result = solve(probe, set_, n_modes)
     model = result.model
     rho_a = p.mass_per_length(values, model) if mu is not None else None
