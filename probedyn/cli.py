@@ -254,12 +254,18 @@ def _usage_message(exc: BaseException) -> str:
     return f"{msg} (see '{path} --help')" if _is(exc, "UsageError") else msg
 
 
+_CLICK_TREE: Any = None
+
+
 def _missing_command(argv: list[str]) -> str | None:
     """The usage error for ``probedyn [GROUP...]`` without a command, the same for every click version
     (click < 8.2 prints the help and exits 0 for ``no_args_is_help``; 8.2+ raises)."""
-    import typer
+    global _CLICK_TREE
+    if _CLICK_TREE is None:  # the commands are all registered at import: build the tree once
+        import typer
 
-    cmd: Any = typer.main.get_command(app)
+        _CLICK_TREE = typer.main.get_command(app)
+    cmd: Any = _CLICK_TREE
     path = [PROG]
     tokens = list(argv)
     while hasattr(cmd, "commands"):

@@ -200,7 +200,7 @@ CASES: list[Case] = [
          match=r"u0=.*no values"),
     Case("c9-portrait-inf-u0", 9, ["stickslip", "portrait", "--u0", "1,inf", "--out", "{tmp}/p.png"], match=r"finite"),
     Case("c9-regime-map-n-ic-zero", 9, ["stickslip", "regime-map", "--n-ic", "0", "--u0", "1,2", "--v", "0.5,1",
-                                        "--out", "{tmp}/r.nc", "--no-progress"], match=r"n_ic .* positive integer",
+                                        "--out", "{tmp}/r.nc", "--no-progress"], match=r"n_ic .* integer from 1 to 1000",
          timeout=120,
          check=lambda tmp, o: "Dask log printed" if "distributed." in o.err else None),
     Case("c9-smart-convergence-one-size", 9, ["smart-convergence", "duo-bimorph", "--sizes", "1"], timeout=120),
@@ -218,6 +218,102 @@ CASES: list[Case] = [
 ]
 
 
+# More bad values for every command (classes 2, 6 and 9: the same plausibility checks everywhere).
+# Each must be refused before any long work; (argv, class, pattern the message must contain).
+TRACE_CSV = "# speed = 2e-6\n# k_x = 0.2\n" + "".join(f"{j * 1e-10:.3e},{(j % 7) * 1e-10:.3e}\n" for j in range(40))
+GRID = ["--grid", "u0=1:2:2", "--grid", "v=1,2", "--out", "a.nc"]
+REGIME = ["sweep", "run", "probedyn.schemes.stickslip:regime_cell"]
+EXTRA = [
+    (["modes", "cantilever", "--set", "length=-1e-4"], 6, r"length' must be positive"),
+    (["modes", "cantilever", "--set", "thickness=10"], 6, r"thickness.*micrometres"),
+    (["modes", "cantilever", "--set", "width=nan"], 6, r"width"),
+    (["modes", "cantilever", "--set", "length=inf"], 6, r"length"),
+    (["modes", "cantilever", "--set", "material=unobtainium"], 6, r"unobtainium"),
+    (["modes", "cantilever", "--set", "tip_shape=cube"], 6, r"tip_shape"),
+    (["modes", "cantilever", "--set", "elements_through_thickness=0"], 6, r"elements_through_thickness"),
+    (["modes", "cantilever", "--set", "elements_through_thickness=1e9"], 6, r"elements_through_thickness"),
+    (["modes", "cantilever", "--set", "poisson_ratio=0.5"], 6, r"poisson_ratio"),
+    (["modes", "cantilever", "--set", "density=-1"], 6, r"density"),
+    (["modes", "nosuchprobe"], 2, r"unknown probe.*'nosuchprobe'"),
+    (["modes", "cantilever", "--electrodes", "x"], 2, r"--electrodes"),
+    (["params", "nosuch"], 2, r"nosuch"),
+    (["compare", "cantilever", "--set", "youngs_modulus=0"], 6, r"youngs_modulus"),
+    (["reduce", "cantilever", "--mu", "-1"], 6, r"mu must be >= 0"),
+    (["reduce", "cantilever", "--q", "0"], 6, r"Q must be positive"),
+    (["reduce", "cantilever", "--q", "nan"], 6, r"Q must be positive"),
+    (["reduce", "cantilever", "--q", "10", "--mu", "1"], 6, r"not both"),
+    (["render", "cantilever", "--n-modes", "0"], 2, r"--n-modes"),
+    (["smart-lumped", "cantilever"], 2, r"cantilever"),
+    (["localisation", "duo-bimorph", "--k", ""], 6, r"k"),
+    (["localisation", "duo-bimorph", "--k", "abc"], 6, r"k"),
+    (["localisation", "duo-bimorph", "--k", "-1,2"], 6, r"stiffness"),
+    (["eccentricity", "piezotube", "--delta", ""], 6, r"delta"),
+    (["eccentricity", "piezotube", "--angle", "nan"], 6, r"must be finite"),
+    (["eccentricity", "piezotube", "--delta", "1"], 6, r"delta|offset|bore"),
+    (["smart-materials", "cantilever"], 2, r"cantilever"),
+    (["smart-convergence", "duo-bimorph", "--sizes", "a,b"], 6, r"sizes"),
+    (["fit-ffm", "x.csv", "--free", ""], 6, r"no free parameters"),
+    (["fit-ffm", "x.csv", "--free", "nosuch"], 6, r"nosuch"),
+    (["fit-ffm", "x.csv", "--preset", "nosuch"], 6, r"nosuch"),
+    (["contact", "--model", "nosuch"], 2, r"unknown contact model"),
+    (["contact", "--lambda", "-1"], 6, r"lam"),
+    (["contact", "--lambda", "1e308"], 6, r"lam"),
+    (["contact", "--set", "R_t=-1"], 6, r"R_t"),
+    (["contact", "--set", "nosuch=1"], 6, r"unknown parameter 'nosuch'"),
+    (["simulate", "ffm", "--preset", "nosuch"], 2, r"unknown FFM preset"),
+    (["simulate", "ffm", "--model", "nosuch"], 2, r"unknown friction model"),
+    (["simulate", "ffm", "--length", "-1"], 6, r"length"),
+    (["simulate", "ffm", "--length", "0"], 6, r"length"),
+    (["simulate", "push", "--substrate", "gold"], 2, r"gold"),
+    (["simulate", "push", "--speed", "-1"], 6, r"speed|V"),
+    (["simulate", "push", "--speed", "0"], 6, r"speed|V"),
+    (["simulate", "push", "--angle", "1e308"], 6, r"angle"),
+    (["simulate", "push", "--speed", "1e308"], 6, r"speed|V"),
+    (["actuate", "nosuch"], 2, r"nosuch"),
+    (["actuate", "piezotube", "--volts", "abc"], 2, r"volts"),
+    (["actuate", "piezotube", "--volts", "1e308"], 6, r"drive|volt"),
+    (["actuate", "piezotube", "--electrode", "nosuch"], 6, r"nosuch"),
+    (["actuate", "piezotube", "--pattern", "nosuch"], 6, r"nosuch"),
+    (["sweep", "run", "nosuch:func", "--grid", "x=0:1:3", "--out", "a.nc"], 9, r"cannot import nosuch"),
+    (["sweep", "run", "probedyn.schemes.stickslip:nofunc", "--grid", "x=0:1:3", "--out", "a.nc"], 9, r"no function"),
+    (["sweep", "run", "numpy", "--grid", "x=0:1:3", "--out", "a.nc"], 9, r"MODULE:FUNCTION"),
+    (REGIME + ["--grid", "u0=1:0:3", "--out", "a.nc"], 9, r"inverted range"),
+    (REGIME + GRID + ["--chunk-size", "0"], 9, r"chunk_size"),
+    (REGIME + GRID + ["--workers", "0"], 9, r"workers"),
+    (REGIME + ["--grid", "u0=1:2:2", "--grid", "v=1,2", "--out", "a.txt"], 9, r"must end in \.nc"),
+    (REGIME + ["--grid", "u0=1:2:2", "--grid", "u0=1,2", "--out", "a.nc"], 9, r"given twice"),
+    (REGIME + GRID + ["--scheduler", "nonsense"], 4, r"malformed Dask scheduler address"),
+    (REGIME + GRID + ["--scheduler", "tcp://256.0.0.1:1"], 4, r"cannot reach"),
+    (REGIME + ["--grid", "seed=1,2", "--out", "a.nc"], 9, r"reserved"),
+    (["sweep", "basins", "--grid", "0", "--out", "b.nc"], 9, r"zero points"),
+    (["sweep", "basins", "--grid", "-5", "--out", "b.nc"], 9, r"--grid"),
+    (["sweep", "basins", "--x3-range", "2,1", "--grid", "4", "--out", "b.nc"], 9, r"--x3-range"),
+    (["sweep", "basins", "--x3-range", "abc", "--grid", "4", "--out", "b.nc"], 9, r"--x3-range"),
+    (["sweep", "basins", "--u0", "-1", "--grid", "4", "--out", "b.nc"], 6, r"u0"),
+    (["sweep", "basins", "--u0", "1e5", "--grid", "4", "--out", "b.nc"], 6, r"u0"),
+    (["stickslip", "equilibria", "--u0", "-1"], 6, r"u0"),
+    (["stickslip", "equilibria", "--u0", "nan"], 6, r"u0"),
+    (["stickslip", "equilibria", "--u0", "1e308"], 6, r"u0"),
+    (["stickslip", "limit-cycles", "--v", "0:1:0"], 9, r"v"),
+    (["stickslip", "limit-cycles", "--v", "-1,2"], 6, r"--v values must be positive"),
+    (["stickslip", "limit-cycles", "--u0", "-3"], 6, r"u0"),
+    (["stickslip", "limit-cycles", "--v", "1e308"], 6, r"beyond 1000"),
+    (["stickslip", "portrait", "--u0", "1e308"], 6, r"u0"),
+    (["stickslip", "regime-map", "--v", "0,1", "--u0", "1,2", "--out", "r.nc"], 6, r"'v' must be positive"),
+    (["stickslip", "regime-map", "--v", "1,2", "--u0", "-1,2", "--out", "r.nc"], 6, r"'u0' must be >= 0"),
+    (["stickslip", "regime-map", "--n-ic", "-3", "--out", "r.nc"], 6, r"n_ic"),
+    (["stickslip", "regime-map", "--n-ic", "1000000000", "--v", "1,2", "--u0", "1,2", "--out", "r.nc"], 6, r"n_ic"),
+    (["report", "--only", "nosuchsection"], 2, r"matches no section"),
+    (["diagnose"], 2, r"needs a MEASUREMENT"),
+    (["diagnose", "nosuch.toml"], 5, r"no such file"),
+]
+CASES += [Case(f"c{cls}-extra-{'-'.join(a.strip('-') for a in argv[:4])[:60] or 'x'}-{i}", cls, argv, match=pat,
+               setup=_w("x.csv", TRACE_CSV), timeout=60) for i, (argv, cls, pat) in enumerate(EXTRA)]
+# slow ones: the error comes only after work (an integration that hits its step limit)
+CASES += [Case("c6-extra-ffm-length-huge", 6, ["simulate", "ffm", "--length", "1e308"], match=r"steps", pending=None,
+               timeout=120)]
+
+
 @pytest.fixture(autouse=True)
 def _cells_module(tmp_path, monkeypatch):
     """A tiny cell module for sweep cases, importable here and in child processes."""
@@ -227,10 +323,14 @@ def _cells_module(tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(tmp_path), os.environ.get("PYTHONPATH", "")]))
 
 
+SLOW = {"c6-extra-ffm-length-huge"}
+
+
 def _param(case: Case):
     # a case waiting for another branch runs in a child process (its behaviour is unknown: it
     # may hang or read without bound), which is slow: only with -m slow until the fix lands
-    return pytest.param(case, id=case.id, marks=[pytest.mark.slow] if case.pending else [])
+    slow = case.pending or case.id in SLOW
+    return pytest.param(case, id=case.id, marks=[pytest.mark.slow] if slow else [])
 
 
 @pytest.mark.parametrize("case", [_param(c) for c in CASES])
@@ -268,6 +368,7 @@ def test_signal_during_work_exits_128_plus_signal_without_output(signum, code, t
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
 
 
+@pytest.mark.slow
 def test_interrupt_of_a_child_process_mid_solve(tmp_path):
     """A real SIGTERM to `probedyn modes --out` while it meshes/solves: 143, one line, no output folder."""
     import subprocess
