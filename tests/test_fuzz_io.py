@@ -8,7 +8,9 @@ import json
 import os
 import signal
 import stat
+import re
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -297,3 +299,27 @@ def test_memory_refusal_states_the_estimate_and_what_is_available():
     with pytest.raises(ResourceError, match=r"a sweep needs about .* \(1e\+10 cells x 32 B\) of memory; .* are available"):
         check_memory(3.2e11, "a sweep", how="1e+10 cells x 32 B")
     assert fmt_bytes(3.2e11) == "320 GB" and fmt_bytes(512) == "512 B"
+
+
+# ---- every writer goes through probedyn.core.io ---------------------------------------------------
+
+_WRITERS = re.compile(r"(\.savefig\(|\.screenshot\(|meshio\.write\(|\.to_netcdf\(|\bopen\([^)]*[\"'][wax]b?[\"']|"
+                      r"\.write_text\(|\.write_bytes\(|np\.save[z]?(_compressed)?\()")
+_TMP_ARG = re.compile(r"(\.savefig|\.screenshot|meshio\.write|\.to_netcdf|\bopen|np\.save[z]?(?:_compressed)?)"
+                      r"\(\s*(str\()?(tmp|fh)\b")
+
+
+def test_every_file_is_written_through_core_io():
+    """Outputs are atomic, umask-honouring and part of the command's transaction only if written
+    through probedyn.core.io: any other writer must write the temporary that io.atomic_path yields."""
+    root = Path(__file__).resolve().parents[1]
+    bad = []
+    for folder in ("probedyn", "fem", "lumped", "meshes", "schemes"):
+        for f in sorted((root / folder).rglob("*.py")):
+            if f.relative_to(root).as_posix() == "probedyn/core/io.py":
+                continue
+            for n, line in enumerate(f.read_text().splitlines(), 1):
+                code = line.split("#")[0]
+                if _WRITERS.search(code) and not _TMP_ARG.search(code):
+                    bad.append(f"{f.relative_to(root)}:{n}: {line.strip()}")
+    assert not bad, "files written outside probedyn.core.io:\n" + "\n".join(bad)
