@@ -51,7 +51,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, OutputError, ParameterError, ProbedynError, SolverError
-from probedyn.core.io import after_commit, as_output_error, atomic_path, write_json
+from probedyn.core.io import after_commit, as_output_error, atomic_path, read_text, write_json
 from probedyn.core.resources import check_memory, fmt_bytes
 
 __all__ = [
@@ -539,8 +539,8 @@ def _resume_state(parts: Path, sig: str, n_chunks: int, restart: bool) -> set[in
     if not any(parts.glob("chunk-*.npz")):
         return set()
     try:
-        old = json.loads((parts / "manifest.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        old = json.loads(read_text(parts / "manifest.json", what="sweep manifest", max_bytes=1 << 20))
+    except (ProbedynError, ValueError):
         old = None
     if not isinstance(old, Mapping):
         raise ParameterError(
