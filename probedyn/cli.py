@@ -45,8 +45,13 @@ from typing import Any
 
 def _early_interrupt(signum: int, frame: Any) -> None:  # pragma: no cover - timing dependent
     """Until :func:`main` installs its handlers (while the commands are imported): nothing is
-    written yet, so leave at once with the same line and code as later."""
-    os.write(2, b"probedyn: interrupted\n")
+    written yet, so leave at once with the same line and code as later. Worker processes
+    (Dask's, started with multiprocessing, import this module again) leave silently: Ctrl-C in a
+    terminal reaches the whole process group, and the line is the main process's to print."""
+    import multiprocessing
+
+    if multiprocessing.parent_process() is None:
+        os.write(2, b"probedyn: interrupted\n")
     os._exit(128 + signum)
 
 
