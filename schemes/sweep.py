@@ -790,9 +790,12 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
                         f"sweep chunk {i} ({cells}) failed: {type(exc).__name__}: {' '.join(str(exc).split())}; "
                         f"{kept()}"
                     ) from exc
-                if fut.status != "finished":  # cancelled or lost: the scheduler went away
-                    raise SchedulerError(f"the Dask scheduler ({where}) lost chunk {i} (it restarted or the "
-                                         f"connection dropped); {kept()}")
+                if fut.status != "finished":  # cancelled or lost: a worker or the scheduler went away
+                    if client.status == "running" and _n_workers(client, timeout=5.0) is not None:
+                        why = "the Dask worker running it died or left"
+                    else:
+                        why = f"the connection to the Dask scheduler ({where}) dropped or it restarted"
+                    raise SchedulerError(f"sweep chunk {i} was lost: {why}; {kept()}")
                 res = fut.result(timeout=60)
                 if parts is not None:
                     _write_chunk(res, _chunk_path(parts, i))

@@ -150,14 +150,19 @@ def test_interrupt_and_kill_keep_the_output_folder_consistent(target, work):
                         fh.write(f"=== {target.name} {sig.name}@{frac}: exit {code}\n{err}\n")
                 if _temporaries(work):
                     problems.append(f"{sig.name}@{frac}: temporaries left {_temporaries(work)}")
-            consistent = now == before or (set(target.files) <= set(now) and not _temporaries(out))
-            if not done and now != before:
-                consistent = False  # interrupted: the previous set must be untouched
+            # consistent: the previous set untouched, or every key file replaced (and files new
+            # in this run present only then): never new files beside old ones
+            key = [f for f in target.files if f in before]
+            replaced = [f for f in key if now.get(f) != before[f]]
+            added = [f for f in now if f not in before]
+            consistent = (not replaced and not added) or (len(replaced) == len(key) and set(target.files) <= set(now))
+            if not done and sig != signal.SIGKILL and now != before:
+                consistent = False  # interrupted with a chance to clean up: the previous set must be untouched
             if not consistent:
                 problems.append(f"{sig.name}@{frac}: folder {sorted(now)} differs from the previous set")
             row = {"command": target.name, "fault": f"{sig.name} at {frac:.0%} of {full:.1f} s",
                    "exit": code, "seconds_to_exit": None if latency is None else round(latency, 2),
-                   "folder": "previous set" if now == before else ("new set" if done else "CHANGED"),
+                   "folder": "previous set" if now == before else ("new set" if consistent else "MIXED"),
                    "temporaries": _temporaries(work)}
             TABLE.append(row)
             if done:
