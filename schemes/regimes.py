@@ -71,6 +71,8 @@ def run_regime_map(v_values, u0_values, out: Path | None, workers: int = 2, sche
     """Regime over the grid (u0, v) (Fig 4.13) on the sweep engine (NetCDF ``out`` if given):
     the share of cells per regime, the boundaries on the grid and refined by bisection, and
     the Dataset (``dataset``)."""
+    if isinstance(n_ic, bool) or int(n_ic) != n_ic or not 1 <= n_ic <= 1000:  # before a cluster is started
+        raise ParameterError(f"n_ic (initial conditions per cell) must be an integer from 1 to 1000, got {n_ic!r}")
     g = validate_grid({"u0": np.asarray(u0_values, float), "v": np.asarray(v_values, float)})
     if np.any(g["v"] <= 0):
         raise GridError("grid axis 'v' must be positive (v = 0 is the quasi-static problem: use basins/equilibria)")

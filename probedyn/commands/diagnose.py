@@ -10,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, emit, format_table
+from probedyn.core.io import make_dirs
 
 
 def _human_list(rows: list[dict[str, Any]]) -> str:
@@ -51,7 +52,7 @@ def diagnose_cmd(
         from probedyn.report.diagnose import markdown, plot_evidence, plot_residuals
 
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         fr = plot_residuals(res, out / "residuals.png", getattr(problem, "group_labels", None) if res["kind"] == "modal" else None)
         fe = plot_evidence(res, out / "evidence.png")
         write_json(out / "diagnose.json", res)

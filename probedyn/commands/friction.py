@@ -11,6 +11,7 @@ import typer
 from probedyn.commands._apps import app, simulate_app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, save
 from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
+from probedyn.core.io import make_dirs
 
 
 def _human(d: dict) -> str:
@@ -59,7 +60,7 @@ def ffm_cmd(
         from probedyn.report.friction import plot_scan
 
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         summary["plot"] = str(plot_scan(res, summary, out / f"ffm_{preset}_{summary['model']}.png"))
         save(out, f"ffm_{preset}_{summary['model']}.json", summary)
     emit(summary, as_json, _human)
@@ -84,7 +85,7 @@ def fit_ffm_cmd(
         from probedyn.report.friction import plot_fit
 
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         summary["plot"] = str(plot_fit(r, tr, out / "fit_ffm.png"))
         save(out, "fit_ffm.json", summary)
 

@@ -12,7 +12,7 @@ from typing import Any, List, Optional
 import typer
 
 from probedyn.commands._apps import app
-from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_table, save
+from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_table, out_folder_option, save
 from probedyn.core.params import parse_sets
 
 PROBE_ARG = typer.Argument(..., help="Probe name (cantilever, duo-bimorph, piezotube) or a TOML probe file.")
@@ -80,8 +80,9 @@ def reduce_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mo
                q: Optional[float] = typer.Option(None, "--q", help="Quality factor (c = sqrt(k m)/Q)."),
                out: Optional[Path] = OUT_OPT, as_json: bool = JSON_OPT) -> None:
     """Lumped model per mode at the tip (eqs 3.1-3.3 generalised) and the static tip stiffness."""
-    from probedyn.lumped.reduce import reduce_modes
+    from probedyn.lumped.reduce import check_damping, reduce_modes
 
+    check_damping(mu, q)  # before the FEM solve
     p, values, result = solve(probe, set_, n_modes)
     model = result.model
     rho_a = p.mass_per_length(values, model) if mu is not None else None
@@ -105,7 +106,7 @@ def reduce_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_mo
 
 @app.command("render")
 def render_cmd(probe: str = PROBE_ARG, set_: Optional[List[str]] = SET_OPT, n_modes: int = typer.Option(4, "--n-modes", min=1, max=50),
-               out: Path = typer.Option(Path("out/render"), "--out", help="Output folder for the PNGs."),
+               out: Path = out_folder_option(Path("out/render"), "Output folder for the PNGs."),
                as_json: bool = JSON_OPT) -> None:
     """PNG pictures of the first modes (off-screen), one per mode plus a 2x2 panel."""
     from probedyn.fem.render import check_offscreen_gl, render_modes, render_panel

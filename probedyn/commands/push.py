@@ -11,6 +11,7 @@ import typer
 from probedyn.commands._apps import simulate_app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, save
 from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
+from probedyn.core.io import make_dirs
 
 
 @simulate_app.command("push")
@@ -41,7 +42,7 @@ def push_cmd(
              probe_source=rp.source if rp is not None else "Table 4.1")
     if out is not None:
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         from probedyn.report.pushing import plot_push
 
         r["plot"] = str(plot_push(res, r, out / "push.png", f"{substrate}, V = {res.model.p['V'] * 1e6:g} µm/s"))

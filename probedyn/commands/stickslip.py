@@ -11,8 +11,8 @@ from typing import Any, Optional
 import typer
 
 from probedyn.commands._apps import stickslip_app, sweep_app
-from probedyn.commands._common import JSON_OPT, emit, format_table
 from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe
+from probedyn.commands._common import JSON_OPT, emit, format_table, out_file_option
 
 WORKERS_OPT = typer.Option(2, "--workers", help="Workers of the local Dask cluster.")
 SCHED_OPT = typer.Option(None, "--scheduler", help="Address of an existing Dask scheduler (tcp://HOST:PORT).")
@@ -87,7 +87,7 @@ def cmd_portrait(
     u0: str = typer.Option("0.5,6,25", "--u0", help="Comma-separated u0 values."),
     psi: float = PSI_OPT,
     v: float = typer.Option(0.0, "--v", help="Non-dimensional speed (0 = quasi-static)."),
-    out: Path = typer.Option(Path("stickslip-portraits.png"), "--out", help="PNG file."),
+    out: Path = out_file_option(Path("stickslip-portraits.png"), "PNG file."),
     as_json: bool = JSON_OPT,
 ) -> None:
     """Solutions of eq 4.11 vs psi and sample phase portraits (Fig 4.8)."""
@@ -102,7 +102,7 @@ def cmd_portrait(
 def cmd_limit_cycles(
     u0: float = typer.Option(3.0, "--u0"),
     v: str = typer.Option("0.02:20:13:log", "--v", help="Speeds: LO:HI:N[:log] or V1,V2,..."),
-    out: Optional[Path] = typer.Option(None, "--out", help="PNG file for the cycles and amplitude/centre vs v."),
+    out: Optional[Path] = out_file_option(None, "PNG file for the cycles and amplitude/centre vs v."),
     as_json: bool = JSON_OPT,
 ) -> None:
     """Limit cycles as the speed rises: amplitude and centre vs v (Figs 4.10-4.11)."""
@@ -132,7 +132,7 @@ def cmd_limit_cycles(
 def cmd_regime_map(
     u0: str = typer.Option("0.25:25:24", "--u0", help="u0 axis: LO:HI:N or V1,V2,..."),
     v: str = typer.Option("0.05:10:24:log", "--v", help="v axis: LO:HI:N[:log] or V1,V2,..."),
-    out: Path = typer.Option(Path("regime-map.nc"), "--out", help="NetCDF file (a PNG is written next to it)."),
+    out: Path = out_file_option(Path("regime-map.nc"), "NetCDF file (a PNG is written next to it)."),
     n_ic: int = typer.Option(6, "--n-ic", help="Initial conditions per cell."),
     workers: int = WORKERS_OPT,
     scheduler: Optional[str] = SCHED_OPT,
@@ -162,7 +162,7 @@ def cmd_sweep_basins(
     u0: float = typer.Option(8.0, "--u0"),
     psi: float = PSI_OPT,
     grid: int = typer.Option(256, "--grid", help="Points per axis of the initial-condition grid."),
-    out: Path = typer.Option(..., "--out", help="NetCDF file (FILE.nc); the plot goes to FILE.png."),
+    out: Path = out_file_option(..., "NetCDF file (FILE.nc); the plot goes to FILE.png."),
     x3_range: Optional[str] = typer.Option(None, "--x3-range", help="LO:HI of x3(0) (default +-1.5 u0)."),
     x4_range: Optional[str] = typer.Option(None, "--x4-range", help="LO:HI of x4(0) (default +-u0)."),
     workers: int = WORKERS_OPT,
@@ -243,7 +243,7 @@ def cmd_sweep_run(
     target: str = typer.Argument(..., help="Cell function MODULE:FUNCTION, e.g. probedyn.schemes.stickslip:regime_cell."),
     grid: list[str] = typer.Option(..., "--grid", help="Axis NAME=LO:HI:N[:log] or NAME=V1,V2,... Repeatable."),
     fixed: Optional[list[str]] = typer.Option(None, "--fixed", help="Fixed parameter NAME=VALUE. Repeatable."),
-    out: Path = typer.Option(..., "--out", help="NetCDF file (FILE.nc)."),
+    out: Path = out_file_option(..., "NetCDF file (FILE.nc)."),
     scalar: bool = typer.Option(False, "--scalar", help="The function takes scalars (one call per cell)."),
     seed: Optional[int] = typer.Option(None, "--seed", help="Sweep seed: the function receives per-cell seeds."),
     chunk_size: Optional[int] = typer.Option(None, "--chunk-size"),

@@ -76,8 +76,17 @@ class Cantilever(Probe):
                                values["tip_height"], values["tip_half_angle"], options=opts)
 
     def build(self, values: dict[str, Any]):
+        from probedyn.core import progress
+        from probedyn.fem.size import check_model, dofs_for_volume
+        from probedyn.meshes.cache import MeshOptions
+
         mat = self.material(values)
-        bundle = self.mesh(values)
+        # before meshing: the model this mesh gives must fit (the beam's volume, the mesh size)
+        L, w, t = values["length"], values["width"], values["thickness"]
+        h = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"])).size_for(min(w, t))
+        check_model(dofs_for_volume(L * w * t, h), "cantilever model")
+        with progress.stage("meshing the cantilever"):
+            bundle = self.mesh(values)
         regions = {"body": mat}
         if "tip" in (bundle.mesh.subdomains or {}):
             regions["tip"] = mat

@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 from probedyn import __version__
-from probedyn.core.io import write_text
+from probedyn.core.io import make_dirs, write_text
 
 SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.report.cantilever:section"),
@@ -43,7 +43,13 @@ def build_report(outdir: Path, quick: bool = False, only: list[str] | None = Non
     """Run every section (or those whose title contains one of ``only``) and write
     ``outdir/report.md``; return its path."""
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    for o in only or ():  # before any work: a filter that selects nothing is a mistake
+        if not any(o.lower() in title.lower() for title, _ in SECTIONS):
+            from probedyn.core.errors import ParameterError
+
+            raise ParameterError(f"--only {o!r} matches no section; sections: "
+                                 + "; ".join(title for title, _ in SECTIONS))
+    make_dirs(outdir)
     parts = [
         "# probedyn report",
         "",

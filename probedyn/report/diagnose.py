@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from probedyn.core.io import make_dirs
 from probedyn.diagnose.engine import diagnose, make_problem
 from probedyn.plotting import fmt_hz, pyplot, savefig
 
@@ -194,7 +195,7 @@ def markdown(res: dict[str, Any], fig_resid: str | None = None, fig_ev: str | No
 
 def section(outdir: Path, quick: bool) -> str:
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     problem = make_problem(EXAMPLES / "al_cantilever_length_sweep.toml")
     res = diagnose(problem)
     fr = plot_residuals(res, outdir / "diagnose_al_residuals.png", problem.group_labels)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from probedyn.core.io import make_dirs
 from probedyn.core.presets import preset as table
 from probedyn.plotting import axis_label, pyplot, savefig
 from probedyn.report._tables import markdown_table
@@ -115,7 +116,7 @@ def plot_pt2d(path: Path, cases=(("hex", 15.0), ("square", 20.0)), eta: float = 
 
 def section(outdir: Path, quick: bool) -> str:
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     md = ["### Nano-friction and FFM line scans (sections 2.1.4–2.1.5)", ""]
 
     # 1. mica: the 10 nm scan of the source and a long scan; VAMWCNT

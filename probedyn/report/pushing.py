@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from probedyn.core.io import make_dirs
 from probedyn.core.presets import preset
 from probedyn.plotting import axis_label, pyplot, savefig
 from probedyn.report._tables import markdown_table
@@ -120,7 +121,7 @@ def plot_viscous(study: dict, path: Path) -> Path:
 
 def section(outdir: Path, quick: bool) -> str:
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     md = []
     slow, fast = 3e-6, 150e-6
     runs, rows = stairs_and_sliding(("mica", "hopg"), slow, fast)

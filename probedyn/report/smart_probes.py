@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.core.io import write_json
+from probedyn.core.io import make_dirs, write_json
 from probedyn.fem.render import render_panel
 from probedyn.lumped.holder_sweep import lumped_holder_sweep, pair_by_family
 from probedyn.plotting import axis_label, fmt_hz, fmt_um, pyplot, savefig
@@ -186,7 +186,7 @@ def _reference_orders(rows: list[dict]) -> list[dict]:
 
 def section(outdir: Path, quick: bool = False) -> str:
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     ks = [1.0, 100.0] if quick else [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0]
     deltas = [0.0, 5e-6] if quick else [0.0, 1e-6, 2e-6, 3e-6, 4e-6, 5e-6]
     parts = ["Source sections 3.2-3.5. FEM: P2 tetrahedra, PZT-5H transversely isotropic (poled through the thickness "

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from matplotlib.colors import ListedColormap
 
+from probedyn.core.io import make_dirs
 from probedyn.plotting import fmt_um, pyplot, savefig
 from probedyn.report._tables import markdown_table
 from probedyn.schemes.regimes import limit_cycles_result, run_basins, run_regime_map
@@ -157,7 +158,7 @@ def plot_branches(qs: dict[str, Any], fast: dict[str, Any], path: Path, qs2: dic
 
 def section(outdir: Path, quick: bool) -> str:
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    make_dirs(outdir)
     md: list[str] = []
     m = DEFAULT_MODEL
     md.append(
