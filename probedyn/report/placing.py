@@ -506,7 +506,7 @@ def section(outdir: Path, quick: bool) -> str:
              f"[{cp['check_beta_range'][0]:.4g}, {cp['check_beta_range'][1]:.4g}]" if chk else
              "Quick mode (beam probe): no FEM comparison here")
     parts += [
-        "**Capture (4.22-4.41).** End condition EI U''' = (k1 - M omega^2) U (SOURCE-NOTES 4; printed "
+        "**Capture (4.22-4.41).** End condition EI U''' = (k1 - M omega^2) U (departure 25; printed "
         "k1 + M omega^2; departure 25): an attached mass lowers every frequency. " + check
         + " (tests/test_placing_slow.py: full FEM re-solves over bL 1.25-10.0 within 0.12 %).",
         "",
@@ -574,7 +574,7 @@ def section(outdir: Path, quick: bool) -> str:
         _selective_text(mul),
         "",
     ]
-    parts += ["**Table 4.4's mass (SOURCE-NOTES 10).**", "",
+    parts += ["**Table 4.4's mass (departure 35).**", "",
               _md(pl["rows"], [("mass_source", "mass", ""), ("m_equivalent_kg", "m [kg]", ".3g"), ("f1_hz", "f1", "hz"),
                                ("jump_z0_m", "z0* [m]", ".4g"), ("df_rel_at_1.5z", "df/f at 1.5 z0*", ".4f"),
                                ("F0_for_0.5um_at_1e8_n", "F0 for 0.5 µm at 1e8 rad/s [N]", ".3g"),
