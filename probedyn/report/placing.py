@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.plotting import axis_label, fmt_hz, pyplot, savefig
+from probedyn.plotting import axis_label, category_colormap, fmt_hz, plain_ticks, pyplot, savefig
 from probedyn.report._tables import markdown_table
 from probedyn.schemes.placing.probe import TABLE
 
@@ -36,23 +36,8 @@ def _a(v, *_args) -> np.ndarray:
 
 
 def _plain(fig) -> None:
-    """Plain tick labels on every axis (``1e-06`` instead of mathtext ``10^-6``: the mathtext parser
-    cost most of this section's drawing time) and no minor-tick labels."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
-
-    def fmt(v, _pos):
-        if v == 0:
-            return "0"
-        a = abs(v)
-        return f"{v:.0e}".replace("e+0", "e").replace("e-0", "e-") if (a >= 1e4 or a < 1e-2) else f"{v:g}"
-
-    for ax in fig.axes:
-        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
-            if scale in ("log", "symlog"):
-                axis.set_major_formatter(FuncFormatter(fmt))
-                axis.set_minor_formatter(NullFormatter())
-            else:
-                axis.set_major_formatter(FuncFormatter(lambda v, _p: f"{v:g}"))
+    """Plain tick labels (:func:`probedyn.plotting.plain_ticks`)."""
+    plain_ticks(fig)
 
 
 def _save(fig, path: Path) -> Path:
@@ -210,13 +195,10 @@ def _fig_4_22(rex: dict[str, Any], ax) -> None:
 
 
 def _map(m: dict[str, Any], ax, title: str, F_po: float | None, k1: float | None) -> None:
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
     from probedyn.schemes.placing.release import threshold_amplitude
 
     codes = sorted(OUTCOME_COLORS)
-    cmap = ListedColormap([OUTCOME_COLORS[c] for c in codes])
-    norm = BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)
+    cmap, norm = category_colormap([OUTCOME_COLORS[c] for c in codes], codes)
     x, y = _a(m["x"]), _a(m["y"])
     o = _a(m["outcome"])
     ax.pcolormesh(x, y, o.T, cmap=cmap, norm=norm, shading="nearest")
