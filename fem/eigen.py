@@ -99,7 +99,7 @@ def _pardiso(A: sp.csr_matrix, mtype: int) -> Factorization:
     def solve(b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=float)
         shape = b.shape
-        bb = np.ascontiguousarray(b.reshape(n, -1))
+        bb = np.asfortranarray(b.reshape(n, -1))  # PARDISO reads several right-hand sides column-major
         ps.set_phase(33)  # solve only, with the stored factors (skip pypardiso's re-hash)
         x = ps._call_pardiso(U, bb)
         return x.reshape(shape)
