@@ -346,14 +346,16 @@ def line_scan(ffm: FFM, length: float | None = None, rtol: float = 1e-5, atol_re
 
 
 def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: float = 1e-6,
-                   atol_rel: float = 1e-7, hmax: float | None = None, max_steps: int = 2_000_000) -> ScanResult:
+                   atol_rel: float = 1e-7, hmax: float | None = None, max_steps: int = 2_000_000,
+                   atol_v: float | None = None) -> ScanResult:
     """FFM scan (2.13) along a piecewise-linear support path: ``turns`` = support positions
     ``[X_0, X_1, ...]`` visited in order at ``speed`` (default the cantilever's V), e.g.
     ``[0, L, 0]`` for a trace and its retrace (a friction loop). Initial state ``y0`` =
     (x, x', z) (default: at rest at ``X_0``, spring relaxed). The segments are integrated one after
     the other with the state carried over, so the reversal is resolved (the tip sticks while the
     support runs back through twice the friction force over k, then slips backwards).
-    ``hmax`` caps the step (default: a fiftieth of a segment). The result concatenates the
+    ``hmax`` caps the step (default: a fiftieth of a segment); ``atol_v`` is the absolute tolerance
+    on the tip velocity (default ``atol_rel * speed``). The result concatenates the
     segments (``base`` not monotonic)."""
     cp = ffm.cantilever
     fm = ffm.friction
@@ -366,7 +368,7 @@ def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: f
         raise ParameterError("line_scan_path needs at least two turning points")
     p = fm.pack()
     atol = _atol(ffm, atol_rel)
-    atol[1] = atol_rel * V0
+    atol[1] = atol_rel * V0 if atol_v is None else atol_v
     y = np.array([turns[0], 0.0, 0.0]) if y0 is None else np.asarray(y0, float).copy()
     t_off = 0.0
     parts_t, parts_b, parts_y, parts_F = [], [], [], []

@@ -382,6 +382,324 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
     return outdir / f"{name}.toml", truth
 
 
+# ------------------------------------------------------------------------------------------
+# Friction: Langevin Prandtl-Tomlinson with inertia and thermal noise, trace and retrace
+# ------------------------------------------------------------------------------------------
+
+FRICTION_EFFECTS = ["thermal-activation", "viscous-friction", "adhesion-load", "force-offset-drift",
+                    "scanner-nonlinearity", "lattice-misalignment", "force-calibration"]
+LEVER_FFM = dict(k_x=1.0, m_x=1e-12, Q_x=1.0)
+
+
+def _langevin_kernel():
+    from numba import njit
+
+    @njit(cache=True)
+    def run(U0, a, k, m, gam, gvisc, kT, Vx, Vy, turns_t, turns_X, X0, Y0, x0, y0, dt, t_samp, mode, seed):
+        """BAOAB Langevin (Leimkuhler & Matthews) of a tip in -U0[cos(q x) + cos(q y)] (Vy = 0: the
+        y axis is inert), pulled by an isotropic spring k from a support moving piecewise linearly
+        in time along the scan direction (turning times turns_t, positions turns_X along the scan);
+        extra viscous force -gvisc * (tip velocity). Returns the scan-direction spring force at the
+        sample times (mode 0: point values; 1: means over each sample interval) and the times of slips."""
+        np.random.seed(seed)
+        q = 2.0 * np.pi / a
+        n = t_samp.size
+        out = np.zeros(n)
+        acc = np.zeros(n)
+        cnt = np.zeros(n)
+        g_tot = gam + gvisc
+        c1 = np.exp(-gam * dt / m)
+        c2 = np.sqrt((1.0 - c1 * c1) * kT / m)
+        cv = np.exp(-gvisc * dt / m)
+        x, y, vx, vy = x0, y0, 0.0, 0.0
+        t = turns_t[0]
+        seg = 0
+        j = 0
+        nsteps = int((turns_t[-1] - turns_t[0]) / dt) + 2
+        ux = Vx
+        uy = Vy
+        # sample interval edges (midpoints)
+        edges = np.empty(n + 1)
+        edges[0] = t_samp[0] - 0.5 * (t_samp[1] - t_samp[0])
+        for i in range(1, n):
+            edges[i] = 0.5 * (t_samp[i] + t_samp[i - 1])
+        edges[n] = t_samp[n - 1] + 0.5 * (t_samp[n - 1] - t_samp[n - 2])
+        cur = 0
+        for it in range(nsteps):
+            while seg < turns_t.size - 2 and t >= turns_t[seg + 1]:
+                seg += 1
+            dirn = 1.0 if turns_X[seg + 1] > turns_X[seg] else -1.0
+            s_pos = turns_X[seg] + dirn * (t - turns_t[seg]) * np.sqrt(Vx * Vx + Vy * Vy)
+            Xb = X0 + s_pos * (ux / np.sqrt(Vx * Vx + Vy * Vy))
+            Yb = Y0 + s_pos * (uy / np.sqrt(Vx * Vx + Vy * Vy))
+            fx = k * (Xb - x) - U0 * q * np.sin(q * x)
+            fy = k * (Yb - y) - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0)
+            # record the scan-direction spring force
+            Fs = (k * (Xb - x) * ux + k * (Yb - y) * uy) / np.sqrt(Vx * Vx + Vy * Vy)
+            while cur < n and t >= edges[cur + 1]:
+                cur += 1
+            if cur < n and t >= edges[cur]:
+                acc[cur] += Fs
+                cnt[cur] += 1.0
+            while j < n and t >= t_samp[j]:
+                out[j] = Fs
+                j += 1
+            if j >= n and cur >= n:
+                break
+            # B
+            vx += 0.5 * dt * fx / m
+            vy += 0.5 * dt * fy / m
+            # A
+            x += 0.5 * dt * vx
+            y += 0.5 * dt * vy
+            # O (thermal bath on gam; the extra viscous term is deterministic)
+            vx = c1 * cv * vx + (c2 * np.random.randn() if kT > 0 else 0.0)
+            vy = c1 * cv * vy + (c2 * np.random.randn() if kT > 0 else 0.0)
+            # A
+            x += 0.5 * dt * vx
+            y += 0.5 * dt * vy
+            t += dt
+            s_pos = turns_X[seg] + dirn * (t - turns_t[seg]) * np.sqrt(Vx * Vx + Vy * Vy)
+            Xb = X0 + s_pos * (ux / np.sqrt(Vx * Vx + Vy * Vy))
+            Yb = Y0 + s_pos * (uy / np.sqrt(Vx * Vx + Vy * Vy))
+            fx = k * (Xb - x) - U0 * q * np.sin(q * x)
+            fy = k * (Yb - y) - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0)
+            # B
+            vx += 0.5 * dt * fx / m
+            vy += 0.5 * dt * fy / m
+        if mode == 1:
+            for i in range(n):
+                if cnt[i] > 0:
+                    out[i] = acc[i] / cnt[i]
+        return out
+
+    return run
+
+
+_LANGEVIN = None
+
+
+def langevin_scan(*, U0, a, k, m, Q, speed, length, n_per_period=40, T=0.0, gvisc=0.0, theta=0.0, bow=0.0,
+                  sampling="interval-mean", seed=0, phase=None):
+    """Trace and retrace of a Langevin PT tip. Returns (nominal support positions, force, times,
+    direction). The support runs 2 periods backwards first (like the end of a previous retrace),
+    then traces ``length`` and retraces it. ``bow``: the true support position is the nominal one
+    bowed by the scanner nonlinearity (the written positions are the nominal ones)."""
+    global _LANGEVIN
+    if _LANGEVIN is None:
+        _LANGEVIN = _langevin_kernel()
+    rng = np.random.default_rng(seed)
+    gam = math.sqrt(m * k) / Q
+    eta = 4 * math.pi**2 * U0 / (k * a * a)
+    T0 = 2 * math.pi * math.sqrt(m / (k * (1 + eta)))
+    dt = T0 / 60
+    n = int(round(length / a * n_per_period))
+    Xn = np.linspace(0.0, length, n)  # nominal support positions of the samples (trace)
+    pre = 2 * a
+    # support path along the scan: -pre -> 0 (data trace starts) -> length -> 0
+    Xtrue = Xn + bow * Xn * (length - Xn) / length
+    s_turns = np.array([-pre, 0.0, length, 0.0])
+    tt = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(s_turns))) / speed])
+    # sample times (true support positions follow the nominal ones through the bow: X_true(X_nom))
+    def t_of(xn, leg):
+        xt = xn + bow * xn * (length - xn) / length
+        return tt[leg] + (xt - s_turns[leg]) / speed if leg == 1 else tt[leg] + (s_turns[leg] - xt) / speed
+    # the support itself moves uniformly in true position; nominal positions are where it is sampled
+    t_tr = np.array([tt[1] + (xt - 0.0) / speed for xt in Xtrue])
+    t_re = np.array([tt[2] + (length - xt) / speed for xt in Xtrue[::-1][1:]])  # the turning point once
+    t_samp = np.concatenate([t_tr, t_re])
+    ph = rng.uniform(0, a) if phase is None else phase
+    X0 = -ph  # lattice registry: support coordinate 0 sits at -ph in the lattice frame
+    vx, vy = speed * math.cos(theta), speed * math.sin(theta)
+    # path for the kernel: turning times and positions along the scan line; start at rest in the
+    # well nearest to the starting support position
+    start = np.array([X0 + s_turns[0] * math.cos(theta), s_turns[0] * math.sin(theta)])
+    x0 = round(start[0] / a) * a
+    y0 = round(start[1] / a) * a if theta else 0.0
+    kT = 1.380649e-23 * T
+    F = _LANGEVIN(U0, a, k, m, gam, gvisc, kT, vx, vy if theta else 0.0, tt, s_turns, X0, 0.0, x0, y0, dt, t_samp,
+                  1 if sampling == "interval-mean" else 0, int(seed) % (2**31))
+    pos = np.concatenate([Xn, Xn[::-1][1:]])
+    direction = np.concatenate([np.ones(n), -np.ones(n - 1)])
+    return pos, F, t_samp, direction
+
+
+def draw_friction_effect(effect: str | None, rng) -> dict:
+    if effect == "thermal-activation":
+        return {"T": 300.0}
+    if effect == "viscous-friction":
+        return {"gvisc": float(10 ** rng.uniform(np.log10(2e-4), np.log10(5e-3)))}  # N s/m at um/s speeds
+    if effect == "adhesion-load":
+        return {"n_adh": float(rng.uniform(0.3, 3.0) * 5e-9)}
+    if effect == "force-offset-drift":
+        return {"offset": float(rng.choice([-1, 1]) * rng.uniform(0.02, 0.2) * 1e-9),
+                "drift": float(rng.choice([-1, 1]) * rng.uniform(0.0, 0.1) * 1e-9)}
+    if effect == "scanner-nonlinearity":
+        return {"bow": float(rng.choice([-1, 1]) * rng.uniform(0.03, 0.2))}
+    if effect == "lattice-misalignment":
+        return {"theta_deg": float(rng.uniform(6.0, 35.0))}
+    if effect == "force-calibration":
+        return {"g": float(10 ** (rng.choice([-1, 1]) * rng.uniform(0.05, 0.3)))}
+    return {}
+
+
+def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 5e-12,
+                       sampling: str = "interval-mean", length_periods: int = 8) -> tuple[Path, dict]:
+    """Three scans (two speeds a decade apart at one load, and the lower speed at twice the load) of a
+    Langevin PT truth with a hidden effect, trace and retrace, written as a friction measurement."""
+    rng = np.random.default_rng(seed)
+    params = draw_friction_effect(effect, rng)
+    a = 0.5e-9 * rng.uniform(0.97, 1.03)
+    k, m, Q = LEVER_FFM["k_x"], LEVER_FFM["m_x"], LEVER_FFM["Q_x"]
+    eta = rng.uniform(3.0, 6.0)
+    N1 = 5e-9
+    u0 = eta * k * a * a / (4 * math.pi**2) / N1  # U0 per unit load at the first load
+    T = params.get("T", 0.0)  # athermal unless the hidden effect is thermal activation
+    v_lo = 10 ** rng.uniform(np.log10(20e-9), np.log10(100e-9))
+    scans = [(0, v_lo, N1), (1, 10 * v_lo, N1), (2, v_lo, 2 * N1)]
+    rows = ["scan,position_m,lateral_force_N,time_s"]
+    tom = []
+    for sid, v, N in scans:
+        U0 = u0 * (N + params.get("n_adh", 0.0))
+        pos, F, t, d = langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
+                                     gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
+                                     bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid)
+        F = params.get("g", 1.0) * F
+        if "offset" in params:
+            tm = 0.5 * (t[0] + t[-1])
+            F = F + params["offset"] + params.get("drift", 0.0) * (t - tm) / (t[-1] - t[0])
+        F = F + noise * rng.standard_normal(len(F))
+        for x, f, tt in zip(pos, F, t):
+            rows.append(f"{sid},{x:.9e},{f:.9e},{tt - t[0]:.9e}")
+        tom.append(f"[[scans]]\nid = {sid}\nspeed = {v!r}\nload = {N!r}\n")
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"friction_{seed}"
+    (outdir / f"{name}.csv").write_text("\n".join(rows) + "\n")
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "{sampling}"\n\n'
+        f"[lever]\nk_x = {k!r}\nm_x = {m!r}\nQ_x = {Q!r}\n\n[sample]\nlattice = 5e-10\n\n"
+        + (f"[medium]\ntemperature = {T!r}\n\n" if T > 0 else "")
+        + f"[noise]\nforce = {noise!r}\n\n" + "\n".join(tom))
+    truth = {"effect": effect, "params": params, "a": a, "eta": eta, "u0": u0, "T": T, "v_lo": v_lo}
+    return outdir / f"{name}.toml", truth
+
+
+# ------------------------------------------------------------------------------------------
+# Force-distance curves: the contact registry with a lever, solved by continuation
+# ------------------------------------------------------------------------------------------
+
+FORCE_EFFECTS = ["adhesion-dmt", "adhesion-jkr", "adhesion-md", "tip-radius-error"]
+
+
+def _continuation_curve(z, P, k, start_delta):
+    """Quasi-static tip-sample force along piezo positions z (one direction), by continuation:
+    Newton on delta + P(delta)/k = z from the previous solution; where the solution branch ends
+    (the fold: P' < -k, Newton leaves the branch) the tip jumps: a bracketing search in the
+    direction of motion for the next root with P' > -k."""
+    out = np.empty(len(z))
+    d = start_delta
+    h = 1e-13
+    for i, zz in enumerate(z):
+        g = lambda x: x + float(np.asarray(P(x)).ravel()[0]) / k - zz  # noqa: E731
+        ok = False
+        x = d
+        for _ in range(60):
+            gp = (g(x + h) - g(x - h)) / (2 * h)
+            if not np.isfinite(gp) or gp <= 0:
+                break
+            step = g(x) / gp
+            x -= step
+            if abs(step) < 1e-16:
+                ok = True
+                break
+        if not ok or abs(x - d) > 2e-9:
+            # jump: scan in the direction of motion for the nearest stable root
+            sgn = 1.0 if (i == 0 or zz >= z[i - 1]) else -1.0
+            grid = d + sgn * np.linspace(0, 60e-9, 60001)
+            gv = grid + np.asarray(P(grid), float) / k - zz
+            cross = np.nonzero(np.sign(gv[1:]) != np.sign(gv[:-1]))[0]
+            x = None
+            for c in cross:
+                lo, hi = grid[c], grid[c + 1]
+                for _ in range(80):
+                    mid = 0.5 * (lo + hi)
+                    if np.sign(g(mid)) == np.sign(g(lo)):
+                        lo = mid
+                    else:
+                        hi = mid
+                xr = 0.5 * (lo + hi)
+                if (g(xr + 1e-12) - g(xr - 1e-12)) > 0:
+                    x = xr
+                    break
+            if x is None:
+                x = d
+        d = x
+        out[i] = float(np.asarray(P(d)).ravel()[0])
+    return out
+
+
+def make_force_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 0.1e-9, n: int = 400,
+                    declare_E: bool = False) -> tuple[Path, dict]:
+    """An approach-retract curve of a lever (k) with a tip of radius R on a sample, from the contact
+    registry with a hidden adhesion law (or a tip-radius error), a tilted force baseline and noise."""
+    from probedyn.schemes.contact import get_contact_model
+
+    rng = np.random.default_rng(seed)
+    k = float(10 ** rng.uniform(-0.5, 1.0))  # 0.3 - 10 N/m
+    R_nom = 20e-9
+    E_s = float(10 ** rng.uniform(8.5, 10.5))  # 0.3 - 30 GPa
+    E_t, nu = 169e9, 0.28
+    params: dict = {}
+    R = R_nom
+    if effect == "tip-radius-error":
+        params["r_ratio"] = float(10 ** (rng.choice([-1, 1]) * rng.uniform(0.15, 0.6)))
+        R = R_nom * params["r_ratio"]
+        declare_E = True
+    Es_star = 1 / ((1 - nu**2) / E_t + (1 - 0.3**2) / E_s)
+    if effect in ("adhesion-dmt", "adhesion-jkr", "adhesion-md"):
+        params["W"] = float(10 ** rng.uniform(-2.0, -0.7))
+        kw = dict(E_t=E_t, nu_t=nu, E_s=E_s, nu_s=0.3, R_t=R, R_s=0.0)
+        if effect == "adhesion-md":
+            params["lam"] = float(10 ** rng.uniform(-0.5, 0.5))
+            from probedyn.schemes.contact.base import MAUGIS_206
+
+            K = 4 / 3 * Es_star
+            z0 = MAUGIS_206 / params["lam"] * (params["W"] ** 2 * R / (math.pi * K * K)) ** (1 / 3)
+            model = get_contact_model("md", **kw, W=params["W"], z0=z0)
+        else:
+            model = get_contact_model(effect.split("-")[1], **kw, W=params["W"])
+        Pl = lambda d: model.force(d, "loading")  # noqa: E731
+        Pu = lambda d: model.force(d, "unloading")  # noqa: E731
+    else:
+        Pl = Pu = lambda d: 4 / 3 * Es_star * math.sqrt(R) * np.maximum(d, 0.0) ** 1.5  # noqa: E731
+    # ramp: from 40 nm away to a maximum load of ~ 20 - 60 nN
+    Fmax = float(rng.uniform(20e-9, 60e-9))
+    dmax = (Fmax / (4 / 3 * Es_star * math.sqrt(R))) ** (2 / 3)
+    z_c = float(rng.uniform(-5e-9, 5e-9))
+    z_top = z_c + dmax + Fmax / k
+    z_app = np.linspace(z_c - 40e-9, z_top, n)
+    z_ret = z_app[::-1]
+    F_app = _continuation_curve(z_app - z_c, Pl, k, -40e-9)
+    F_ret = _continuation_curve(z_ret - z_c, Pu, k, z_top - z_c - F_app[-1] / k)
+    z = np.concatenate([z_app, z_ret])
+    F = np.concatenate([F_app, F_ret])
+    b0, b1 = float(rng.normal(0, 5e-9)), float(rng.normal(0, 0.02) * k)
+    Fm = F + b0 + b1 * z + noise * rng.standard_normal(len(F))
+    seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"force_{seed}"
+    np.savetxt(outdir / f"{name}.csv", np.column_stack([z, Fm, seg]), delimiter=",", header="z_m,force_N,segment",
+               comments="", fmt=["%.10e", "%.10e", "%d"])
+    sample = f"\n[sample]\nE = {E_s!r}\nnu = 0.3\n" if declare_E else ""
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\nk = {k!r}\n\n[tip]\nradius = {R_nom!r}\n'
+        f"E = {E_t!r}\nnu = {nu!r}\n{sample}\n[noise]\nforce = {noise!r}\n")
+    truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1}
+    return outdir / f"{name}.toml", truth
+
+
 if __name__ == "__main__":  # precompute the FEM truths of the rate study (slow: about one FEM solve each)
     import sys
 

@@ -119,6 +119,7 @@ class Fit:
     cv: float | None = None
     cv_r: np.ndarray | None = None
     start: str = ""
+    nuisance: Any = None
 
     @property
     def k(self) -> int:
@@ -152,17 +153,42 @@ class Fitter:
         plist = list(self.problem.base_params) + [p for c in causes for p in c.params]
         fixed = dict(fixed or {})
         free = [p for p in plist if p.name not in fixed]
-        n_all = None
+        best: Fit | None = None
+        if hasattr(self.problem, "train_mask"):
+            self.problem.train_mask = mask  # nuisance profiling (e.g. lattice registry) sees training data only
+        try:
+            return self._fit(causes, starts, mask, fixed, max_nfev, plist, free)
+        finally:
+            if hasattr(self.problem, "train_mask"):
+                self.problem.train_mask = None
+
+    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free) -> Fit:
+        """Least squares from every start. A problem with a nuisance that is profiled rather than
+        fitted (``problem.nuisance(values, causes)``, e.g. the lattice registry of friction scans)
+        holds it fixed during each least-squares run and re-profiles it between runs (at most three
+        rounds; a re-profiled nuisance is kept only if it lowers chi^2)."""
+        prob = self.problem
+        has_nu = hasattr(prob, "nuisance")
+        diff_step = getattr(prob, "diff_step", 1e-5)
+        cap = max_nfev or getattr(prob, "nfev_per_param", 100) * (len(free) + 1)
         best: Fit | None = None
         lo = np.array([_u_bounds(p)[0] for p in free])
         hi = np.array([_u_bounds(p)[1] for p in free])
+        m_all = None
         for si, st in enumerate(starts):
             vals0 = {**st, **fixed}
+            nu0 = st.get("__nuisance__") if isinstance(st, dict) else None
+            vals0.pop("__nuisance__", None)
+            if has_nu:
+                prob.fixed_nuisance = nu0 if nu0 is not None else prob.nuisance(vals0, causes)
             if not free:
                 r = self.residuals(vals0, causes)
                 m = np.ones(len(r), bool) if mask is None else mask
                 f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)), int(m.sum()),
                         np.zeros((int(m.sum()), 0)), 1, m)
+                f.nuisance = prob.fixed_nuisance if has_nu else None
+                if has_nu:
+                    prob.fixed_nuisance = None
                 return f
             u0 = np.clip(np.array([_to_u(p, vals0[p.name]) for p in free]), lo, hi)
 
@@ -172,12 +198,29 @@ class Fitter:
                 r = self.residuals(v, causes)
                 return r if _m is None else r[_m]
 
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", OptimizeWarning)
-                    res = least_squares(fun, u0, bounds=(lo, hi), method="trf", x_scale="jac", diff_step=1e-6,
-                                        max_nfev=max_nfev or 100 * (len(free) + 1), xtol=1e-10, ftol=1e-10)
-            except ValueError:
+            res = None
+            for _round in range(3 if has_nu else 1):
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore", OptimizeWarning)
+                        res = least_squares(fun, u0, bounds=(lo, hi), method="trf", x_scale="jac", diff_step=diff_step,
+                                            max_nfev=cap, xtol=1e-10, ftol=1e-10)
+                except ValueError:
+                    res = None
+                    break
+                if not has_nu:
+                    break
+                c_old = float(np.sum(res.fun**2))
+                old = prob.fixed_nuisance
+                v = {p.name: _from_u(p, x) for p, x in zip(free, res.x)}
+                v.update(fixed)
+                prob.fixed_nuisance = prob.nuisance(v, causes)
+                c_new = float(np.sum(fun(res.x) ** 2))
+                if not c_new < c_old * (1 - 1e-6):
+                    prob.fixed_nuisance = old
+                    break
+                u0 = res.x
+            if res is None:
                 continue
             c2 = float(np.sum(res.fun**2))
             if best is None or c2 < best.chi2 - 1e-12 * max(1.0, abs(c2)):
@@ -186,9 +229,16 @@ class Fitter:
                 n = len(res.fun)
                 best = Fit(causes, free, res.x.copy(), v, None, c2, n, res.jac.copy(), res.nfev, mask,
                            start=str(si))
+                best.nuisance = prob.fixed_nuisance if has_nu else None
         if best is None:
             raise DataFormatError("the fit failed from every start (the model cannot be evaluated at the starting values)")
-        best.r = self.residuals(best.values, causes)
+        if has_nu:
+            prob.fixed_nuisance = best.nuisance
+        try:
+            best.r = self.residuals(best.values, causes)
+        finally:
+            if has_nu:
+                prob.fixed_nuisance = None
         m = np.ones(len(best.r), bool) if mask is None else mask
         best.mask = m
         best.chi2 = float(np.sum(best.r[m] ** 2))
@@ -213,21 +263,45 @@ class Fitter:
         causes = tuple(ref.causes) + new
         newp = [p for c in new for p in c.params]
         start0 = {**ref.values, **{p.name: p.null for p in newp}}
-        starts = [start0]
-        alts = [[p.null, *p.starts] if p.starts else [p.null] for p in newp]
-        for i, combo in enumerate(itertools.islice(itertools.product(*alts), 1, MAX_STARTS + 1), start=1):
+        starts = [dict(start0, __nuisance__=ref.nuisance) if ref.nuisance is not None else start0]
+        for i, combo in enumerate(_start_sets(new)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
             if only_starts is None or i in only_starts:
-                starts.append({**ref.values, **dict(zip([p.name for p in newp], combo))})
+                starts.append({**ref.values, **combo})
         f = self.fit(causes, starts, mask)
         if only_starts is not None and f.start != "0":
             f.start = str(only_starts[int(f.start) - 1])
         if f.chi2 > ref.chi2 * (1 + 1e-9) + 1e-9:  # never worse than the model it contains
-            r = self.residuals(start0, causes)
+            if hasattr(self.problem, "nuisance"):
+                self.problem.fixed_nuisance = ref.nuisance
+            try:
+                r = self.residuals(start0, causes)
+            finally:
+                if hasattr(self.problem, "nuisance"):
+                    self.problem.fixed_nuisance = None
             m = np.ones(len(r), bool) if mask is None else mask
             J = np.zeros((int(m.sum()), len(f.plist)))
             f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
                     float(np.sum(r[m] ** 2)), int(m.sum()), J, f.nfev, m, start="null")
+            f.nuisance = ref.nuisance
         return f
+
+
+def _start_sets(causes) -> list[dict[str, float]]:
+    """Declared (data-independent) starting points of the new causes' parameters besides the null
+    start: a cause's own ``start_sets`` if it declares them, else the combinations of its
+    parameters' starts (and nulls), those with the fewest parameters at their null first."""
+    out: list[dict[str, float]] = []
+    for c in causes:
+        sets = c.start_sets() if hasattr(c, "start_sets") else None
+        if sets is None:
+            ps = list(c.params)
+            alts = [[p.null, *p.starts] for p in ps]
+            combos = [dict(zip([p.name for p in ps], v)) for v in itertools.product(*alts)]
+            combos = [cb for cb in combos if any(cb[p.name] != p.null for p in ps)]
+            combos.sort(key=lambda cb: sum(cb[p.name] == p.null for p in ps))
+            sets = combos
+        out = sets if not out else [{**a, **b} for a in out for b in sets]
+    return out
 
 
 # ------------------------------------------------------------------------------------------
@@ -255,20 +329,33 @@ class CrossValidation:
         # the declared start (an index, data independent) that won the full-data fit of a cause:
         # the folds try the null start and that one
         self.winning_start: dict[tuple, int] = {}
+        # full-data fits by cause tuple (warm starts of the folds when the groups are interleaved)
+        self.full_fits: dict[tuple, Fit] = {}
 
     def fold_fits(self, causes: tuple) -> list[Fit]:
         key = tuple(c.key for c in causes)
         hit = self._ref.get(key)
         if hit is None:
             hit = []
+            warm = getattr(self.F.problem, "cv_warm", False) and key in self.full_fits
             for fold in self.folds:
                 mask = np.ones(self.n, bool)
                 mask[fold] = False
                 if not causes:
-                    hit.append(self.F.baseline(mask))
+                    if warm:
+                        hit.append(self.F.fit((), [dict(self.full_fits[key].values)], mask))
+                    else:
+                        hit.append(self.F.baseline(mask))
                 else:
                     ref = self.fold_fits(causes[:-1])[len(hit)]
-                    hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
+                    if warm:  # interleaved groups: start at the null and at the full-data optimum only
+                        full = self.full_fits[key].values
+                        newp = [p.name for p in causes[-1].params]
+                        f0 = self.F.nested(ref, causes[-1:], mask, only_starts=[])
+                        f1 = self.F.fit(causes, [{**ref.values, **{q: full[q] for q in newp}}], mask)
+                        hit.append(f1 if f1.chi2 < f0.chi2 else f0)
+                    else:
+                        hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
             self._ref[key] = hit
         return hit
 
@@ -377,6 +464,8 @@ def _profile(F: Fitter, fit: Fit, j: int, h0: float, target: float = 1.0) -> tup
     def chi2_at(u):
         fixed = {p.name: _from_u(p, u)}
         start = dict(fit.values)
+        if fit.nuisance is not None:
+            start["__nuisance__"] = fit.nuisance
         g = F.fit(fit.causes, [start], fit.mask, fixed=fixed, max_nfev=40 * len(names))
         return g.chi2
 
@@ -429,7 +518,9 @@ def _check_baseline_identifiable(base: Fit) -> None:
                               "(the model does not depend on them for the measured quantities); remove them from "
                               "[baseline] free or add data they affect")
     _, s, Vt = np.linalg.svd(J / cn, full_matrices=False)
-    if s.min() < 1e-7 * s.max():
+    # finite-difference Jacobians are accurate to ~1e-5: a combination a thousand times weaker
+    # than the typical column is not informed by the data
+    if s.min() < 1e-3 * s.max():
         v = Vt[-1]
         combo = [p.name for p, x in zip(base.plist, v) if abs(x) > 0.2]
         raise DataFormatError(f"the data cannot inform the baseline parameters {', '.join(combo)} separately "
@@ -466,6 +557,7 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
     # 4. evidence out of sample where a claim is possible
     if significant and any(d["lr_pass"] for d in cands):
         if use_cv:
+            cv.full_fits[()] = base
             base.cv, base.cv_r = cv.heldout(())
         # in order of the in-sample improvement; the evidence is capped at Delta chi2 / 2, so a
         # cause whose cap is below the best evidence so far minus the margin can neither win nor
@@ -567,6 +659,8 @@ def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> No
     if use_cv and cv is not None:
         causes = fit.causes
         cv.winning_start[tuple(c.key for c in causes)] = int(fit.start) if fit.start.isdigit() else 0
+        cv.full_fits[tuple(c.key for c in causes)] = fit
+        cv.full_fits.setdefault(tuple(c.key for c in ref.causes), ref)
         if ref.cv is None:
             ref.cv, ref.cv_r = cv.heldout(ref.causes)
         fit.cv, fit.cv_r = cv.heldout(causes)

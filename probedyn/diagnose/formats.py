@@ -340,14 +340,14 @@ def _common(meta: dict, side: Path, kind: str) -> dict[str, Any]:
             rho0, eta0 = MEDIA[name]
         else:
             rho0 = eta0 = None
-        if "density" in med or "viscosity" in med or name is None:
+        if "density" in med or "viscosity" in med:
             rho_f = _num(meta, "medium", "density", side, default=rho0, lo=0.0, hi=2.5e4, unit="kg/m^3")
             eta_f = _num(meta, "medium", "viscosity", side, default=eta0, positive=True, lo=1e-6, hi=10.0, unit="Pa s")
             if rho_f is None or eta_f is None:
                 raise DataFormatError(f"{side}: [medium] needs a name or both density and viscosity")
         else:
             rho_f, eta_f = rho0, eta0
-        if "name" in med or "density" in med:
+        if name is not None or "density" in med:
             out["medium"] = (float(rho_f), float(eta_f))
             out["medium_name"] = name or "declared fluid"
         if "temperature" in med:
@@ -389,7 +389,12 @@ def probe_from_meta(meta: dict, side: Path) -> tuple[Any, dict, frozenset, tuple
         else:
             probe, over = get_probe(str(name or "cantilever"))
     except ProbedynError as exc:
-        raise DataFormatError(f"{side}: [probe] {exc}") from None
+        msg = str(exc)
+        if "unknown probe" in msg and "did you mean" not in msg:
+            from probedyn.probes import list_probes
+
+            msg += _did_you_mean(str(name), list_probes())
+        raise DataFormatError(f"{side}: [probe] {msg}") from None
     for k, v in sec.items():
         key = PROBE_ALIASES.get(k, k)
         if key not in probe.params:

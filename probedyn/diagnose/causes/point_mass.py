@@ -28,6 +28,11 @@ class PointMass(Cause):
         return PointMass((CauseParam("mass", "kg", 0.0, 3.0 * m, 0.0, "added mass (0 to 3 probe masses)",
                                      starts=(0.03 * m, 0.3 * m)), self.params[1]))
 
+    def start_sets(self):
+        m = self.params[0].hi / 3.0  # the probe mass
+        return [{"mass": 0.03 * m, "xi": 1.0}, {"mass": 0.03 * m, "xi": 0.6}, {"mass": 0.3 * m, "xi": 1.0},
+                {"mass": 0.3 * m, "xi": 0.6}, {"mass": 0.03 * m, "xi": 0.3}]
+
     def effect(self, v, s):
         s.masses = [*s.masses, (v["xi"], v["mass"])]
 

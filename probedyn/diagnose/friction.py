@@ -1,0 +1,620 @@
+"""The friction diagnosis problem: FFM scans (trace and retrace) against probedyn's FFM model.
+
+Baseline: the FFM line-scan model of :mod:`probedyn.schemes.ffm` -- the lever (k_x, effective
+mass m_x, damping c_x) dragged by its support over the Prandtl-Tomlinson substrate of the
+friction registry (``pt``: ``U = -U0 cos(2 pi x / a)``), integrated by the same Rosenbrock
+integrator ``simulate ffm`` uses, along the measured support path with its reversals
+(:func:`probedyn.schemes.ffm.line_scan_path`: trace and retrace, tip inertia at the stated
+speeds). The corrugation scales with the normal load, ``U0 = u0 N`` (single-asperity Amontons,
+the registry's ``load_params``). Each sample is the model's lateral spring force
+``k_x (X - x)`` at the sample's support position (``sampling = "point"``) or its mean over the
+sample's interval (``"interval-mean"``, an integrating detector), as the sidecar declares.
+
+Calibrated: ``u0`` [J/N] and the lattice period ``a`` (within 25 % of the periodogram's
+estimate); per scan the lattice registry (where the lattice sits relative to the support
+coordinate) is a nuisance profiled out by aligning the fundamental of model and data (their
+cross spectrum at 1/a over the steady parts of trace and retrace), then re-integrating at
+that registry. Cross-validation groups are the trace and the retrace of each scan (the
+registry of a held-out half is estimated from the other half only).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from probedyn.core.errors import DataFormatError, ProbedynError
+from probedyn.diagnose.causes import CauseParam, catalog
+from probedyn.diagnose.formats import FrictionData, FrictionScan, _noise, _num, col_error, read_csv
+from probedyn.schemes.ffm import FFM, line_scan_path
+
+__all__ = ["FrictionProblem", "FrictionState", "read_friction", "simulate_scan"]
+
+K_B = 1.380649e-23
+PREROLL = 2.0  # lattice periods of support travel before the data start (in the opposite direction)
+START_PERIODS = 1.5  # lattice periods at the start of a scan left out (unknown history before the scan)
+#: integrator tolerance (relative, and absolute in units of the force scale / k and the speed): the
+#: lateral force of stick-slip traces (interval means) agrees with rtol = 1e-7 to 0.15 sigma at the slips and
+#: ~1e-15 N elsewhere (tests/test_diagnose_friction.py); 1e-3 misplaces slips by up to 10 sigma
+RTOL = 1e-5
+
+
+# ------------------------------------------------------------------------------------------
+# Reading
+# ------------------------------------------------------------------------------------------
+
+
+def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionData:
+    d = read_csv(csv, ["scan", "position_m", "lateral_force_N"], ["time_s"])
+    lev = meta.get("lever", {})
+    k_x = _num(meta, "lever", "k_x", side, positive=True, lo=1e-4, hi=1e4, unit="N/m")
+    m_x = _num(meta, "lever", "m_x", side, default=0.0, lo=0.0, hi=1e-3, unit="kg") or None
+    c_x = _num(meta, "lever", "c_x", side, default=-1.0) if "c_x" in lev else None
+    if c_x is not None and c_x < 0:
+        raise DataFormatError(f"{side}: [lever] c_x must be >= 0")
+    Q_x = _num(meta, "lever", "Q_x", side, default=0.0, lo=0.01, hi=1e7) if "Q_x" in lev else None
+    if c_x is not None and Q_x is not None:
+        raise DataFormatError(f"{side}: [lever] give c_x or Q_x, not both")
+    lattice = _num(meta, "sample", "lattice", side, default=0.5e-9, positive=True, lo=5e-11, hi=1e-6, unit="m")
+    sig, stated = _noise(meta, side, "force", 0.0, 1e-15, 1e-3, "N")
+    sampling = str(meta["measurement"].get("sampling", "interval-mean"))
+    if sampling not in ("point", "interval-mean"):
+        raise DataFormatError(f"{side}: [measurement] sampling must be 'point' or 'interval-mean', got {sampling!r}")
+    scans_meta = meta.get("scans", [])
+    if not isinstance(scans_meta, list) or not scans_meta:
+        raise DataFormatError(f"{side}: missing [[scans]] tables (id, speed, load)")
+    by_id: dict[int, tuple[float, float]] = {}
+    for i, s in enumerate(scans_meta):
+        if not isinstance(s, dict):
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1} must be a table")
+        for k in s:
+            if k not in ("id", "speed", "load"):
+                from probedyn.diagnose.formats import _did_you_mean
+
+                raise DataFormatError(f"{side}: unknown key '{k}' in [[scans]] entry {i + 1}"
+                                      + _did_you_mean(k, ("id", "speed", "load")))
+        if "id" not in s or "speed" not in s or "load" not in s:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1} needs id, speed [m/s] and load [N]")
+        sp, ld = s["speed"], s["load"]
+        if isinstance(sp, bool) or not isinstance(sp, (int, float)) or not 1e-12 < sp < 1.0:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1}: speed {sp!r} m/s is outside (1e-12, 1) m/s (SI)")
+        if isinstance(ld, bool) or not isinstance(ld, (int, float)) or not 0 < ld < 1e-3:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1}: load {ld!r} N is outside (0, 1e-3) N (SI)")
+        if int(s["id"]) in by_id:
+            raise DataFormatError(f"{side}: [[scans]] id {int(s['id'])} appears twice")
+        by_id[int(s["id"])] = (float(sp), float(ld))
+    ids = d["scan"]
+    scans = []
+    for sid in dict.fromkeys(ids.astype(int).tolist()):
+        idx = np.nonzero(ids == sid)[0]
+        if sid not in by_id:
+            raise col_error(d, "scan", idx[0], f"scan id {sid} has no [[scans]] entry in {side.name}")
+        if len(idx) < 16:
+            raise col_error(d, "scan", idx[0], f"scan {sid} has only {len(idx)} samples (need >= 16)")
+        if np.any(np.diff(idx) != 1):
+            k = idx[np.nonzero(np.diff(idx) != 1)[0][0] + 1]
+            raise col_error(d, "scan", k, f"rows of scan {sid} are not contiguous")
+        x = d["position_m"][idx]
+        if np.max(np.abs(x)) > 1e-3:
+            raise col_error(d, "position_m", idx[int(np.argmax(np.abs(x)))], "position beyond 1 mm: values are SI metres")
+        dx = np.diff(x)
+        z = np.nonzero(dx == 0)[0]
+        bad = [j for j in z if j == 0 or j == len(dx) - 1 or np.sign(dx[j - 1]) == np.sign(dx[j + 1])]
+        if bad:  # a repeated position is only allowed at a reversal (the turning point sampled twice)
+            raise col_error(d, "position_m", idx[1 + int(bad[0])], "repeated position (speed zero) away from a reversal")
+        sgn = np.sign(dx)
+        sgn[z] = np.sign(dx[z + 1])  # the repeated turning point belongs to the new direction
+        direction = np.concatenate([sgn[:1], sgn])
+        sp, ld = by_id[sid]
+        if "time_s" in d and not np.any(np.isnan(d["time_s"][idx])):
+            t = d["time_s"][idx]
+            if np.any(np.diff(t) <= 0):
+                raise col_error(d, "time_s", idx[1 + int(np.nonzero(np.diff(t) <= 0)[0][0])], "times must increase")
+        else:
+            t = np.concatenate([[0.0], np.cumsum(np.abs(dx))]) / sp
+        f = d["lateral_force_N"][idx]
+        if np.max(np.abs(f)) > 1e-3:
+            raise col_error(d, "lateral_force_N", idx[int(np.argmax(np.abs(f)))], "force beyond 1 mN: values are SI newtons")
+        scans.append(FrictionScan(sid, sp, ld, x, f, t, direction))
+    if not stated:  # from the point-to-point scatter (robust; the signal's own increments are removed twice)
+        r = np.concatenate([np.diff(s.force, 2) for s in scans])
+        sig = float(1.4826 * np.median(np.abs(r - np.median(r))) / math.sqrt(6))
+    return FrictionData(**common, scans=scans, k_x=k_x, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice, sigma_force=sig,
+                        sampling=sampling, noise_stated=stated)
+
+
+# ------------------------------------------------------------------------------------------
+# Model
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class FrictionState:
+    u0: float  # corrugation per unit load [J/N]
+    a: float  # lattice period [m]
+    gamma: float = 0.0  # viscous coefficient of the registry PT model [N s/m]
+    n_adh: float = 0.0  # adhesion load [N]
+    offset: float = 0.0  # [N]
+    drift: float = 0.0  # [N over one scan]
+    bow: float = 0.0  # scanner nonlinearity
+    theta: float = 0.0  # scan angle to the lattice rows [rad]
+    gain: float = 1.0  # lateral-force calibration factor
+    thermal: tuple[float, float] | None = None  # (T [K], attempt frequency [Hz])
+    transforms: list = field(default_factory=list)  # f(problem, scan, F) -> F, applied last
+
+
+def _ffm(data: FrictionData, U0: float, a: float, gamma: float) -> FFM:
+    k = data.k_x
+    m = data.m_x if data.m_x else k / (2 * math.pi * 1e5) ** 2
+    if data.c_x is not None:
+        c = data.c_x
+    elif data.Q_x is not None:
+        c = math.sqrt(m * k) / data.Q_x
+    else:
+        c = math.sqrt(m * k)  # Q = 1 (a strongly damped slip), stated in the docs
+    return FFM.from_preset("mica", "pt", {"U0": max(U0, 1e-30), "a": a, "gamma": max(gamma, 0.0), "k_x": k, "m_x": m,
+                                          "c_x": c})
+
+
+def _barrier_table(U0: float, a: float, k: float, n: int = 400):
+    """Quasi-static PT: for support positions X on the branch of the well at 0 up to its
+    instability X_c, the barrier to the next well. Returns (X, dE, X_c, x_s(X))."""
+    q = 2 * math.pi / a
+    F0 = q * U0
+    eta = q * F0 / k
+    if eta <= 1.0:
+        return None
+    xc = math.acos(-1.0 / eta) / q
+    xm = np.linspace(-0.25 * a, xc * (1 - 1e-6), n)
+    X = xm + (F0 / k) * np.sin(q * xm)
+    # saddle: the unstable equilibrium x_s in (x_c, a/2 + ...): k (X - x) = F0 sin(q x)
+    xs = np.empty_like(xm)
+    for i, Xi in enumerate(X):
+        lo, hi = xc, 0.5 * a + xc
+        g = lambda x: k * (Xi - x) - F0 * math.sin(q * x)  # noqa: E731
+        glo, ghi = g(lo), g(hi)
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            gm = g(mid)
+            if (gm > 0) == (glo > 0):
+                lo, glo = mid, gm
+            else:
+                hi = mid
+        xs[i] = 0.5 * (lo + hi)
+    E = lambda x, Xi: -U0 * np.cos(q * x) + 0.5 * k * (Xi - x) ** 2  # noqa: E731
+    dE = E(xs, X) - E(xm, X)
+    Xc = xc + (F0 / k) * math.sin(q * xc)
+    return X, np.maximum(dE, 0.0), Xc, xs
+
+
+def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: float) -> tuple[float, Any]:
+    """Median support position of a thermally activated slip before the athermal instability:
+    the hazard ``int f0 exp(-dE(X) / k_B T) dX / V`` reaches ln 2 (Kramers rate with attempt frequency
+    f0; Gnecco et al. 2000, Sang et al. 2001). Returns ``(X_c - X*, table)`` (0 if the slip stays athermal)."""
+    tab = _barrier_table(U0, a, k)
+    if tab is None or T <= 0 or f0 <= 0:
+        return 0.0, tab
+    X, dE, Xc, xs = tab
+    rate = f0 * np.exp(-dE / (K_B * T)) / V
+    H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+    if H[-1] < math.log(2.0):
+        return 0.0, tab
+    Xs = float(np.interp(math.log(2.0), H, X))
+    return max(Xc - Xs, 0.0), tab
+
+
+def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
+                  train: int = 0) -> np.ndarray:
+    """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
+    the scan's samples, for lattice registry ``phis[train]``."""
+    X = scan.position
+    if st.bow:
+        x0, x1 = X.min(), X.max()
+        X = X + st.bow * (X - x0) * (x1 - X) / max(x1 - x0, 1e-30)
+    w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
+    Xl = X * w - phis[train]
+    V = scan.speed * w
+    N = max(scan.load + st.n_adh, 0.0)
+    U0 = st.u0 * N
+    ffm = _ffm(data, U0, st.a, st.gamma)
+    d0 = scan.direction[0]
+    cuts = np.nonzero(np.diff(scan.direction) != 0)[0] + 1
+    starts = np.concatenate([[0], cuts])
+    ends = np.concatenate([cuts, [len(X)]])
+    turns = [Xl[0] + d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
+    # resolve the stick branches between samples: the step at most half a sample interval
+    dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
+    hmax = hmax_frac * dX / max(V, 1e-30)
+    if st.thermal is not None and U0 > 0:
+        res = _thermal_path(ffm, turns, V, st, hmax)
+    else:
+        res = line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+    F = np.empty(len(X))
+    # split the model output into its segments (the pre-roll is the first)
+    seg_model = _segments(res, len(turns) - 1)
+    for j, (s0, e0) in enumerate(zip(starts, ends)):
+        mb, mf, mt = seg_model[j + 1]
+        xs = Xl[s0:e0]
+        order = np.argsort(mb)
+        b, fz = mb[order], mf[order]
+        if data.sampling == "point" or len(xs) < 2:
+            F[s0:e0] = np.interp(xs, b, fz)
+        else:
+            cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
+            mid = 0.5 * (xs[1:] + xs[:-1])
+            lo = np.concatenate([[xs[0]], mid])
+            hi = np.concatenate([mid, [xs[-1]]])
+            width = hi - lo
+            Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                F[s0:e0] = np.where(np.abs(width) > 0, (Ihi - Ilo) / np.where(width == 0, 1.0, width), np.interp(xs, b, fz))
+    return F
+
+
+def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Split a path result into its monotone support segments (at the reversals)."""
+    b = res.base
+    d = np.sign(np.diff(b))
+    nz = np.nonzero(d)[0]  # repeated points keep the direction of travel
+    d = d[nz[np.maximum(np.searchsorted(nz, np.arange(len(d)), side="right") - 1, 0)]]
+    cuts = np.nonzero(d[1:] * d[:-1] < 0)[0] + 1
+    edges = np.concatenate([[0], cuts, [len(b) - 1]])
+    out = []
+    for i0, i1 in zip(edges[:-1], edges[1:]):
+        sl = slice(i0, i1 + 1)
+        out.append((b[sl], res.lateral_force[sl], res.t[sl]))
+    if len(out) != n_seg:
+        raise ProbedynError(f"FFM path: expected {n_seg} monotone segments, found {len(out)}")
+    return out
+
+
+def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
+    """Trace/retrace with thermally activated slips: between slips the FFM integration runs as
+    usual; when the support reaches the median activated slip point of the current well, the tip
+    is placed just over the saddle (at rest) and the FFM dynamics carries out the slip."""
+    from probedyn.schemes.ffm import ScanResult
+
+    T, f0 = st.thermal
+    fv = ffm.friction.values
+    U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
+    adv, tab = thermal_slip_advance(U0, a, k, V, T, f0)
+    if adv <= 0 or tab is None:
+        return line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+    Xtab, _, Xc, xs_tab = tab
+    X_slip = Xc - adv  # relative to the well centre, for motion in +x
+    xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
+    y = np.array([turns[0], 0.0, 0.0])
+    parts = []
+    for Xa, Xb in zip(turns[:-1], turns[1:]):
+        d = 1.0 if Xb > Xa else -1.0
+        Xcur = Xa
+        seg = []
+        while (Xb - Xcur) * d > 0:
+            n = round(y[0] / a)
+            Xs = n * a + d * X_slip
+            if (Xs - Xcur) * d <= 1e-9 * a:  # already past this well's slip point: slip now
+                Xs = Xcur
+            Xend = Xs if (Xb - Xs) * d > 0 else Xb
+            if (Xend - Xcur) * d > 1e-12 * a:
+                r = line_scan_path(ffm, [Xcur, Xend], speed=V, y0=y, hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+                seg.append(r)
+                y = np.array([r.x[-1], r.v[-1], r.z[-1]])
+                Xcur = Xend
+            if Xend == Xs and (Xb - Xcur) * d > 0:
+                y = np.array([n * a + d * (xs_slip + 0.02 * a), 0.0, 0.0])  # over the saddle, at rest
+        parts.append(seg)
+    # flatten into one result; segment boundaries are recovered from the turns by _segments
+    t, base, x, v, z, F = [], [], [], [], [], []
+    toff = 0.0
+    for seg in parts:
+        for r in seg:
+            t.append(r.t + toff)
+            base.append(r.base)
+            x.append(r.x)
+            v.append(r.v)
+            z.append(r.z)
+            F.append(r.friction)
+            toff += r.t[-1]
+    base = np.concatenate(base)
+    x = np.concatenate(x)
+    return ScanResult(t=np.concatenate(t), base=base, x=x, v=np.concatenate(v), z=np.concatenate(z),
+                      lateral_force=k * (base - x), friction=np.concatenate(F), n_steps=0, n_rejected=0, setup={})
+
+
+# ------------------------------------------------------------------------------------------
+# The problem
+# ------------------------------------------------------------------------------------------
+
+
+def _period_estimate(data: FrictionData) -> float:
+    """Lattice period from the periodogram of the traces (0.6 - 1.6 x the nominal lattice)."""
+    cand = data.lattice * np.linspace(0.6, 1.6, 501)
+    power = np.zeros_like(cand)
+    for s in data.scans:
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        for seg in np.split(np.arange(len(s.position)), cuts):
+            if len(seg) < 8:
+                continue
+            x = s.position[seg]
+            f = s.force[seg] - s.force[seg].mean()
+            E = np.exp(-2j * np.pi * np.outer(1.0 / cand, x))
+            power += np.abs(E @ (f * np.hanning(len(f)))) ** 2
+    return float(cand[int(np.argmax(power))])
+
+
+def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
+    """The lattice period from the positions of the slips (jumps of the lateral force larger than
+    10 noise levels against the direction of motion): within each segment the spacing of
+    successive slips is an integer number of periods (multiple slips), ``a = sum dX / sum n`` with
+    ``n = round(dX / a_est)``. Falls back to ``a_est`` with fewer than three slips."""
+    num = den = 0.0
+    for s in data.scans:
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            if len(seg) < 4:
+                continue
+            d = s.direction[seg[0]]
+            jump = -d * np.diff(s.force[seg])
+            idx = np.nonzero(jump > 10 * sigma)[0]
+            if len(idx) < 2:
+                continue
+            # one slip may span two samples (interval means): keep the larger of adjacent jumps
+            keep = [idx[0]]
+            for j in idx[1:]:
+                if j - keep[-1] <= 1:
+                    if jump[j] > jump[keep[-1]]:
+                        keep[-1] = j
+                else:
+                    keep.append(j)
+            x = s.position[seg]
+            xs = np.array([0.5 * (x[j] + x[j + 1]) for j in keep])
+            dx = np.abs(np.diff(xs))
+            n = np.round(dx / a_est)
+            ok = n >= 1
+            num += float(dx[ok].sum())
+            den += float(n[ok].sum())
+    return num / den if den >= 3 else a_est
+
+
+class FrictionProblem:
+    kind = "friction"
+    unit = "N"
+    reduced = False
+
+    def __init__(self, data: FrictionData) -> None:
+        self.data = data
+        self.path = data.path
+        self.known = set(data.known) | set(data.free)
+        self.declared_medium = data.medium
+        self.medium_name = data.medium_name
+        sc = data.scans
+        self.speeds = np.array([s.speed for s in sc])
+        self.loads = np.array([s.load for s in sc])
+        self.sigma = data.sigma_force if data.sigma_force > 0 else 1e-12
+        self.force = np.concatenate([s.force for s in sc])
+        self.n = len(self.force)
+        gid, labels, pos = [], [], 0
+        self.slices = []
+        for i, s in enumerate(sc):
+            self.slices.append(slice(pos, pos + len(s.force)))
+            pos += len(s.force)
+            cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+            seg_id = np.zeros(len(s.force), int)
+            for j, c in enumerate(cuts):
+                seg_id[c:] = j + 1
+            gid.append(1000 * i + seg_id)
+            for j in range(len(cuts) + 1):
+                labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
+        self.a_est = _period_estimate(data)
+        # the samples within START_PERIODS lattice periods of a scan's start depend on the unrecorded
+        # history before it (where the tip sat when the scan began): they are not used
+        use = []
+        for s in sc:
+            u = np.ones(len(s.force), bool)
+            cuts = np.nonzero(np.diff(s.direction) != 0)[0]
+            end0 = (cuts[0] + 1) if len(cuts) else len(s.force)
+            u[:end0] = np.abs(s.position[:end0] - s.position[0]) >= START_PERIODS * self.a_est
+            use.append(u)
+        self.use = np.concatenate(use)
+        self.groups = np.concatenate(gid)[self.use]
+        self.group_labels = labels
+        N = float(np.mean(self.loads))
+        self.a_slip = _slip_period(data, self.a_est, self.sigma)
+        # corrugation start from the stick-slip loop: the largest lateral force of a PT stick branch is
+        # F_max = F0 sqrt(1 - 1/eta^2) with eta = 2 pi F0 / (k a), so F0 = sqrt(F_max^2 + (k a / 2 pi)^2)
+        q = 2 * math.pi / self.a_est
+        u0s = []
+        for s_ in sc:
+            fmax = 0.5 * float(np.percentile(s_.force, 99.5) - np.percentile(s_.force, 0.5))
+            F0 = math.sqrt(fmax**2 + (data.k_x / q) ** 2)
+            u0s.append(F0 / q / s_.load)
+        u0_start = float(np.median(u0s))
+        self.base_params = [
+            CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
+                       scale="log", starts=(0.85 * u0_start, 1.2 * u0_start)),
+            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period"),
+        ]
+        self.temperature = data.temperature
+        self.N_mean = N
+        self.v_max = float(self.speeds.max())
+        self.t_mid = [0.5 * (s.time[0] + s.time[-1]) for s in sc]
+        self.t_span = [max(s.time[-1] - s.time[0], 1e-12) for s in sc]
+        self.train_mask = None
+        self.fixed_nuisance = None
+        # the integrated model is accurate to ~1e-5 of the force scale (RTOL): finite differences
+        # need steps of 1e-3 of the parameter scale; fewer evaluations and starts per fit
+        self.diff_step = 1e-3
+        self.nfev_per_param = 30
+        self.max_starts = 4
+        self.causes = []
+        for cls in catalog("friction"):
+            c = cls().constrain(self)
+            if c is not None:
+                self.causes.append(c)
+
+    def supports(self, what: str) -> bool:
+        return True
+
+    # -- model --------------------------------------------------------------------------------
+    def state(self, values, causes=()) -> FrictionState:
+        st = FrictionState(u0=values["u0"], a=values["a"])
+        for c in causes:
+            c.effect(values, st)
+        return st
+
+    def _align(self, i: int, st: FrictionState, train: int, m0: np.ndarray, target: np.ndarray) -> float:
+        """Registry of one lattice train of scan i: phase of the fundamental of model vs data over
+        the steady parts of each segment (the training samples only during cross-validation)."""
+        s = self.data.scans[i]
+        w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
+        if w <= 1e-9:
+            return 0.0
+        kx = 2 * math.pi * w / st.a  # along the support coordinate
+        mask = self._fit_mask(i)
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        acc = 0.0 + 0.0j
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            x = s.position[seg]
+            steady = np.abs(x - x[0]) > 1.5 * st.a / w
+            sel = seg[steady & mask[seg]]
+            if len(sel) < 8:
+                continue
+            e = np.exp(-1j * kx * s.position[sel]) * np.hanning(len(sel))
+            acc += np.sum(m0[sel] * e) * np.conj(np.sum(target[sel] * e))
+        if acc == 0:
+            return 0.0
+        return float(np.angle(acc)) / (2 * math.pi / st.a)
+
+    def nuisance(self, values, causes=()) -> list[list[float]]:
+        """The lattice registry of every scan (and train) at these parameters: the model at
+        registry 0 aligned with the data (training samples only) by the phase of the fundamental."""
+        st = self.state(values, causes)
+        trains = [0] + ([1] if st.theta > 1e-6 else [])
+        out = []
+        for i, s in enumerate(self.data.scans):
+            phis = [0.0, 0.0]
+            for tr in trains:
+                m0 = simulate_scan(self.data, st, s, [0.0, 0.0], train=tr)
+                phis[tr] = self._align(i, st, tr, m0, s.force)
+            # least-squares polish (parabolas through three registries, twice): the phase of the
+            # fundamental is biased by the reversal transients at the level of a few 1e-3 a
+            if len(trains) == 1:
+                mask = self._fit_mask(i)
+                for h in (4e-3 * st.a, 1e-3 * st.a):
+                    sse = []
+                    for dph in (-h, 0.0, h):
+                        ph = [phis[0] + dph, 0.0]
+                        F = st.gain * simulate_scan(self.data, st, s, ph) + st.offset + st.drift * (
+                            s.time - self.t_mid[i]) / self.t_span[i]
+                        sse.append(float(np.sum((s.force - F)[mask] ** 2)))
+                    den = sse[0] - 2 * sse[1] + sse[2]
+                    if den > 0:
+                        phis[0] += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
+            out.append(phis)
+        return out
+
+    def _fit_mask(self, i: int) -> np.ndarray:
+        """Samples of scan i that the fit uses (start transient out; training samples during CV)."""
+        mask = self.use[self.slices[i]].copy()
+        if self.train_mask is not None:
+            full = np.zeros(self.n, bool)
+            full[np.nonzero(self.use)[0][self.train_mask]] = True
+            mask &= full[self.slices[i]]
+        return mask
+
+    def predict(self, values, causes=()) -> np.ndarray:
+        st = self.state(values, causes)
+        out = np.empty(self.n)
+        trains = [0] + ([1] if st.theta > 1e-6 else [])
+        nu = self.fixed_nuisance if self.fixed_nuisance is not None else self.nuisance(values, causes)
+        for i, s in enumerate(self.data.scans):
+            parts = []
+            for tr in trains:
+                parts.append(simulate_scan(self.data, st, s, nu[i], train=tr))
+            w = [math.cos(st.theta), math.sin(st.theta)]
+            F = st.gain * sum(w[tr] * p for tr, p in zip(trains, parts))
+            F = F + st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
+            for tf in st.transforms:
+                F = tf(self, s, F)
+            out[self.slices[i]] = F
+        return out
+
+    def residuals(self, values, causes=()) -> np.ndarray:
+        try:
+            m = self.predict(values, causes)
+        except ProbedynError:
+            return np.full(int(self.use.sum()), 1e6)
+        return ((self.force - m) / self.sigma)[self.use]
+
+    def physical_rms(self, r) -> float:
+        return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
+
+    # -- structure ----------------------------------------------------------------------------
+    def structure(self, r: np.ndarray) -> dict[str, Any]:
+        from scipy.stats import chi2
+
+        out: dict[str, Any] = {"scans": [], "left_out_start_samples": int((~self.use).sum())}
+        fr = []
+        full = np.full(self.n, np.nan)
+        full[self.use] = np.asarray(r)
+        for i, s in enumerate(self.data.scans):
+            rr = full[self.slices[i]]
+            rr = rr[np.isfinite(rr)]
+            rc = rr - rr.mean()
+            den = float(np.sum(rc**2)) or 1.0
+            m = len(rr)
+            ac = [float(np.sum(rc[:-L] * rc[L:]) / den) for L in range(1, 11)]
+            Qlb = m * (m + 2) * sum(c * c / (m - L) for L, c in enumerate(ac, start=1))
+            fwd = s.direction > 0
+            half = 0.5 * (s.force[fwd].mean() - s.force[~fwd].mean()) if fwd.any() and (~fwd).any() else float("nan")
+            fr.append(half)
+            out["scans"].append({"scan": s.id, "speed": s.speed, "load": s.load, "mean_residual_sigma": float(rr.mean()),
+                                 "rms_sigma": float(np.sqrt(np.mean(rr**2))), "lag1_autocorr": ac[0],
+                                 "ljung_box_p": float(chi2.sf(Qlb, 10)), "friction_half_loop_N": float(half)})
+        fr = np.array(fr)
+        for key, xv in (("ln_speed", np.log(self.speeds)), ("load", self.loads)):
+            ok = np.isfinite(fr)
+            if np.ptp(xv[ok]) > 0 and ok.sum() >= 2:
+                A = np.vstack([np.ones(ok.sum()), xv[ok] - xv[ok].mean()]).T
+                out[f"friction_vs_{key}_slope"] = float(np.linalg.lstsq(A, fr[ok], rcond=None)[0][1])
+        return out
+
+    def predict_observables(self, values, causes) -> list[dict[str, Any]]:
+        """Mean friction (half the trace-retrace loop) of hypothetical scans of the fastest scan's
+        path at 10x and 0.1x its speed and at 2x and 0.5x its load."""
+        st = self.state(values, causes)
+        ref = self.data.scans[int(np.argmax(self.speeds))]
+        out = []
+        for label, fs, fl in (("a scan at 10x the highest speed", 10.0, 1.0),
+                              ("a scan at 1/10 of the lowest speed", 0.1 * self.speeds.min() / ref.speed, 1.0),
+                              ("a scan at twice the highest load", 1.0, 2.0 * self.loads.max() / ref.load),
+                              ("a scan at half the lowest load", 1.0, 0.5 * self.loads.min() / ref.load)):
+            sc = replace(ref, speed=ref.speed * fs, load=ref.load * fl, time=ref.time / fs)
+            try:
+                F = st.gain * simulate_scan(self.data, st, sc, [0.0, 0.0]) + st.offset
+            except ProbedynError:
+                continue
+            fwd = sc.direction > 0
+            half = 0.5 * (F[fwd].mean() - F[~fwd].mean()) if fwd.any() and (~fwd).any() else float(np.mean(F))
+            out.append({"measure": f"{label} (mean friction, half the trace-retrace loop)", "value": float(half),
+                        "sigma": self.sigma / math.sqrt(len(F)), "unit": "N"})
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        d = self.data
+        return {"kind": "friction", "scans": len(d.scans), "samples": self.n, "speeds_m_s": sorted(set(self.speeds.tolist())),
+                "loads_N": sorted(set(self.loads.tolist())), "k_x_N_per_m": d.k_x, "sigma_force_N": self.sigma,
+                "noise_stated": d.noise_stated, "sampling": d.sampling, "lattice_estimate_m": self.a_est,
+                "temperature_K": d.temperature, "medium": d.medium_name or "not declared"}
+
+    def model_description(self) -> dict[str, Any]:
+        ffm = _ffm(self.data, 1e-21, self.a_est, 0.0)
+        cp = ffm.cantilever
+        return {"baseline": "FFM line-scan model (schemes/ffm.py, eqs 2.13-2.15) with the registry friction model 'pt', "
+                            "trace and retrace along the measured support path (line_scan_path)",
+                "lever": {"k_x": cp["k_x"], "m_x": cp["m_x"], "c_x": cp["c_x"]},
+                "sampling": self.data.sampling, "registry": "profiled per scan (fundamental alignment, then re-integration)"}
