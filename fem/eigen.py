@@ -30,6 +30,8 @@ SOLVERS = ("auto", "pardiso", "superlu")
 
 
 def have_pardiso() -> bool:
+    # pypardiso is imported where it is used, not at module level: it is the optional fast
+    # backend (SuperLU is the fallback when MKL is missing) and importing it loads MKL (~0.6 s).
     try:
         import pypardiso  # noqa: F401
     except Exception:
@@ -99,10 +101,11 @@ def _pardiso(A: sp.csr_matrix, mtype: int) -> Factorization:
     def solve(b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=float)
         shape = b.shape
-        bb = np.asfortranarray(b.reshape(n, -1))  # PARDISO reads several right-hand sides column-major
+        # PARDISO reads a block of right-hand sides column by column: Fortran order
+        bb = np.asfortranarray(b.reshape(n, -1))
         ps.set_phase(33)  # solve only, with the stored factors (skip pypardiso's re-hash)
         x = ps._call_pardiso(U, bb)
-        return x.reshape(shape)
+        return np.ascontiguousarray(x).reshape(shape)
 
     def release() -> None:
         ps.free_memory(everything=True)

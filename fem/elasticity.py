@@ -34,8 +34,11 @@ from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
+from skfem import Basis, BilinearForm, ElementTetP2, ElementVector, FacetBasis, LinearForm
+from skfem.quadrature import get_quadrature
 
-from probedyn.core.errors import MaterialError
+from probedyn.core.errors import GeometryError, MaterialError
+from probedyn.fem.materials import rotate_voigt
 
 STIFFNESS_INTORDER = 2
 MASS_INTORDER = 4
@@ -54,8 +57,6 @@ def _voigt_strain(grad):
 
 
 def _make_forms():
-    from skfem import BilinearForm
-
     @BilinearForm
     def aniso_elasticity(u, v, w):
         """eps(v) : C : eps(u) with ``w.C`` of shape (6, 6, nel, nq) (global axes)."""
@@ -120,8 +121,6 @@ def stiffness_field(
     ``x_qp``: quadrature point coordinates (3, nel, nq) of the chosen ``elements``;
     ``orientations[i]``: None, a 3x3 rotation or a callable ``R(x) -> (..., 3, 3)``.
     """
-    from probedyn.fem.materials import rotate_voigt
-
     reg = elem_region if elements is None else elem_region[elements]
     nel, nq = x_qp.shape[1], x_qp.shape[2]
     C = np.empty((nel, nq, 6, 6))
@@ -153,8 +152,6 @@ def _check_rotation(R: np.ndarray) -> np.ndarray:
 
 def scalar_basis(mesh, intorder: int):
     """Scalar P2 basis on ``mesh`` (its DOF numbering defines the vector numbering)."""
-    from skfem import Basis, ElementTetP2
-
     return Basis(mesh, ElementTetP2(), intorder=intorder)
 
 
@@ -175,9 +172,6 @@ def assemble_stiffness(
     Per element chunk: scalar P2 gradients ``g`` (nel, nq, 10, 3) -> strain-displacement
     matrices ``B`` (nel, nq, 6, 30) -> ``K_e = sum_q w_q B^T (C_q B)`` -> COO triplets.
     """
-    from skfem import ElementTetP2
-    from skfem.quadrature import get_quadrature
-
     elem = ElementTetP2()
     X, W = get_quadrature(elem.refdom, STIFFNESS_INTORDER)
     nq = W.size
@@ -246,8 +240,6 @@ def assemble_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
 def assemble_stiffness_skfem(mesh, elem_region, materials, orientations) -> sp.csr_matrix:
     """Reference assembly with scikit-fem's :data:`aniso_elasticity` form, permuted to the
     interleaved numbering (for tests; slow)."""
-    from skfem import Basis, ElementTetP2, ElementVector
-
     vb = Basis(mesh, ElementVector(ElementTetP2()), intorder=STIFFNESS_INTORDER)
     x_qp = np.asarray(vb.global_coordinates())
     C = stiffness_field(elem_region, materials, orientations, x_qp)
@@ -283,8 +275,6 @@ def _scalar_probes(basis, x: np.ndarray) -> sp.csr_matrix:
     1e-9 of the mesh extent, e.g. a tip apex that is a mesh vertex) takes that node's value
     exactly (Lagrange property), which avoids the element finder's round-off failures on
     vertices and edges; other points must lie inside the mesh."""
-    from probedyn.core.errors import GeometryError
-
     locs = basis.doflocs
     ext = float(np.ptp(locs, axis=1).max())
     rows, cols, data = [], [], []
@@ -313,8 +303,6 @@ def face_average_operator(mesh, facets: np.ndarray) -> tuple[sp.csr_matrix, floa
     Its transpose applied to a force F gives the consistent nodal loads of the uniform
     traction F / area, so the pair (F, averaged displacement) is work-conjugate.
     """
-    from skfem import ElementTetP2, FacetBasis, LinearForm
-
     fb = FacetBasis(mesh, ElementTetP2(), facets=np.asarray(facets), intorder=2)
 
     @LinearForm

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import meshio
 import numpy as np
 
 from probedyn.core.errors import DataFormatError
+from probedyn.core.io import atomic_path, write_json
 
 # VTK tetra10 edge order as vertex pairs
 _VTK_EDGES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))
@@ -37,10 +39,6 @@ def tetra10_connectivity(mesh, basis) -> np.ndarray:
 
 def write_modes_vtu(result, path: str | Path) -> Path:
     """Write the mesh and every mode's displacement field to ``path`` (.vtu) atomically."""
-    import meshio
-
-    from probedyn.core.io import atomic_path
-
     model = result.model
     if model is None:
         raise DataFormatError("modal result has no model attached; cannot write VTU")
@@ -64,8 +62,6 @@ def write_modes_vtu(result, path: str | Path) -> Path:
 def read_modes_vtu(path: str | Path):
     """Read a VTU written by :func:`write_modes_vtu`: returns (points (n,3), tetra10 (m,10),
     {field name: (n, 3)})."""
-    import meshio
-
     try:
         m = meshio.read(path)
     except Exception as exc:
@@ -79,6 +75,4 @@ def read_modes_vtu(path: str | Path):
 def write_modes_json(result, path: str | Path) -> Path:
     """JSON summary (frequencies, families, effective masses, participation, energy shares,
     DOFs, timings) written atomically."""
-    from probedyn.core.io import write_json
-
     return write_json(path, result.to_dict())

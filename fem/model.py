@@ -27,10 +27,14 @@ from typing import Any, Mapping, Sequence, Union
 import numpy as np
 import scipy.sparse as sp
 
+from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
+from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
+from probedyn.fem.size import check_model
+from probedyn.meshes._gmsh import element_volumes
 
 Where = Union[str, Sequence[float], np.ndarray]
 
@@ -181,10 +185,12 @@ class ElasticModel:
     def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
         if self._K is None:
+            check_model(self.dofs, self.name or "model")  # announce a large model, refuse one too large
             t0 = time.perf_counter()
-            K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations)
-            t1 = time.perf_counter()
-            M = el.assemble_mass(self.mesh, self.elem_density)
+            with progress.stage(f"assembling K and M ({self.dofs} DOFs)"):
+                K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations)
+                t1 = time.perf_counter()
+                M = el.assemble_mass(self.mesh, self.elem_density)
             t2 = time.perf_counter()
             self._Kel, self._Mel = K, M
             for pm in self.point_masses:
@@ -214,8 +220,6 @@ class ElasticModel:
         return float(r @ (M @ r))
 
     def region_masses(self) -> dict[str, float]:
-        from probedyn.meshes._gmsh import element_volumes
-
         vol = element_volumes(self.mesh)
         return {n: float((vol[self.elem_region == i] * self.materials[i].density).sum())
                 for i, n in enumerate(self.region_names)}
@@ -223,8 +227,6 @@ class ElasticModel:
     # ---- solutions ----------------------------------------------------------------------
     def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto") -> ModalResult:
         """The lowest ``n_modes`` modes by shift-invert (see :mod:`probedyn.fem.eigen`)."""
-        from probedyn.fem.eigen import shift_invert_eigsh
-
         if int(n_modes) != n_modes or n_modes < 1:
             raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
         self.check_resolution(int(n_modes))
@@ -234,7 +236,8 @@ class ElasticModel:
         Mf = M[free][:, free].tocsr()
         if sigma is None and self.clamp:
             sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
-        res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
+        with progress.stage(f"solving for {int(n_modes)} modes ({self.dofs} DOFs)"):
+            res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
         t0 = time.perf_counter()
         Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
         Phi[free] = res.vectors
@@ -344,8 +347,6 @@ class ElasticModel:
         """Full displacement vector [m] for static forces [N] at attachments
         (``{"free_end": (0, 0, 1e-6)}``: uniform traction over that face; keys may also be
         named points or coordinate tuples)."""
-        from probedyn.fem.eigen import factorize
-
         if not self.clamp and not self.springs:
             raise SolverError("static solve needs a clamp or a grounded spring (the model floats freely)")
         K, _ = self.assemble()
@@ -353,7 +354,8 @@ class ElasticModel:
         for where, F in force_at.items():
             f += self.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)
         free = self.free_dofs
-        fac = factorize(K[free][:, free], spd=True, solver=solver)
+        with progress.stage(f"factorising K for a static solve ({self.dofs} DOFs)"):
+            fac = factorize(K[free][:, free], spd=True, solver=solver)
         try:
             u = np.zeros(self.ndofs_total)
             u[free] = fac.solve(f[free])

@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from probedyn.fem.io import write_modes_json, write_modes_vtu
+
 FAMILIES = ("flapwise", "lateral", "torsion", "axial", "other")
 DIRS = ("x", "y", "z")
 
@@ -128,13 +130,9 @@ class ModalResult:
         return d
 
     def write_json(self, path: str | Path) -> Path:
-        from probedyn.fem.io import write_modes_json
-
         return write_modes_json(self, path)
 
     def write_vtu(self, path: str | Path) -> Path:
-        from probedyn.fem.io import write_modes_vtu
-
         return write_modes_vtu(self, path)
 
 

@@ -1,1 +1,2 @@
-"""Analytic beam references and automatic reduction of FEM modes to lumped models."""
+"""Analytic beam references, FEM-vs-formula comparison (compare.py) and reductions of FEM modes to
+lumped models (reduce.py, smart.py)."""

@@ -12,8 +12,8 @@ Contents (source equations in brackets):
 * :func:`eb_roots` – roots of ``1 + cos(bL) cosh(bL) = 0`` (2.40), Euler–Bernoulli frequencies
   ``omega = (bL)^2 sqrt(EI / (rho A L^4))`` (2.41 for the first one), mode shape (2.39)/(3.11).
 * :func:`timoshenko_roots` – the full Timoshenko clamped-free frequency equation (shear
-  deformation with Cowper's coefficient and rotary inertia; Huang 1961), plus an independent
-  transfer-matrix evaluation :func:`timoshenko_roots_transfer` used by the tests.
+  deformation with Cowper's coefficient and rotary inertia; Huang 1961); the tests check it
+  against an independent transfer-matrix evaluation (``tests/beam_reference.py``).
 * :func:`torsion_frequencies` – Saint-Venant torsion with the rectangular torsion constant
   (series); **warping is neglected** (free warping everywhere, also at the clamp).
 * :func:`axial_frequencies` – longitudinal rod modes.
@@ -32,7 +32,6 @@ from typing import Callable, Literal, Sequence
 
 import numpy as np
 from scipy.interpolate import make_interp_spline
-from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from probedyn.core.errors import ParameterError, SolverError
@@ -206,16 +205,6 @@ def eb_mode_shape(x: np.ndarray, bL: float, L: float) -> np.ndarray:
     return (np.cos(bx) - sig * np.sin(bx)) - hyp
 
 
-def eb_mode_curvature(x: np.ndarray, bL: float, L: float) -> np.ndarray:
-    """Second derivative of :func:`eb_mode_shape` with respect to x."""
-    x = np.asarray(x, dtype=float)
-    b = bL / L
-    sig = (math.cosh(bL) + math.cos(bL)) / (math.sinh(bL) + math.sin(bL))
-    bx = b * x
-    hyp = 0.5 * ((1.0 - sig) * np.exp(bx) + (1.0 + sig) * np.exp(-bx))
-    return b**2 * (-(np.cos(bx) - sig * np.sin(bx)) - hyp)
-
-
 # --------------------------------------------------------------------------------------------
 # Timoshenko
 # --------------------------------------------------------------------------------------------
@@ -272,40 +261,6 @@ def timoshenko_roots(beam: RectBeam, direction: Direction, n: int) -> np.ndarray
 def timoshenko_frequencies(beam: RectBeam, direction: Direction, n: int) -> np.ndarray:
     """Timoshenko clamped-free bending frequencies [Hz] (Cowper's kappa unless ``beam.kappa`` set)."""
     return timoshenko_roots(beam, direction, n) * beam.omega_scale(direction) / (2 * math.pi)
-
-
-def timoshenko_roots_transfer(beam: RectBeam, direction: Direction, n: int) -> np.ndarray:
-    """Independent evaluation of :func:`timoshenko_roots` from the Timoshenko ODEs themselves.
-
-    State ``y = [w, w', psi, psi']`` with
-    ``kGA (w'' - psi') + rho A omega^2 w = 0`` and ``EI psi'' + kGA (w' - psi) + rho I omega^2 psi = 0``;
-    ``y(L) = expm(A L) y(0)``. Clamped: ``w(0) = psi(0) = 0``; free: moment ``EI psi'(L) = 0`` and
-    shear ``kGA (w'(L) - psi(L)) = 0``. Roots of the 2x2 determinant. Used as a cross-check of
-    the closed-form equation (no shared algebra).
-    """
-    I = beam.I(direction)
-    EI, kGA, rA, rI, L = beam.E * I, beam.k_shear * beam.G * beam.A, beam.rho * beam.A, beam.rho * I, beam.L
-    scale = beam.omega_scale(direction)
-
-    def det(x: float) -> float:
-        om2 = (x * x * scale) ** 2
-        Amat = np.array(
-            [
-                [0.0, 1.0, 0.0, 0.0],  # w' = w'
-                [-rA * om2 / kGA, 0.0, 0.0, 1.0],  # w'' = psi' - rho A omega^2 / kGA w
-                [0.0, 0.0, 0.0, 1.0],  # psi' = psi'
-                [0.0, -kGA / EI, (kGA - rI * om2) / EI, 0.0],  # psi'' = -(kGA/EI)(w' - psi) - rho I omega^2/EI psi
-            ]
-        )
-        T = expm(Amat * L)
-        # unknowns at the clamp: w'(0) (column 1) and psi'(0) (column 3)
-        m = np.array([[T[3, 1], T[3, 3]], [T[1, 1] - T[2, 1], T[1, 3] - T[2, 3]]])
-        m = m / np.abs(m).max(axis=1, keepdims=True)  # row scaling: zeros unchanged
-        return float(np.linalg.det(m))
-
-    r2, s2 = _timo_params(beam, direction)
-    x_max = (1.0 / math.sqrt(r2 * s2)) ** 0.5 * (1 - 1e-9)
-    return _scan_roots(det, 0.3, 0.02, n, x_max) ** 2
 
 
 # --------------------------------------------------------------------------------------------

@@ -46,9 +46,11 @@ import numpy as np
 from scipy.linalg import eigh
 
 from probedyn.core.errors import ParameterError, SolverError
+from probedyn.fem.augmented import LumpedTip
+from probedyn.fem.model import ElasticModel
+from probedyn.lumped.smart_analytic import end_body_first_mode_at, end_body_frequencies, rigid_body_properties
 
 AX = {"x": 0, "y": 1, "z": 2}
-FAMILY_DIR = {"axial": "x", "lateral": "y", "flapwise": "z"}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -58,8 +60,6 @@ FAMILY_DIR = {"axial": "x", "lateral": "y", "flapwise": "z"}
 
 def body_modes(model, n_modes: int = 8):
     """Modes of the FE model **without** its lumped tip (body + holder + point masses)."""
-    from probedyn.fem.model import ElasticModel
-
     return ElasticModel.modes(model, n_modes)
 
 
@@ -68,16 +68,6 @@ def holder_displacements(model, result, attach: str) -> np.ndarray:
     A = model.attachment(attach)
     Phi = np.column_stack([m.shape for m in result.modes])
     return np.asarray((A @ Phi).T)
-
-
-def dominant(vec: np.ndarray, dirs: Sequence[str], share: float = 0.6) -> str | None:
-    """The direction among ``dirs`` carrying more than ``share`` of ``|vec|^2``, else None."""
-    v2 = np.array([vec[AX[d]] ** 2 for d in dirs])
-    tot = float(np.sum(np.asarray(vec) ** 2))
-    if tot <= 0:
-        return None
-    i = int(np.argmax(v2))
-    return dirs[i] if v2[i] / tot >= share else None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -151,8 +141,10 @@ class SmartLumpedModel:
 def reduce_from_fem(model, directions: Sequence[str], attach: str, *, mu: float = 0.0,
                     rho_A: float | None = None, body_regions: Sequence[str] = (), n_body: int = 12,
                     body_result=None, residual: bool = True) -> SmartLumpedModel:
-    """Assemble the lumped model of ``model`` (a :class:`~probedyn.probes._smart.SmartModel`
-    with a lumped tip) from its FEM body modes (module docstring)."""
+    """Assemble the lumped model of ``model`` (a :class:`~probedyn.fem.augmented.AugmentedModel`
+    with a lumped tip) from its FEM body modes (module docstring). The probe passes what the
+    reduction needs: the ``directions`` of the lumped model, the attachment ``attach`` of the
+    tip springs, the drag ``mu`` with the body's ``rho_A`` and ``body_regions``."""
     lt = getattr(model, "lumped_tip", None)
     if lt is None:
         raise ParameterError("the lumped model needs a probe with tip = 'lumped' (mass m on the holder spring)")
@@ -286,8 +278,6 @@ def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence
     ``directions``; the other components keep their value). Per mode: frequency, direction,
     kinetic-energy share of the tip, of holder + tip (holder regions, point masses, tip), of
     the body, and the strain-energy share of the holder spring."""
-    from probedyn.probes._smart import LumpedTip
-
     lt0 = model.lumped_tip
     if lt0 is None:
         raise ParameterError("the holder-stiffness sweep needs tip = 'lumped'")
@@ -318,8 +308,6 @@ def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence
 
 def _holder_body(model, regions: Sequence[str], pm_mass: float = 0.0):
     """(mass, centre x, inertia tensor about the centre) of the meshed holder regions."""
-    from probedyn.lumped.smart_analytic import rigid_body_properties
-
     mesh = model.mesh
     sel = np.concatenate([mesh.subdomains[r] for r in regions if r in (mesh.subdomains or {})])
     if sel.size == 0:
@@ -353,8 +341,6 @@ def duo_bimorph_references(probe, values: dict[str, Any], result) -> list[dict[s
     the corrected (3.10)+(3.18) with the holder as a point mass, the printed (3.10), the
     textbook Rayleigh tip-mass estimate, the end-body model with the holder's real offset and
     rotary inertia ("holder geometry"), and with a lumped tip the analytic 2-DOF (3.4)."""
-    from probedyn.lumped.smart_analytic import end_body_first_mode_at, end_body_frequencies
-
     model = result.model
     b = probe.beam(values)
     lt = getattr(model, "lumped_tip", None)
@@ -395,8 +381,6 @@ def piezotube_references(probe, values: dict[str, Any], result) -> list[dict[str
     with the holder as a point mass (3.10 corrected), the exact annulus with the holder's
     offset and rotary inertia and the Timoshenko shear compliance; axial with
     ``(omega L/a) tan(omega L/a) = rho A L / m_h`` (3.27-3.29)."""
-    from probedyn.lumped.smart_analytic import end_body_frequencies
-
     model = result.model
     t = probe.tube(values)
     lt = getattr(model, "lumped_tip", None)
@@ -423,8 +407,6 @@ def piezotube_references(probe, values: dict[str, Any], result) -> list[dict[str
             t.I(True) / t.s11, t.rho * t.A, t.L, m_h, e, J, cs))
         refs[("x", "(3.27-3.29) rod with holder mass")] = t.axial_frequencies(m_h, 2)
     else:
-        from probedyn.lumped.smart_analytic import end_body_first_mode_at
-
         cs = t.shear_compliance(probe.s66(values), nu=_nu(probe, values))
         x_ref = 2 * e if c is not None else 0.0
         Mb, kb = end_body_first_mode_at(t.I(True) / t.s11, t.rho * t.A, t.L, m_h, e, J, x_ref, cs)
@@ -448,68 +430,8 @@ def _nu(probe, values) -> float:
 
 
 # ---------------------------------------------------------------------------------------------
-# Studies (used by `probedyn smart-*`, `probedyn localisation`, `probedyn eccentricity`, report)
+# Mesh convergence
 # ---------------------------------------------------------------------------------------------
-
-PROBE_SETUP = {
-    "duo-bimorph": {"directions": ["y", "z"], "groups": {"y": ("y",), "z": ("z",)}, "body": ("upper_layer", "lower_layer"),
-                    "sweep_dirs": ("y", "z")},
-    "piezotube": {"directions": ["x", "y", "z"], "groups": {"lateral": ("y", "z"), "axial": ("x",)}, "body": ("tube",),
-                  "sweep_dirs": ("x", "y", "z")},
-}
-
-
-def _probe(name: str, overrides: dict[str, Any] | None):
-    from probedyn.probes import get_probe
-
-    p, file_ov = get_probe(name)
-    if p.name not in PROBE_SETUP:
-        raise ParameterError(f"'{p.name}' is not a smart probe (duo-bimorph or piezotube)")
-    return p, p.resolve({**file_ov, **(overrides or {})})
-
-
-def _body_rho_A(p, v) -> float:
-    if p.name == "duo-bimorph":
-        return v["density"] * v["width"] * v["thickness"]
-    return v["density"] * math.pi * (v["Re"] ** 2 - v["Ri"] ** 2)
-
-
-def study_lumped(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 10) -> dict[str, Any]:
-    """Lumped model from FEM body modes vs FEM of the assembled probe (tip lumped)."""
-    p, v = _probe(name, {**(overrides or {}), "tip": "lumped"})
-    setup = PROBE_SETUP[p.name]
-    model = p.build(v)
-    attach = model.lumped_tip.attach
-    lm = reduce_from_fem(model, setup["directions"], attach, mu=v["mu"], rho_A=_body_rho_A(p, v),
-                         body_regions=setup["body"], n_body=8)
-    res = model.modes(n_modes)
-    rows = compare_lumped_fem(model, lm, res, attach, setup["groups"])
-    return {"probe": p.name, "values": v, "lumped": lm.to_dict(), "rows": rows, "fem": res}
-
-
-def study_localisation(name: str, stiffnesses: Sequence[float], overrides: dict[str, Any] | None = None,
-                       n_modes: int = 4) -> dict[str, Any]:
-    """Section 3.4.1: FEM over holder stiffness (the holder springs in the lateral/vertical
-    directions of the probe are set to k; the tip stays lumped)."""
-    p, v = _probe(name, {**(overrides or {}), "tip": "lumped"})
-    setup = PROBE_SETUP[p.name]
-    model = p.build(v)
-    rows = localisation_sweep(model, stiffnesses, setup["sweep_dirs"], n_modes, setup["body"], setup["groups"])
-    return {"probe": p.name, "values": v, "rows": rows}
-
-
-def study_materials(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 4) -> dict[str, Any]:
-    """First modes with transversely isotropic PZT-5H and with the isotropic E = 1/s11 option."""
-    out = {}
-    for mat in ("pzt-5h", "pzt-5h-iso"):
-        p, v = _probe(name, {**(overrides or {}), "material": mat})
-        res = p.build(v).modes(n_modes)
-        out[mat] = res
-    rows = []
-    for a, b in zip(out["pzt-5h"].modes, out["pzt-5h-iso"].modes):
-        rows.append({"mode": a.index, "family": a.family, "aniso_hz": a.frequency_hz, "iso_hz": b.frequency_hz,
-                     "family_iso": b.family, "rel_diff": (b.frequency_hz - a.frequency_hz) / a.frequency_hz})
-    return {"probe": name, "rows": rows}
 
 
 def observed_order(f: Sequence[float], ratio: float) -> tuple[float, float]:
@@ -521,97 +443,3 @@ def observed_order(f: Sequence[float], ratio: float) -> tuple[float, float]:
         return float("nan"), f3
     p_ = math.log(abs(d1 / d2)) / math.log(ratio)
     return p_, f3 - d2 / (ratio**p_ - 1)
-
-
-def study_convergence(name: str, sizes: Sequence[float], overrides: dict[str, Any] | None = None,
-                      n_modes: int = 4) -> dict[str, Any]:
-    """First ``n_modes`` frequencies on meshes with element sizes ``sizes`` (constant ratio),
-    observed order and extrapolated values per mode."""
-    import time
-
-    levels = []
-    for s in sizes:
-        p, v = _probe(name, {**(overrides or {}), "element_size": s})
-        t0 = time.perf_counter()
-        model = p.build(v)
-        res = model.modes(n_modes)
-        levels.append({"element_size": s, "dofs": res.dofs, "seconds": time.perf_counter() - t0,
-                       "frequencies_hz": [m.frequency_hz for m in res.modes],
-                       "families": [m.family for m in res.modes]})
-    ratio = sizes[0] / sizes[1]
-    modes = []
-    if len(levels) >= 3:
-        for i in range(n_modes):
-            f = [lv["frequencies_hz"][i] for lv in levels]
-            p_, fx = observed_order(f, ratio)
-            modes.append({"mode": i + 1, "family": levels[-1]["families"][i], "f_finest_hz": f[-1],
-                          "f_extrapolated_hz": fx, "observed_order": p_,
-                          "rel_change_last": (f[-1] - f[-2]) / f[-1]})
-    return {"probe": name, "levels": levels, "ratio": ratio, "modes": modes}
-
-
-def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrides: dict[str, Any] | None = None,
-                       probe: str = "piezotube", n_modes: int = 4) -> dict[str, Any]:
-    """Piezotube with its bore offset by ``delta`` along ``angle_deg`` (from +y towards +z; the
-    source's delta_x = delta_y case is 45 degrees, |offset| = sqrt(2) delta there... here
-    ``delta`` is the magnitude of the offset). For each delta: the lateral pair (f_low,
-    f_high), its split, the direction of the lower mode (holder end face motion), the
-    Euler-Bernoulli prediction of both from the exact eccentric section, and the lateral
-    stiffness coupling ``K_yz / sqrt(K_yy K_zz)`` of the 2x2 lumped lateral model in the
-    electrode axes, and the axial-lateral coupling ``|K_x,lat| / sqrt(K_xx K_lat)`` of the 3x3
-    model (lateral pair + axial mode) at the holder end face: the section's centroid moves by
-    ``A_i delta / A`` off the axis, so an axial load on the holder bends the tube (the FEM
-    counterparts of the off-diagonal terms of Gamma, eqs 3.38-3.44)."""
-    from probedyn.lumped.smart_analytic import EccentricSection
-
-    rows = []
-    a = math.radians(angle_deg)
-    for d in deltas:
-        dy, dz = d * math.cos(a), d * math.sin(a)
-        p, v = _probe(probe, {**(overrides or {}), "delta_y": dy, "delta_z": dz, "tip": "none"})
-        if p.name != "piezotube":
-            raise ParameterError("the eccentricity study applies to the piezotube")
-        model = p.build(v)
-        res = model.modes(n_modes)
-        lat = [i for i, m in enumerate(res.modes) if m.family in ("lateral", "flapwise")][:2]
-        ax = [i for i, m in enumerate(res.modes) if m.family == "axial"][:1]
-        if len(lat) < 2:
-            raise SolverError("eccentricity: the lateral pair was not found among the lowest modes")
-        uh_all = holder_displacements(model, res, "holder_end")
-        uh = uh_all[lat][:, 1:]
-        f = np.array([res.modes[i].frequency_hz for i in lat])
-        ang = math.degrees(math.atan2(uh[0, 1], uh[0, 0])) % 180.0
-        Ui = np.linalg.inv(uh.T)  # rows: directions y, z; columns: modes
-        K2 = Ui.T @ np.diag((2 * np.pi * f) ** 2) @ Ui
-        c_xl = float("nan")
-        if ax:  # 3x3 (x, y, z) stiffness at the holder from the pair + the axial mode
-            idx = ax + lat
-            U3 = uh_all[idx].T
-            U3i = np.linalg.inv(U3)
-            K3 = U3i.T @ np.diag([res.modes[i].omega ** 2 for i in idx]) @ U3i
-            c_xl = float(math.hypot(K3[0, 1], K3[0, 2]) / math.sqrt(K3[0, 0] * 0.5 * (K3[1, 1] + K3[2, 2])))
-        sec = EccentricSection(v["Re"], v["Ri"], dy, dz)
-        A_i, A = math.pi * v["Ri"] ** 2, math.pi * (v["Re"] ** 2 - v["Ri"] ** 2)
-        split = f[1] / f[0] - 1
-        rows.append({"delta": d, "delta_y": dy, "delta_z": dz, "f_low_hz": f[0], "f_high_hz": f[1],
-                     "split": split, "split_predicted": sec.frequency_split(),
-                     "angle_low_deg": ang if d > 0 else None, "angle_predicted_deg": sec.lower_mode_angle_deg() if d > 0 else None,
-                     "coupling_yz": float(K2[0, 1] / math.sqrt(K2[0, 0] * K2[1, 1])),
-                     "coupling_axial_lateral": c_xl, "centroid_offset": A_i * d / A,
-                     "families": [m.family for m in res.modes]})
-    return {"angle_deg": angle_deg, "rows": rows}
-
-
-def study_holder_mass(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 4) -> dict[str, Any]:
-    """SOURCE-NOTES item 10: the first modes of body + holder (no tip) with the holder mass of
-    the table (m_h) and with the mass of the holder geometry."""
-    out, masses = {}, {}
-    for src in ("table", "geometry"):
-        p, v = _probe(name, {**(overrides or {}), "holder_mass_source": src, "tip": "none"})
-        out[src] = p.build(v).modes(n_modes)
-        masses[src] = p.holder_mass(v)
-    rows = []
-    for a, b in zip(out["table"].modes, out["geometry"].modes):
-        rows.append({"mode": a.index, "family_table": a.family, "table_hz": a.frequency_hz,
-                     "family_geometry": b.family, "geometry_hz": b.frequency_hz, "ratio": b.frequency_hz / a.frequency_hz})
-    return {"probe": name, "holder_mass": masses, "rows": rows}

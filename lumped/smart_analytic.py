@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from scipy.linalg import eigh
 from scipy.optimize import brentq
 
 from probedyn.core.errors import GeometryError, ParameterError
@@ -137,13 +138,6 @@ class DuoBimorphBeam:
         return rayleigh_end_mass_frequency(self.EI(direction), self.rho * self.A, self.L, m_end)
 
 
-def bimorph_mode_shape(x: np.ndarray, lam: float, L: float) -> np.ndarray:
-    """Mode shape (3.11) (the clamped-free form the source uses for every end mass)."""
-    b = lam
-    s = (math.cos(b * L) + math.cosh(b * L)) / (math.sin(b * L) + math.sinh(b * L))
-    return np.cos(b * x) - np.cosh(b * x) + s * (np.sinh(b * x) - np.sin(b * x))
-
-
 # ---------------------------------------------------------------------------------------------
 # Piezotube (section 3.3.2, eqs 3.21-3.30) and its eccentric section (3.5.1)
 # ---------------------------------------------------------------------------------------------
@@ -196,12 +190,6 @@ class Piezotube:
         ``kappa = 2 (1 + nu) / (4 + 3 nu)``."""
         kappa = 2 * (1 + nu) / (4 + 3 * nu)
         return self.L * s66 / (kappa * self.A)
-
-    def lateral_first_timoshenko(self, m_end: float, s66: float, nu: float = 0.3) -> float:
-        """First lateral frequency [Hz], Rayleigh tip-mass estimate with bending + shear
-        compliance in series (the Euler-Bernoulli gap for L/R ~ 10 is a few per cent)."""
-        return rayleigh_end_mass_frequency(self.I(True) / self.s11, self.rho * self.A, self.L, m_end,
-                                           self.shear_compliance(s66, nu))
 
     @property
     def bar_speed(self) -> float:
@@ -295,8 +283,6 @@ def end_body_frequencies(EI: float, rho_A: float, L: float, m: float, e: float =
     K = np.linalg.inv(F)
     Mb = rho_A * L / 420.0 * np.array([[156.0, -22 * L], [-22 * L, 4 * L**2]])
     Mr = m * np.array([[1.0, e], [e, e * e]]) + np.array([[0.0, 0.0], [0.0, J]])
-    from scipy.linalg import eigh
-
     lam = eigh(K, Mb + Mr, eigvals_only=True)
     return np.sqrt(np.maximum(lam, 0.0)) / (2 * math.pi)
 
@@ -311,8 +297,6 @@ def end_body_first_mode_at(EI: float, rho_A: float, L: float, m: float, e: float
     K = np.linalg.inv(F)
     Mt = rho_A * L / 420.0 * np.array([[156.0, -22 * L], [-22 * L, 4 * L**2]]) \
         + m * np.array([[1.0, e], [e, e * e]]) + np.array([[0.0, 0.0], [0.0, J]])
-    from scipy.linalg import eigh
-
     lam, V = eigh(K, Mt)
     v = V[:, 0]
     u = v[0] + x_ref * v[1]

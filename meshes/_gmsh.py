@@ -27,9 +27,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
+import meshio
 import numpy as np
+from skfem import MeshTet
 
 from probedyn.core.errors import GeometryError
+from probedyn.core.io import atomic_path
 
 _LOCK = threading.RLock()
 
@@ -42,12 +45,17 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
     If gmsh was already initialised by the caller, the session reuses it with a fresh model
     and does not finalise it.
     """
+    # gmsh is imported inside the builders only: it loads system GL libraries (libGLU, Xcursor,
+    # ...) that a machine may lack, and a cached mesh (meshes.cache) is read without it.
     import gmsh
+
+    from probedyn.core.signals import reassert_handlers
 
     with _LOCK:
         owner = not gmsh.isInitialized()
         if owner:
             gmsh.initialize(interruptible=False)
+            reassert_handlers()  # gmsh resets SIGTERM/SIGHUP to the default action
         try:
             gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
             gmsh.option.setNumber("General.Verbosity", 2 if verbose else 0)
@@ -63,6 +71,7 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
                 gmsh.model.remove()
             if owner:
                 gmsh.finalize()
+                reassert_handlers()
 
 
 def set_mesh_size(h_max: float, h_min: float | None = None) -> None:
@@ -102,8 +111,6 @@ class RawMesh:
 
     def to_skfem(self):
         """A :class:`skfem.MeshTet` with ``subdomains`` and ``boundaries`` (facet indices)."""
-        from skfem import MeshTet
-
         p = np.ascontiguousarray(self.points.T, dtype=float)
         t = np.ascontiguousarray(self.tets.T, dtype=np.int64)
         mesh = MeshTet(p, t)
@@ -188,10 +195,6 @@ def extract_tet_mesh() -> RawMesh:
 def export_meshio(mesh, path: str | Path, file_format: str | None = None) -> Path:
     """Write a scikit-fem tet mesh with a ``region`` cell field (index into sorted subdomain
     names) through meshio, in any format meshio knows (by suffix: .vtu, .msh, .xdmf, ...)."""
-    import meshio
-
-    from probedyn.core.io import atomic_path
-
     path = Path(path)
     region = np.full(mesh.t.shape[1], -1, dtype=np.int32)
     for i, name in enumerate(sorted(mesh.subdomains or {})):
@@ -203,8 +206,6 @@ def export_meshio(mesh, path: str | Path, file_format: str | None = None) -> Pat
 
 
 def _meshio_format(path: Path) -> str:
-    import meshio
-
     ext = path.suffix.lower()
     fmts = meshio.extension_to_filetypes.get(ext)
     if not fmts:
@@ -217,3 +218,9 @@ def element_volumes(mesh) -> np.ndarray:
     p = mesh.p[:, mesh.t]  # (3, 4, nel)
     a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
     return np.abs(np.einsum("ie,ie->e", a, np.cross(b, c, axis=0))) / 6.0
+
+
+def region_volumes(mesh, names) -> dict[str, float]:
+    """Volume [m^3] of each named subdomain of a tet mesh (names the mesh lacks are left out)."""
+    vol = element_volumes(mesh)
+    return {n: float(vol[mesh.subdomains[n]].sum()) for n in names if n in (mesh.subdomains or {})}

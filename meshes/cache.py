@@ -9,14 +9,21 @@ meshio (:meth:`MeshBundle.export`).
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from skfem import MeshTet
+
+from probedyn.core.errors import DataFormatError, ParameterError
+from probedyn.core.io import atomic_path, to_jsonable
+from probedyn.meshes._gmsh import element_volumes, export_meshio
 
 #: Bump when the mesh format or a builder's meaning changes (invalidates old cache entries).
 CACHE_VERSION = 2
@@ -37,8 +44,6 @@ class MeshOptions:
     optimize: bool = True
 
     def size_for(self, thinnest: float) -> float:
-        from probedyn.core.errors import ParameterError
-
         if self.elements_through_thickness < 1:
             raise ParameterError("elements_through_thickness must be at least 1")
         h = thinnest / self.elements_through_thickness
@@ -83,20 +88,14 @@ class MeshBundle:
 
     def element_volumes(self) -> np.ndarray:
         """Volumes [m^3] of the tetrahedra."""
-        from probedyn.meshes._gmsh import element_volumes
-
         return element_volumes(self.mesh)
 
     def export(self, path: str | Path) -> Path:
         """Write the mesh (with a ``region`` cell field) through meshio; format by suffix."""
-        from probedyn.meshes._gmsh import export_meshio
-
         return export_meshio(self.mesh, path)
 
     # ---- persistence -------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
-        from probedyn.core.io import atomic_path
-
         path = Path(path)
         arrays: dict[str, np.ndarray] = {"p": self.mesh.p, "t": self.mesh.t}
         for name, idx in (self.mesh.subdomains or {}).items():
@@ -105,20 +104,14 @@ class MeshBundle:
             arrays[f"bnd::{name}"] = np.asarray(idx)
         for name, x in self.points.items():
             arrays[f"pt::{name}"] = np.asarray(x, dtype=float)
-        from probedyn.core.io import to_jsonable
-
         arrays["meta"] = np.array(json.dumps(to_jsonable({"key": self.key, "meta": self.meta, "version": CACHE_VERSION})))
-        with atomic_path(path) as tmp:
+        with atomic_path(path, defer=False) as tmp:  # a cache entry: kept even if the run fails
             with open(tmp, "wb") as fh:
                 np.savez(fh, **arrays)
         return path
 
     @classmethod
     def load(cls, path: str | Path) -> "MeshBundle":
-        from skfem import MeshTet
-
-        from probedyn.core.errors import DataFormatError
-
         path = Path(path)
         try:
             with np.load(path, allow_pickle=False) as z:
@@ -135,18 +128,46 @@ class MeshBundle:
         return cls(mesh, pts, info.get("key", ""), path, info.get("meta", {}))
 
 
-def cache_dir() -> Path:
-    """``$PROBEDYN_CACHE`` or ``~/.cache/probedyn/meshes`` (created on demand)."""
-    env = os.environ.get("PROBEDYN_CACHE")
-    d = Path(env) if env else Path.home() / ".cache" / "probedyn" / "meshes"
+def _usable(d: Path) -> None:
+    """Raise OSError unless ``d`` is (or can be made) a folder this process can write in."""
     d.mkdir(parents=True, exist_ok=True)
+    if not d.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, "not a folder", str(d))
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise PermissionError(errno.EACCES, "not writable", str(d))
+
+
+def cache_dir() -> Path:
+    """``$PROBEDYN_CACHE`` or ``~/.cache/probedyn/meshes`` (created on demand).
+
+    An unusable ``$PROBEDYN_CACHE`` (a file, a read-only or forbidden folder) is a one-line
+    :class:`~probedyn.core.errors.OutputError`: the user asked for it. An unusable default
+    location (a read-only home) falls back to a folder in the system's temporary directory.
+    """
+    from probedyn.core.errors import OutputError
+
+    env = os.environ.get("PROBEDYN_CACHE")
+    if env:
+        d = Path(env)
+        try:
+            _usable(d)
+        except OSError as exc:
+            reason = "it is a file" if isinstance(exc, (FileExistsError, NotADirectoryError)) else (
+                exc.strerror or type(exc).__name__).lower()
+            raise OutputError(f"PROBEDYN_CACHE={env} is not a usable folder ({reason}); point it at a "
+                              "writable folder or unset it") from None
+        return d
+    d = Path.home() / ".cache" / "probedyn" / "meshes"
+    try:
+        _usable(d)
+    except OSError:
+        d = Path(tempfile.gettempdir()) / f"probedyn-cache-{os.getuid()}" / "meshes"
+        _usable(d)
     return d
 
 
 def params_key(builder_name: str, params: dict[str, Any]) -> str:
     """Stable hash of a builder name and its (JSON-able) parameters."""
-    from probedyn.core.io import to_jsonable
-
     blob = json.dumps(
         {"builder": builder_name, "params": to_jsonable(params), "v": CACHE_VERSION},
         sort_keys=True, separators=(",", ":"),
@@ -179,5 +200,10 @@ def cached_mesh(
     bundle.key = key
     bundle.meta = {"builder": builder_name, "params": params, **bundle.meta}
     if use_cache:
-        bundle.path = bundle.save(cache_dir() / f"{builder_name}-{key}.npz")
+        from probedyn.core.errors import OutputError
+
+        try:
+            bundle.path = bundle.save(cache_dir() / f"{builder_name}-{key}.npz")
+        except OutputError:  # a full disk under the cache: the mesh is still good, just not kept
+            bundle.path = None
     return bundle

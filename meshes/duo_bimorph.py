@@ -40,15 +40,19 @@ from typing import Any
 import numpy as np
 
 from probedyn.core.errors import GeometryError
+from probedyn.core.presets import preset
 from probedyn.meshes._gmsh import RawMesh, entities_in_box, extract_tet_mesh, gmsh_session, set_mesh_size
 from probedyn.meshes.cache import MeshBundle, MeshOptions, cached_mesh
 
 UM = 1e6  # build in micrometres (OpenCASCADE tolerance is absolute, 1e-7 model units)
 MAX_SIZE = 0.05  # m: no dimension of a micro-probe reaches 5 cm (micrometres typed as metres)
 
+_T31 = preset("table-3.1")
+
+#: default geometry: Table 3.1 (L, w, h, w0, L_h) and the holder block of docs/smart-probes.md
 DEFAULTS: dict[str, Any] = {
-    "length": 300e-6, "width": 30e-6, "thickness": 10e-6, "electrode_gap": 5e-6,
-    "holder": "meshed", "holder_length": 50e-6, "holder_width": 30e-6,
+    "length": _T31["L"], "width": _T31["w"], "thickness": _T31["h"], "electrode_gap": _T31["w0"],
+    "holder": "meshed", "holder_length": _T31["L_h"], "holder_width": 30e-6,
     "holder_thickness": 8e-6, "piezolayer_thickness": 2e-6,
     "tip": "none", "tip_height": 5e-6, "tip_radius": 2e-6,
 }

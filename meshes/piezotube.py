@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.core.errors import GeometryError
+from probedyn.core.presets import preset
 from probedyn.meshes._gmsh import RawMesh, entities_in_box, extract_tet_mesh, gmsh_session
 from probedyn.meshes.cache import MeshBundle, MeshOptions, cached_mesh
 
@@ -50,8 +51,11 @@ MIN_WALL = 5e-6  # m: thinnest wall that can be built and meshed (also the eccen
 N_SECT = 12
 QUARTERS = {"electrode_yp": (11, 0, 1), "electrode_zp": (2, 3, 4), "electrode_ym": (5, 6, 7), "electrode_zm": (8, 9, 10)}
 
+_T32 = preset("table-3.2")
+
+#: default geometry: Table 3.2 (R_e, R_i as corrected, L) and the holder collar of docs/smart-probes.md
 DEFAULTS: dict[str, Any] = {
-    "Re": 0.5e-3, "Ri": 0.45e-3, "length": 5e-3, "delta_y": 0.0, "delta_z": 0.0,
+    "Re": _T32["R_e"], "Ri": _T32["R_i"], "length": _T32["L"], "delta_y": 0.0, "delta_z": 0.0,
     "holder": "meshed", "holder_length": 0.5e-3, "holder_wall": 0.25e-3, "piezolayer_thickness": 25e-6,
 }
 

@@ -27,63 +27,73 @@ source used MATLAB ode23tb with rtol 1e-2 and atol 1e-15.
 
 Presets: ``mica`` (Table 2.1; F_nu in N s/m, SOURCE-NOTES item 9; scan 10 nm at 2 um/s,
 section 2.1.5.1) and ``vamwcnt`` (Table 2.2; scan range 1 um; the scan speed is not stated
-for this sample, 2 um/s of the mica experiment is assumed).
+for this sample, 2 um/s of the mica experiment is assumed); the values are those of
+:mod:`probedyn.core.presets`.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
 from numba import njit
+from scipy.integrate import solve_ivp
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset as table
+from probedyn.lumped.reduced import ReducedProbe
 from probedyn.schemes.friction import FrictionModel, model_class
-from probedyn.schemes.friction.bristle import bristle2d_eval, bristle_kernel
-from probedyn.schemes.friction.lugre import lugre_kernel
-from probedyn.schemes.friction.prandtl_tomlinson import pt_kernel
+from probedyn.schemes.friction.bristle import bristle2d_eval
+from probedyn.schemes.friction.prandtl_tomlinson import MICA_LATTICE
+from probedyn.schemes.probe_hooks import ffm_cantilever
+from probedyn.schemes.stickslip_analysis import analyze
 
 # ------------------------------------------------------------------------------------------
 # Parameters and presets
 # ------------------------------------------------------------------------------------------
 
+_T21 = table("table-2.1")
+
 CANTILEVER_PARAMS = ParamSet([
-    Param("m_x", 1.98e-18, "kg", "effective mass, x", positive=True, hi=1e-3, source="(2.13); Table 2.1"),
-    Param("c_x", 7e-9, "N s/m", "damping, x", lo=0.0, hi=1.0, source="(2.13); Table 2.1"),
-    Param("k_x", 0.2, "N/m", "lateral stiffness, x", positive=True, hi=1e4, source="(2.13); Table 2.1"),
-    Param("m_y", 1.98e-18, "kg", "effective mass, y", positive=True, hi=1e-3, source="(2.14); Table 2.1"),
-    Param("c_y", 7e-9, "N s/m", "damping, y", lo=0.0, hi=1.0, source="(2.14); Table 2.1"),
-    Param("k_y", 0.1, "N/m", "stiffness, y", positive=True, hi=1e4, source="(2.14); Table 2.1"),
-    Param("V", 2e-6, "m/s", "scan speed of the base", positive=True, hi=1.0, source="(2.15); 2.1.5.1"),
-    Param("length", 10e-9, "m", "scan length (base travel)", positive=True, hi=1e-3, source="2.1.5.1"),
+    Param("m_x", _T21["m_x"], "kg", "effective mass, x", positive=True, hi=1e-3, source="(2.13); Table 2.1"),
+    Param("c_x", _T21["c_x"], "N s/m", "damping, x", lo=0.0, hi=1.0, source="(2.13); Table 2.1"),
+    Param("k_x", _T21["k_x"], "N/m", "lateral stiffness, x", positive=True, hi=1e4, source="(2.13); Table 2.1"),
+    Param("m_y", _T21["m_y"], "kg", "effective mass, y", positive=True, hi=1e-3, source="(2.14); Table 2.1"),
+    Param("c_y", _T21["c_y"], "N s/m", "damping, y", lo=0.0, hi=1.0, source="(2.14); Table 2.1"),
+    Param("k_y", _T21["k_y"], "N/m", "stiffness, y", positive=True, hi=1e4, source="(2.14); Table 2.1"),
+    Param("V", _T21["V"], "m/s", "scan speed of the base", positive=True, hi=1.0, source="(2.15); 2.1.5.1"),
+    Param("length", _T21["scan_length"], "m", "scan length (base travel)", positive=True, hi=1e-3, source="2.1.5.1"),
 ])
 
 #: y-direction friction parameters of the 2D model (2.10)-(2.12)
 Y_FRICTION_PARAMS = ParamSet([
-    Param("sigma0_y", 1e4, "N/m", "bristle stiffness sigma_0y", positive=True, hi=1e9, source="(2.10)"),
-    Param("F_sy", 12.95e-9, "N", "static friction F_sy", positive=True, hi=1e-3, source="(2.12)"),
-    Param("F_cy", 12.45e-9, "N", "kinetic friction F_cy", positive=True, hi=1e-3, source="(2.12), (2.16)"),
-    Param("F_vy", 1e-7, "N s/m", "viscous friction F_vy", lo=0.0, hi=1.0, source="(2.10)"),
+    Param("sigma0_y", _T21["sigma0_y"], "N/m", "bristle stiffness sigma_0y", positive=True, hi=1e9, source="(2.10)"),
+    Param("F_sy", _T21["F_s_y"], "N", "static friction F_sy", positive=True, hi=1e-3, source="(2.12)"),
+    Param("F_cy", _T21["F_c_y"], "N", "kinetic friction F_cy", positive=True, hi=1e-3, source="(2.12), (2.16)"),
+    Param("F_vy", _T21["F_v_y"], "N s/m", "viscous friction F_vy", lo=0.0, hi=1.0, source="(2.10)"),
 ])
 
+
+def _ffm_preset(key: str, source: str) -> dict[str, Any]:
+    """A table of :mod:`probedyn.core.presets` split into cantilever, x-friction and y-friction."""
+    t = table(key)
+    return dict(
+        cantilever=dict(t.pick("m_x", "c_x", "k_x", "m_y", "c_y", "k_y", "V"), length=t["scan_length"]),
+        friction=t.pick("V_s", sigma0="sigma0_x", F_s="F_s_x", F_c="F_c_x", F_v="F_v_x"),
+        friction_y=t.pick(sigma0_y="sigma0_y", F_sy="F_s_y", F_cy="F_c_y", F_vy="F_v_y"),
+        source=source,
+    )
+
+
 PRESETS: dict[str, dict[str, Any]] = {
-    # Table 2.1 (mica). F_nu printed in N; N s/m per SOURCE-NOTES item 9.
-    "mica": dict(
-        cantilever=dict(m_x=1.98e-18, c_x=7e-9, k_x=0.2, m_y=1.98e-18, c_y=7e-9, k_y=0.1, V=2e-6, length=10e-9),
-        friction=dict(sigma0=1e4, F_s=12.95e-9, F_c=12.45e-9, V_s=1e-5, F_v=1e-7),
-        friction_y=dict(sigma0_y=1e4, F_sy=12.95e-9, F_cy=12.45e-9, F_vy=1e-7),
-        source="Table 2.1; scan 10 nm x 10 nm at 2000 nm/s (2.1.5.1)",
-    ),
-    # Table 2.2 (VAMWCNT array). Scan speed not given in 2.1.5.2: 2 um/s assumed.
-    "vamwcnt": dict(
-        cantilever=dict(m_x=2.25e-17, c_x=7e-9, k_x=0.1, m_y=2.25e-17, c_y=7e-9, k_y=0.05, V=2e-6, length=1e-6),
-        friction=dict(sigma0=3e5, F_s=1.5e-7, F_c=0.6e-7, V_s=1e-5, F_v=1e-7),
-        friction_y=dict(sigma0_y=3e5, F_sy=1.5e-7, F_cy=0.6e-7, F_vy=1e-7),
-        source="Table 2.2; scan range 1 um (2.1.5.2); speed 2 um/s assumed (not stated)",
-    ),
+    # F_nu printed in N; N s/m per SOURCE-NOTES item 9.
+    "mica": _ffm_preset("table-2.1", "Table 2.1; scan 10 nm x 10 nm at 2000 nm/s (2.1.5.1)"),
+    # Scan speed not given in 2.1.5.2: 2 um/s assumed.
+    "vamwcnt": _ffm_preset("table-2.2", "Table 2.2; scan range 1 um (2.1.5.2); speed 2 um/s assumed (not stated)"),
 }
 
 
@@ -95,14 +105,19 @@ class FFM:
     friction: FrictionModel
     friction_y: dict[str, float] = field(default_factory=lambda: Y_FRICTION_PARAMS.defaults())
     preset: str | None = None
+    #: the reduced probe the cantilever parameters came from (None: the preset's table values)
+    probe: ReducedProbe | None = None
 
     @classmethod
     def from_preset(cls, preset: str = "mica", model: str = "bristle",
                     overrides: Mapping[str, Any] | None = None, friction_scale: float = 1.0,
-                    normal_load: float | None = None) -> "FFM":
+                    normal_load: float | None = None, probe: ReducedProbe | None = None) -> "FFM":
         """Build from a preset; ``overrides`` may name cantilever, friction-model or y-friction
         parameters. ``friction_scale`` multiplies the friction levels (normal-load input of
-        the adhesion coupling); ``normal_load`` [N] does it with ``L / 141.75 nN``."""
+        the adhesion coupling); ``normal_load`` [N] does it with ``L / 141.75 nN``. ``probe``: a
+        :class:`~probedyn.lumped.reduced.ReducedProbe` whose scan / lateral one-mode models
+        replace the table's ``m, c, k`` (:func:`probedyn.schemes.probe_hooks.ffm_cantilever`);
+        explicit ``overrides`` still win."""
         if preset not in PRESETS:
             raise ParameterError(f"unknown FFM preset {preset!r} (known: {', '.join(PRESETS)})")
         pr = PRESETS[preset]
@@ -115,7 +130,7 @@ class FFM:
         if unknown:
             known = [p.name for p in CANTILEVER_PARAMS] + [p.name for p in cls_m.params] + \
                 [p.name for p in Y_FRICTION_PARAMS]
-            raise ParameterError(f"unknown parameter '{unknown[0]}' for model {cls_m.name!r} "
+            raise ParameterError(f"unknown parameter '{unknown[0]}' for model {cls_m.key!r} "
                                  f"(known: {', '.join(known)})")
         fr.update(over)
         fm = cls_m(**fr)
@@ -123,43 +138,32 @@ class FFM:
             fm = fm.at_load(normal_load)
         if friction_scale != 1.0:
             fm = fm.scaled(friction_scale)
-        cant = CANTILEVER_PARAMS.resolve({**pr["cantilever"], **cant_over})
+        from_probe = ffm_cantilever(probe) if probe is not None else {}
+        cant = CANTILEVER_PARAMS.resolve({**pr["cantilever"], **from_probe, **cant_over})
         fy = Y_FRICTION_PARAMS.resolve({**pr["friction_y"], **y_over})
         if fy["F_cy"] > fy["F_sy"]:
             raise ParameterError(f"F_cy = {fy['F_cy']:g} N > F_sy = {fy['F_sy']:g} N: kinetic friction "
                                  "cannot exceed static friction in the bristle model")
-        return cls(cantilever=cant, friction=fm, friction_y=fy, preset=preset)
+        return cls(cantilever=cant, friction=fm, friction_y=fy, preset=preset, probe=probe)
 
     @property
     def alpha(self) -> float:
-        """alpha = sigma0^2 / k_x (section 2.1.4.2, Fig 2.10) [N/m]."""
-        s0 = self.friction.values.get("sigma0")
+        """alpha = sigma0^2 / k_x (section 2.1.4.2, Fig 2.10) [N/m]; NaN without a bristle stiffness."""
+        s0 = self.friction.presliding_stiffness()
         return math.nan if s0 is None else s0 * s0 / self.cantilever["k_x"]
 
-    def first_slip_estimate(self) -> float:
-        """Base travel to the first slip in the quasi-static limit: F_s / k_x (SOURCE-NOTES 12)."""
-        Fs = self.friction.values.get("F_s")
-        return math.nan if Fs is None else Fs / self.cantilever["k_x"]
-
 
 # ------------------------------------------------------------------------------------------
-# Numba Rosenbrock (ode23s) integrator for the 1D FFM model with a registry kernel
+# Numba Rosenbrock (ode23s) integrator for the 1D FFM model with the model's own kernel
 # ------------------------------------------------------------------------------------------
+# ``kern`` is the friction model's numba kernel, passed as an argument: numba compiles (and
+# caches on disk, see friction.base._stable_identity) one specialisation per model, with the
+# kernel inlined, so a new model runs at the speed of the built-in ones.
 
 @njit(cache=True)
-def _kern(kind, p, x, v, z):
-    if kind == 0:
-        return lugre_kernel(p, x, v, z)
-    elif kind == 1:
-        return bristle_kernel(p, x, v, z)
-    else:
-        return pt_kernel(p, x, v, z)
-
-
-@njit(cache=True)
-def _rhs_jac(kind, p, m, c, k, V, X0, t, y, f, J):
+def _rhs_jac(kern, p, m, c, k, V, X0, t, y, f, J):
     x, v, z = y[0], y[1], y[2]
-    F, zd, dFx, dFv, dFz, dzx, dzv, dzz = _kern(kind, p, x, v, z)
+    F, zd, dFx, dFv, dFz, dzx, dzv, dzz = kern(p, x, v, z)
     f[0] = v
     f[1] = (c * (V - v) + k * (X0 + V * t - x) - F) / m
     f[2] = zd
@@ -176,9 +180,9 @@ def _rhs_jac(kind, p, m, c, k, V, X0, t, y, f, J):
 
 
 @njit(cache=True)
-def _rhs(kind, p, m, c, k, V, X0, t, y, f):
+def _rhs(kern, p, m, c, k, V, X0, t, y, f):
     x, v, z = y[0], y[1], y[2]
-    r = _kern(kind, p, x, v, z)
+    r = kern(p, x, v, z)
     f[0] = v
     f[1] = (c * (V - v) + k * (X0 + V * t - x) - r[0]) / m
     f[2] = r[1]
@@ -219,7 +223,7 @@ def _lu_solve(A, b):
 
 
 @njit(cache=True)
-def _ros23(kind, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
+def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
     d = 1.0 / (2.0 + math.sqrt(2.0))
     e32 = 6.0 + math.sqrt(2.0)
     n = 3
@@ -235,7 +239,7 @@ def _ros23(kind, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
     W = np.empty((n, n))
     Tt = np.zeros(n)
     Tt[1] = k * V / m
-    Fr = _rhs_jac(kind, p, m, c, k, V, X0, t, y, f0, J)
+    Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
     ts[0] = 0.0
     ys[0] = y
     Fs[0] = Fr
@@ -253,10 +257,10 @@ def _ros23(kind, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
             W[a, a] += 1.0
         k1 = _lu_solve(W, f0 + h * d * Tt)
         ym = y + 0.5 * h * k1
-        _rhs(kind, p, m, c, k, V, X0, t + 0.5 * h, ym, f1)
+        _rhs(kern, p, m, c, k, V, X0, t + 0.5 * h, ym, f1)
         k2 = _lu_solve(W, f1 - k1) + k1
         yn = y + h * k2
-        _rhs(kind, p, m, c, k, V, X0, t + h, yn, f2)
+        _rhs(kern, p, m, c, k, V, X0, t + h, yn, f2)
         k3 = _lu_solve(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
         err = 0.0
         for a in range(n):
@@ -266,7 +270,7 @@ def _ros23(kind, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
         if err <= 1.0 or h < 1e-22:
             t = t + h
             y = yn
-            Fr = _rhs_jac(kind, p, m, c, k, V, X0, t, y, f0, J)
+            Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
             i += 1
             ts[i] = t
             ys[i] = y
@@ -302,15 +306,11 @@ class ScanResult:
 
 
 def _atol(ffm: FFM, atol_rel: float) -> np.ndarray:
-    fm = ffm.friction
+    """Absolute tolerances: ``atol_rel`` of the model's force scale / k_x (x), of V (x') and of
+    the model's state scale (z), :meth:`FrictionModel.scales`."""
+    Fscale, zscale = ffm.friction.scales()
     k = ffm.cantilever["k_x"]
     V = ffm.cantilever["V"]
-    if "F_s" in fm.values:
-        Fscale = fm.values["F_s"]
-        zscale = Fscale / fm.values["sigma0"]
-    else:  # PT
-        Fscale = 2 * math.pi * fm.values["U0"] / fm.values["a"]
-        zscale = 1.0
     return np.array([atol_rel * Fscale / k, atol_rel * V, atol_rel * zscale])
 
 
@@ -334,14 +334,14 @@ def line_scan(ffm: FFM, length: float | None = None, rtol: float = 1e-5, atol_re
     p = fm.pack()
     y0 = np.zeros(3)
     h0 = 1e-3 * math.sqrt(m / k)
-    ts, ys, Fr, nst, nrej = _ros23(fm.kind, p, m, c, k, V, T, y0, rtol, _atol(ffm, atol_rel), h0, T / 50.0,
+    ts, ys, Fr, nst, nrej = _ros23(fm.kernel, p, m, c, k, V, T, y0, rtol, _atol(ffm, atol_rel), h0, T / 50.0,
                                    max_steps)
     if nst < 0:
         raise SolverError(f"FFM line scan: more than {max_steps} steps (shorten the scan or loosen rtol)")
     x = ys[:, 0]
     return ScanResult(t=ts, base=V * ts, x=x, v=ys[:, 1], z=ys[:, 2], lateral_force=k * (V * ts - x),
                       friction=Fr, n_steps=int(nst), n_rejected=int(nrej),
-                      setup=dict(preset=ffm.preset, model=fm.name, cantilever=dict(cp),
+                      setup=dict(preset=ffm.preset, model=fm.key, cantilever=dict(cp),
                                  friction=dict(fm.values), length=L, rtol=rtol, atol_rel=atol_rel))
 
 
@@ -380,7 +380,7 @@ def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: f
         T = abs(Xb - Xa) / V0
         h0 = 1e-3 * math.sqrt(m / k)
         hm = T / 50.0 if hmax is None else min(hmax, T / 50.0)
-        ts, ys, Fr, nst, nrej = _ros23(fm.kind, p, m, c, k, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
+        ts, ys, Fr, nst, nrej = _ros23(fm.kernel, p, m, c, k, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
         if nst < 0:
             raise SolverError(f"FFM scan path: more than {max_steps} steps in one segment")
         first = 0 if not parts_t else 1
@@ -401,9 +401,9 @@ def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: f
                                  turns=turns, speed=V0, rtol=rtol, atol_rel=atol_rel))
 
 
-def warm_up() -> None:
-    """Compile the numba kernels (cached on disk after the first run)."""
-    ffm = FFM.from_preset("mica")
+def warm_up(model: str = "bristle") -> None:
+    """Compile the integrator for ``model``'s kernel (cached on disk after the first run)."""
+    ffm = FFM.from_preset("mica", model)
     line_scan(ffm, length=1e-10)
 
 
@@ -416,10 +416,8 @@ def line_scan_2d(ffm: FFM, length: float | None = None, rtol: float = 1e-6, n_ou
     """The full model: states (x, x', z_x, y, y', z_y); friction (2.7)–(2.12); drives (2.15),
     (2.16) with ``I = 0``. Requires the ``bristle`` model. Returns the x lateral force
     ``k_x (V t - x)``, ``y``, the friction components and the solver statistics."""
-    from scipy.integrate import solve_ivp
-
     fm = ffm.friction
-    if fm.name != "bristle":
+    if fm.key != "bristle":
         raise ParameterError("line_scan_2d implements (2.7)-(2.12): use the 'bristle' model")
     cp, fy = ffm.cantilever, ffm.friction_y
     L = cp["length"] if length is None else float(length)
@@ -479,10 +477,10 @@ def presliding_force(ffm: FFM, base: np.ndarray) -> np.ndarray:
         x = g0 ln(1 / (1 - z/g0)),  X = x + sigma0 z / k,   lateral force = sigma0 z.
 
     Returns the lateral force at the base positions ``base`` (NaN beyond the first slip)."""
-    fv = ffm.friction.values
-    if "sigma0" not in fv:
+    s0, lv = ffm.friction.presliding_stiffness(), ffm.friction.levels()
+    if s0 is None or lv is None:
         raise ParameterError("presliding_force needs a bristle-type model (sigma0, F_s)")
-    s0, Fs, k = fv["sigma0"], fv["F_s"], ffm.cantilever["k_x"]
+    Fs, k = lv[0], ffm.cantilever["k_x"]
     g0 = Fs / s0
     zeta = np.linspace(0.0, 1.0 - 1e-12, 20001)
     xx = -g0 * np.log1p(-zeta)
@@ -496,16 +494,14 @@ def presliding_force(ffm: FFM, base: np.ndarray) -> np.ndarray:
 
 def run_ffm(preset: str = "mica", model: str = "bristle", overrides: Mapping[str, Any] | None = None,
             length: float | None = None, friction_scale: float = 1.0, normal_load: float | None = None,
-            rtol: float = 1e-5) -> tuple[ScanResult, dict[str, Any]]:
+            rtol: float = 1e-5, probe: ReducedProbe | None = None) -> tuple[ScanResult, dict[str, Any]]:
     """Line scan of ``preset`` with friction model ``model``; returns the scan and a summary:
     static / kinetic friction, period, regime (:func:`probedyn.schemes.stickslip_analysis.analyze`),
     the quasi-static estimates ``F_s / k_x`` (first slip) and ``(F_s - F_c) / k_x`` (period),
-    alpha, wall time and solver statistics."""
-    import time
-
-    from probedyn.schemes.stickslip_analysis import analyze
-
-    ffm = FFM.from_preset(preset, model, overrides, friction_scale=friction_scale, normal_load=normal_load)
+    alpha, wall time and solver statistics; with a ``probe`` (a reduced probe: its scan/lateral
+    one-mode models drive the cantilever) the summary carries the probe's provenance."""
+    ffm = FFM.from_preset(preset, model, overrides, friction_scale=friction_scale, normal_load=normal_load,
+                          probe=probe)
     line_scan(ffm, 1e-3 * ffm.cantilever["V"] * math.sqrt(ffm.cantilever["m_x"] / ffm.cantilever["k_x"]))
     # ^ loads / compiles the numba kernels so that wall_time_s measures the integration only
     t0 = time.perf_counter()
@@ -513,19 +509,22 @@ def run_ffm(preset: str = "mica", model: str = "bristle", overrides: Mapping[str
     wall = time.perf_counter() - t0
     an = analyze(res.base, res.lateral_force)
     fv = ffm.friction.values
+    lv = ffm.friction.levels()
     k = ffm.cantilever["k_x"]
     summary = dict(
-        preset=preset, model=ffm.friction.name, scan_length_m=res.setup["length"],
+        preset=preset, model=ffm.friction.key, scan_length_m=res.setup["length"],
         scan_speed_m_s=ffm.cantilever["V"], k_x=k, alpha=ffm.alpha,
         static_friction_n=an["static_friction_n"], kinetic_friction_n=an["kinetic_friction_n"],
         period_m=an["period_m"], regime=an["regime"], first_slip_m=an["first_slip_m"],
         n_slips=an["n_slips"], slip_fraction=an["slip_fraction"], abruptness=an.get("abruptness"),
         max_force_n=an["max_force_n"],
-        first_slip_estimate_m=(fv["F_s"] / k) if "F_s" in fv else None,
-        period_estimate_m=((fv["F_s"] - fv["F_c"]) / k) if "F_s" in fv else None,
-        F_s=fv.get("F_s"), F_c=fv.get("F_c"),
+        first_slip_estimate_m=(lv[0] / k) if lv else None,
+        period_estimate_m=((lv[0] - lv[1]) / k) if lv else None,
+        F_s=lv[0] if lv else None, F_c=lv[1] if lv else None,
         wall_time_s=wall, n_steps=res.n_steps, n_rejected=res.n_rejected,
         parameters=dict(cantilever=dict(ffm.cantilever), friction=dict(fv)),
+        probe=probe.summary() if probe is not None else None,
+        probe_source=probe.source if probe is not None else PRESETS[preset]["source"],
     )
     return res, summary
 
@@ -556,10 +555,6 @@ def pt_eta_sweep(etas=(0.3, 0.6, 0.9, 1.2, 2.0, 4.0), n_lattice: int = 12, prese
     the cantilever of ``preset``, the mica lattice, ``U0 = eta k_x a^2 / (4 pi^2)``. Each row:
     eta, period / a, regime, abruptness and the quasi-static abruptness of smooth sliding
     ``(1 + eta) / (1 - eta)`` (eta < 1)."""
-    from probedyn.schemes.friction.prandtl_tomlinson import MICA_LATTICE
-
-    from probedyn.schemes.stickslip_analysis import analyze
-
     a = MICA_LATTICE
     k = PRESETS[preset]["cantilever"]["k_x"]
     rows = []

@@ -10,9 +10,10 @@ tip and sample centres sit at the same height (the tip pushes at the sample's eq
 contact force lies in the plane and does not change the normal load on the substrate (the
 friction levels of Table 4.2 are taken at a fixed load, as in the source).
 
-* **Tip–sample contact** (section 2.2, eq 2.20): the DMT force along the push axis as a function of
-  the gap ``s = x_s - x_t`` (van der Waals tail ``-HR/6s^2`` for ``s >= zeta0``, DMT = Hertz +
-  constant adhesion for ``s < zeta0``). The contact normal is kept along x: the lateral offsets are
+* **Tip–sample contact** (section 2.2, eq 2.20): the DMT model of the contact registry
+  (:class:`probedyn.schemes.contact.dmt.DMT`, its closed form :meth:`~.DMT.point`) along the
+  push axis, at the penetration ``delta = zeta0 - s`` of the gap ``s = x_s - x_t`` (van der Waals
+  tail ``-HR/6s^2`` for ``s >= zeta0``, DMT = Hertz + constant adhesion for ``s < zeta0``). The contact normal is kept along x: the lateral offsets are
   below a nanometre while the centre distance is ``R_s + R_t = 210 nm``, so the rotation of the
   normal changes the forces by less than ``(1 nm / 210 nm) = 0.5 %``. Transverse (y) coupling is a
   stuck (no-slip) Mindlin tangential spring ``k_t = (4 G*/E*) k_n(s)`` (Hertz ``k_n = 2E* a_c``,
@@ -63,8 +64,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from scipy.integrate import solve_ivp
+
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset
+from probedyn.lumped.reduced import ReducedProbe
+from probedyn.schemes.contact import ContactModel, get_contact_model
+from probedyn.schemes.probe_hooks import pushing_tip
 
 # --------------------------------------------------------------------------------------------
 # Substrates (Table 4.2)
@@ -72,8 +79,8 @@ from probedyn.core.params import Param, ParamSet
 
 SUBSTRATES: dict[str, dict[str, float]] = {
     # lattice parameter a [m], static F_s and kinetic F_c friction [N] (Table 4.2)
-    "mica": {"a": 5.19e-10, "F_s": 2.2e-9, "F_c": 6e-10},
-    "hopg": {"a": 2.55e-10, "F_s": 1.2e-9, "F_c": 5e-10},
+    "mica": dict(preset("table-4.2-mica")),
+    "hopg": dict(preset("table-4.2-hopg")),
 }
 
 
@@ -89,36 +96,42 @@ def substrate(name: str) -> dict[str, float]:
 # Parameters
 # --------------------------------------------------------------------------------------------
 
+_T41 = preset("table-4.1")
+
 PARAMS = ParamSet([
     # probe (Table 4.1)
-    Param("k_tx", 30.0, "N/m", "tip stiffness along the push axis", lo=1e-3, hi=1e4, positive=True, source="Table 4.1"),
-    Param("k_ty", 10.0, "N/m", "tip stiffness across the push axis", lo=1e-3, hi=1e4, positive=True, source="Table 4.1"),
-    Param("m_tx", 1.98e-18, "kg", "tip effective mass (x)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
-    Param("m_ty", 1.98e-18, "kg", "tip effective mass (y)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
-    Param("c_t", 7e-9, "N s/m", "tip damping", lo=0.0, hi=1e-2, source="Table 4.1"),
+    Param("k_tx", _T41["k_tx"], "N/m", "tip stiffness along the push axis", lo=1e-3, hi=1e4, positive=True,
+          source="Table 4.1"),
+    Param("k_ty", _T41["k_ty"], "N/m", "tip stiffness across the push axis", lo=1e-3, hi=1e4, positive=True,
+          source="Table 4.1"),
+    Param("m_tx", _T41["m_tx"], "kg", "tip effective mass (x)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
+    Param("m_ty", _T41["m_ty"], "kg", "tip effective mass (y)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
+    Param("c_t", _T41["c_t"], "N s/m", "tip damping", lo=0.0, hi=1e-2, source="Table 4.1"),
     # sample and tip material (Table 4.1)
-    Param("m_s", 4e-17, "kg", "sample mass", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
-    Param("R_s", 160e-9, "m", "sample radius", lo=1e-10, hi=1e-4, positive=True, source="Table 4.1"),
-    Param("R_t", 50e-9, "m", "tip radius", lo=1e-10, hi=1e-4, positive=True, source="Table 4.1"),
-    Param("E_s", 0.27e9, "Pa", "sample Young modulus", lo=1e5, hi=2e12, positive=True, source="Table 4.1"),
-    Param("E_t", 200e9, "Pa", "tip Young modulus", lo=1e5, hi=2e12, positive=True, source="Table 4.1"),
-    Param("nu_s", 0.33, "", "sample Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
-    Param("nu_t", 0.33, "", "tip Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
-    Param("H", 1.452e-20, "J", "tip-sample Hamaker constant", lo=0.0, hi=1e-17, source="Table 4.1"),
-    Param("zeta0", 3.75e-10, "m", "inter-atomic distance of the DMT law, eq 2.20 (Table 4.4, as schemes.contact)",
+    Param("m_s", _T41["m_s"], "kg", "sample mass", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
+    Param("R_s", _T41["R_s"], "m", "sample radius", lo=1e-10, hi=1e-4, positive=True, source="Table 4.1"),
+    Param("R_t", _T41["R_t"], "m", "tip radius", lo=1e-10, hi=1e-4, positive=True, source="Table 4.1"),
+    Param("E_s", _T41["E_s"], "Pa", "sample Young modulus", lo=1e5, hi=2e12, positive=True, source="Table 4.1"),
+    Param("E_t", _T41["E_t"], "Pa", "tip Young modulus", lo=1e5, hi=2e12, positive=True, source="Table 4.1"),
+    Param("nu_s", _T41["nu_s"], "", "sample Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
+    Param("nu_t", _T41["nu_t"], "", "tip Poisson ratio", lo=-0.99, hi=0.5, source="Table 4.1"),
+    Param("H", _T41["H"], "J", "tip-sample Hamaker constant", lo=0.0, hi=1e-17, source="Table 4.1"),
+    Param("zeta0", preset("table-4.4")["zeta0"], "m",
+          "inter-atomic distance of the DMT law, eq 2.20 (Table 4.4, as schemes.contact)",
           lo=5e-11, hi=2e-9, positive=True, source="eq 2.20, Table 4.4"),
     # sample-substrate friction
-    Param("sigma0", 1e4, "N/m", "bristle stiffness", lo=1e-2, hi=1e9, positive=True, source="Table 4.1"),
+    Param("sigma0", _T41["sigma0"], "N/m", "bristle stiffness", lo=1e-2, hi=1e9, positive=True, source="Table 4.1"),
     Param("sigma1", -1.0, "N s/m", "bristle damping; negative = critical 2 sqrt(sigma0 m_s)", lo=-1.0, hi=1.0,
           source="eq 2.5"),
-    Param("V_s", 1e-5, "m/s", "Stribeck velocity", lo=1e-9, hi=1.0, positive=True, source="Table 4.1"),
-    Param("F_v", 1e-7, "N s/m", "viscous friction coefficient (Table 2.1 value; units per SOURCE-NOTES 9)",
+    Param("V_s", _T41["V_s"], "m/s", "Stribeck velocity", lo=1e-9, hi=1.0, positive=True, source="Table 4.1"),
+    Param("F_v", preset("table-2.1")["F_v_x"], "N s/m",
+          "viscous friction coefficient (Table 2.1 value; units per SOURCE-NOTES 9)",
           lo=0.0, hi=1e-2, source="eq 2.7, Table 2.1"),
     Param("a", 0.0, "m", "lattice parameter; 0 = from the substrate (Table 4.2)", lo=0.0, hi=1e-8, source="Table 4.2"),
     Param("F_s", 0.0, "N", "static friction; 0 = from the substrate", lo=0.0, hi=1e-5, source="Table 4.2"),
     Param("F_c", 0.0, "N", "kinetic friction; 0 = from the substrate", lo=0.0, hi=1e-5, source="Table 4.2"),
     # scenario (section 4.1.1)
-    Param("V", 3e-6, "m/s", "base pushing speed", lo=1e-9, hi=1.0, positive=True, source="4.1.1"),
+    Param("V", _T41["V"], "m/s", "base pushing speed", lo=1e-9, hi=1.0, positive=True, source="4.1.1"),
     Param("angle", 0.0, "deg", "angle between push direction and main lattice axis", lo=-180.0, hi=180.0,
           source="Fig 2.7"),
     Param("gap0", 4e-10, "m", "initial tip-sample gap", lo=0.0, hi=1e-7, source="4.1.1"),
@@ -132,9 +145,13 @@ PARAMS = ParamSet([
 
 
 def _probe_fields(probe: Any) -> dict[str, float]:
-    """k and m (and optional damping) of a LumpedModel-like object, a mapping or a number pair."""
+    """k and m (and optional damping) of a LumpedModel-like object, a mapping or a number pair;
+    a :class:`~probedyn.lumped.reduced.ReducedProbe` gives its scan / lateral one-mode models
+    (:func:`probedyn.schemes.probe_hooks.pushing_tip`)."""
     if probe is None:
         return {}
+    if isinstance(probe, ReducedProbe):
+        return pushing_tip(probe)
     if isinstance(probe, Mapping):
         get = probe.get
     else:
@@ -173,51 +190,6 @@ def _probe_fields(probe: Any) -> dict[str, float]:
 
 
 # --------------------------------------------------------------------------------------------
-# Contact (local interface: force(s), stiffness(s), dstiffness(s) of the gap s)
-# --------------------------------------------------------------------------------------------
-
-@dataclass
-class DMTContact:
-    """DMT tip–sample force of eq 2.20 as a function of the gap ``s`` (positive = repulsive).
-
-    ``F(s) = -H R / (6 s^2)`` for ``s >= zeta0`` and ``-H R / (6 zeta0^2) + (4/3) E* sqrt(R)
-    (zeta0 - s)^{3/2}`` below (penetration ``delta = zeta0 - s``), with ``E*`` and ``R`` of eq 2.21.
-    ``stiffness(s) = -dF/ds`` (Hertz ``2 E* sqrt(R delta)`` in contact, negative in the tail).
-    """
-
-    H: float
-    R: float
-    E_star: float
-    zeta0: float
-
-    def force(self, s: float) -> float:
-        if s >= self.zeta0:
-            return -self.H * self.R / (6.0 * s * s)
-        d = self.zeta0 - s
-        return -self.H * self.R / (6.0 * self.zeta0 ** 2) + 4.0 / 3.0 * self.E_star * math.sqrt(self.R) * d * math.sqrt(d)
-
-    def stiffness(self, s: float) -> float:
-        if s >= self.zeta0:
-            return -self.H * self.R / (3.0 * s ** 3)
-        return 2.0 * self.E_star * math.sqrt(self.R * (self.zeta0 - s))
-
-    def contact_stiffness(self, s: float) -> float:
-        """Hertz part only (zero out of contact): the normal stiffness of the contact patch."""
-        return 2.0 * self.E_star * math.sqrt(self.R * (self.zeta0 - s)) if s < self.zeta0 else 0.0
-
-    def dcontact_stiffness(self, s: float) -> float:
-        """d(contact_stiffness)/ds, with the penetration floored at 1e-3 zeta0 (Jacobian only)."""
-        if s >= self.zeta0:
-            return 0.0
-        d = max(self.zeta0 - s, 1e-3 * self.zeta0)
-        return -self.E_star * math.sqrt(self.R / d)
-
-    @property
-    def pull_off(self) -> float:
-        return self.H * self.R / (6.0 * self.zeta0 ** 2)
-
-
-# --------------------------------------------------------------------------------------------
 # The model
 # --------------------------------------------------------------------------------------------
 
@@ -232,7 +204,7 @@ class PushModel:
 
     p: dict[str, float]
     dim: int = 1
-    contact: DMTContact = field(init=False)
+    contact: ContactModel = field(init=False)
 
     def __post_init__(self) -> None:
         p = self.p
@@ -243,14 +215,15 @@ class PushModel:
                 f"friction levels must satisfy F_s > F_c > 0, got F_s = {p['F_s']:g} N, F_c = {p['F_c']:g} N")
         if not p["a"] > 0:
             raise ParameterError(f"lattice parameter must be positive, got {p['a']:g} m")
-        Es = (1 - p["nu_s"] ** 2) / p["E_s"] + (1 - p["nu_t"] ** 2) / p["E_t"]
-        self.E_star = 1.0 / Es
-        self.R = 1.0 / (1.0 / p["R_t"] + 1.0 / p["R_s"])
+        self.contact = get_contact_model("dmt", **{k: p[k] for k in ("E_t", "nu_t", "E_s", "nu_s", "R_t", "R_s", "H")},
+                                         z0=p["zeta0"])
+        self.E_star = self.contact.scales.E_star  # eq 2.21
+        self.R = self.contact.scales.R
         G_s = p["E_s"] / (2 * (1 + p["nu_s"]))
         G_t = p["E_t"] / (2 * (1 + p["nu_t"]))
         self.G_star = 1.0 / ((2 - p["nu_s"]) / G_s + (2 - p["nu_t"]) / G_t)
         self.kappa = 4.0 * self.G_star / self.E_star  # Mindlin k_t / Hertz k_n
-        self.contact = DMTContact(p["H"], self.R, self.E_star, p["zeta0"])
+        self.zeta0 = p["zeta0"]
         self.sigma1 = p["sigma1"] if p["sigma1"] >= 0 else 2.0 * math.sqrt(p["sigma0"] * p["m_s"])
         self.tau_p = p["tau_p"] if p["tau_p"] > 0 else p["a"] / p["V_s"]
         a = p["a"]
@@ -276,13 +249,30 @@ class PushModel:
         ph = self.G[:, 0, None] * (np.asarray(rx) - self.x0) + self.G[:, 1, None] * np.asarray(ry)
         return -self.U0 * np.cos(ph).sum(axis=0)
 
+    # -- tip-sample contact ---------------------------------------------------------------------
+    def normal_contact(self, s: float, jacobian: bool = False) -> tuple[float, float, float, float]:
+        """DMT contact at the gap ``s`` (penetration ``zeta0 - s``): normal force ``Fn`` [N]
+        (positive = repulsive), ``kn = -dFn/ds``, the Hertz stiffness of the contact patch
+        ``kc = 2 E* a`` (0 out of contact; Mindlin's tangential spring is ``kappa kc``) and, with
+        ``jacobian``, ``dkc/ds`` with the penetration floored at 1e-3 zeta0 (it is infinite at
+        first touch; the floor only softens the Jacobian, not the right-hand side)."""
+        delta = self.zeta0 - s
+        Fn, kn, a, da = self.contact.point(delta)
+        kc = 2.0 * self.E_star * a
+        dkc = 0.0
+        if jacobian and delta > 0.0:
+            floor = 1e-3 * self.zeta0
+            if delta < floor:
+                da = self.contact.point(floor)[3]
+            dkc = -2.0 * self.E_star * da
+        return Fn, kn, kc, dkc
+
     # -- dynamics (2D state) --------------------------------------------------------------------
     def forces(self, t: float, y: np.ndarray) -> dict[str, Any]:
         p = self.p
         xt, yt, ut, wt, xs, ys, us, ws, zx, zy, wm = y
         s = xs - xt
-        Fn = self.contact.force(s)
-        kc = self.contact.contact_stiffness(s)
+        Fn, _, kc, _ = self.normal_contact(s)
         Ft = -self.kappa * kc * (ys - yt)
         sp2 = us * us + ws * ws
         vabs = math.sqrt(sp2 + p["v_eps"] ** 2)
@@ -316,9 +306,7 @@ class PushModel:
         J = np.zeros((NS, NS))
         J[0, 2] = J[1, 3] = J[4, 6] = J[5, 7] = 1.0
         s = xs - xt
-        kn = self.contact.stiffness(s)  # -dFn/ds
-        kc = self.contact.contact_stiffness(s)
-        dkc = self.contact.dcontact_stiffness(s)
+        _, kn, kc, dkc = self.normal_contact(s, jacobian=True)  # kn = -dFn/ds
         dy = ys - yt
         # Fn(s): dFn/dxs = -kn, dFn/dxt = +kn ; Ft = -kappa kc(s) dy
         dFn = np.zeros(NS)
@@ -375,7 +363,7 @@ class PushModel:
     # -- characteristic scales -----------------------------------------------------------------
     def k_series(self, load: float) -> float:
         """Stiffness from base to sample (tip spring in series with the DMT contact) at ``load``."""
-        tot = load + self.contact.pull_off
+        tot = load - self.contact.pull_off_force()
         # Hertz: tot = (4/3) E* sqrt(R) d^1.5
         d = (3 * tot / (4 * self.E_star * math.sqrt(self.R))) ** (2.0 / 3.0)
         kc = 2 * self.E_star * math.sqrt(self.R * d)
@@ -386,9 +374,10 @@ def make_model(substrate_name: str = "mica", overrides: Mapping[str, Any] | None
                dim: int = 1, probe: Any = None) -> PushModel:
     """Resolve parameters (Table 4.1 defaults, Table 4.2 substrate, user overrides) into a model.
 
-    ``probe`` may be a LumpedModel-like object (``stiffness``/``mass`` or ``k``/``m``) or a mapping;
-    it replaces the Table 4.1 tip values ``k_tx``, ``m_tx`` (and ``k_ty`` = k/3, ``m_ty`` = m unless
-    given).
+    ``probe`` may be a :class:`~probedyn.lumped.reduced.ReducedProbe` (scan -> ``k_tx, m_tx, c_t``,
+    lateral -> ``k_ty, m_ty``), a LumpedModel-like object (``stiffness``/``mass`` or ``k``/``m``) or
+    a mapping; it replaces the Table 4.1 tip values ``k_tx``, ``m_tx`` (and ``k_ty`` = k/3,
+    ``m_ty`` = m unless given).
     """
     sub = substrate(substrate_name)
     ov = dict(overrides or {})
@@ -449,8 +438,6 @@ def simulate(model: PushModel, travel: float | None = None, *, n_out: int = 4000
     to cross one lattice constant, so no slip can be stepped over. Output is the solver's own steps
     (dense near slips) thinned to at most ``n_out`` points plus all slip points.
     """
-    from scipy.integrate import solve_ivp
-
     p = model.p
     if travel is None:
         travel = p["travel"] or (p["F_s"] / model.k_series(p["F_s"]) + p["a"] / 4 + p["gap0"] + 14 * p["a"])
@@ -640,10 +627,11 @@ def push(substrate_name: str = "mica", overrides: Mapping[str, Any] | None = Non
 
 
 def transition_speed(substrate_name: str = "mica", overrides: Mapping[str, Any] | None = None, *,
-                     lo: float = 3e-6, hi: float = 150e-6, rel_tol: float = 0.02,
+                     lo: float = _T41["V"], hi: float = 150e-6, rel_tol: float = 0.02,
                      n_lattice: float = 10.0) -> dict[str, Any]:
     """Speed at which stick-slip gives way to sliding, by bisection on the regime of pushes
-    started from rest (``lo`` must be stick-slip, ``hi`` sliding). Bisection in log-speed until
+    started from rest (``lo`` must be stick-slip, ``hi`` sliding; default ``lo``: the pushing
+    speed of 4.1.1). Bisection in log-speed until
     ``hi/lo - 1 < rel_tol``; returns the bracket, its geometric mean and every evaluation."""
     evals = []
 

@@ -35,7 +35,8 @@ Integration: the tip mode is stiff compared with the sample (non-dimensional fre
 sqrt((k1+k2)/k / (m1/m)) ~ 95 for Table 4.3 against O(1-5) for the sample), so the bulk
 kernels use classical RK4 with a fixed step below the RK4 stability limit of the tip mode
 (|lambda dt| < 2.8), compiled with numba and run over all cells; reference solutions use
-scipy's DOP853 with tight tolerances (benchmarks/basins.py, tests).
+scipy's DOP853 with tight tolerances (``tests/stickslip_reference.py``, used by the tests and
+benchmarks/basins.py).
 """
 
 from __future__ import annotations
@@ -46,29 +47,35 @@ from typing import Any
 
 import numba
 import numpy as np
+from scipy.optimize import brentq
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset
 
 # --------------------------------------------------------------------------------------
 # Parameters (Table 4.3)
 # --------------------------------------------------------------------------------------
 
-EV = 1.602176634e-19  # J
+_T43 = preset("table-4.3")
 
 TABLE_4_3 = ParamSet(
     [
-        Param("m1", 2e-11, "kg", "tip (probe) effective mass", lo=1e-16, hi=1e-6, positive=True, source="Table 4.3"),
-        Param("m2", 2e-12, "kg", "sample mass", lo=1e-22, hi=1e-6, positive=True, source="Table 4.3"),
-        Param("k1", 1.0, "N/m", "probe stiffness", lo=1e-4, hi=1e4, positive=True, source="Table 4.3"),
-        Param("k2", 1e-5, "N/m", "linearised tip-sample contact stiffness", lo=1e-9, hi=1e4, positive=True, source="Table 4.3"),
-        Param("zeta1", 0.1, "", "probe damping ratio c1/(2 sqrt(k m))", lo=0.0, hi=100.0, source="Table 4.3, eq 4.7"),
-        Param("zeta2", 1.0, "", "tip-sample damping ratio c2/(2 sqrt(k m))", lo=0.0, hi=100.0, source="Table 4.3, eq 4.7"),
+        Param("m1", _T43["m1"], "kg", "tip (probe) effective mass", lo=1e-16, hi=1e-6, positive=True, source="Table 4.3"),
+        Param("m2", _T43["m2"], "kg", "sample mass", lo=1e-22, hi=1e-6, positive=True, source="Table 4.3"),
+        Param("k1", _T43["k1"], "N/m", "probe stiffness", lo=1e-4, hi=1e4, positive=True, source="Table 4.3"),
+        Param("k2", _T43["k2"], "N/m", "linearised tip-sample contact stiffness", lo=1e-9, hi=1e4, positive=True,
+              source="Table 4.3"),
+        Param("zeta1", _T43["zeta1"], "", "probe damping ratio c1/(2 sqrt(k m))", lo=0.0, hi=100.0,
+              source="Table 4.3, eq 4.7"),
+        Param("zeta2", _T43["zeta2"], "", "tip-sample damping ratio c2/(2 sqrt(k m))", lo=0.0, hi=100.0,
+              source="Table 4.3, eq 4.7"),
         # The source gives no period for 4.1.3.  The text's own pairings (u0 = 25 <-> U0 ~ 1 eV,
         # V = 3 um/s .. 0.3 mm/s spanning quasi-static .. sliding) are consistent only with a
         # period of ~0.16 um for Table 4.3's k (see docs/stickslip.md); with an atomic period
-        # (0.5 nm) u0 would be ~2e6 for 1 eV.  The default is that implied period.
-        Param("a", 1.59e-7, "m", "period of the sample-substrate potential (eq 4.1)", lo=1e-11, hi=1e-3, positive=True, source="eq 4.1, implied by 4.1.3.1"),
+        # (0.5 nm) u0 would be ~2e6 for 1 eV.  The default is that implied period (preset note).
+        Param("a", _T43["a"], "m", "period of the sample-substrate potential (eq 4.1)", lo=1e-11, hi=1e-3,
+              positive=True, source="eq 4.1, implied by 4.1.3.1"),
     ]
 )
 
@@ -77,17 +84,17 @@ TABLE_4_3 = ParamSet(
 class TwoMassModel:
     """Two-mass model of Fig 4.7 with its non-dimensional coefficients (eqs 4.5, 4.7).
 
-    Defaults are Table 4.3.  All attributes are SI; the derived properties are the
-    dimensionless coefficients of eq 4.7.
+    Defaults are Table 4.3 (:mod:`probedyn.core.presets`).  All attributes are SI; the derived
+    properties are the dimensionless coefficients of eq 4.7.
     """
 
-    m1: float = 2e-11
-    m2: float = 2e-12
-    k1: float = 1.0
-    k2: float = 1e-5
-    zeta1: float = 0.1
-    zeta2: float = 1.0
-    a: float = 1.59e-7
+    m1: float = _T43["m1"]
+    m2: float = _T43["m2"]
+    k1: float = _T43["k1"]
+    k2: float = _T43["k2"]
+    zeta1: float = _T43["zeta1"]
+    zeta2: float = _T43["zeta2"]
+    a: float = _T43["a"]
 
     @classmethod
     def from_params(cls, overrides: dict[str, Any] | None = None) -> "TwoMassModel":
@@ -197,6 +204,13 @@ class TwoMassModel:
 DEFAULT_MODEL = TwoMassModel()
 
 
+#: largest non-dimensional speed of the moving-base dynamics: the transient (t >= 300) is integrated
+#: with 128 steps per forcing period 2 pi / v, i.e. ~6000 v steps per cell
+V_MAX = 1e3
+#: largest |psi| accepted: beyond, X + psi (|X| <= u0 <= 1e4) keeps fewer than ~6 significant digits of X
+PSI_MAX = 1e6
+
+
 def _check_u0_psi(u0: float, psi: float) -> None:
     if not (isinstance(u0, (int, float, np.floating, np.integer)) and math.isfinite(u0)):
         raise ParameterError(f"u0 must be a finite number, got {u0!r}")
@@ -206,6 +220,9 @@ def _check_u0_psi(u0: float, psi: float) -> None:
         raise ParameterError(f"u0 = {u0:g} is too large (more than ~3000 equilibria); use u0 <= 1e4")
     if not math.isfinite(psi):
         raise ParameterError(f"psi must be finite, got {psi!r}")
+    if abs(psi) > PSI_MAX:
+        raise ParameterError(f"psi = {psi:g} rad: a phase beyond +-{PSI_MAX:g} rad loses its value in floating point "
+                             "(X + psi); give it modulo 2 pi")
 
 
 # --------------------------------------------------------------------------------------
@@ -270,8 +287,6 @@ def equilibria(u0: float, psi: float, tol: float = 1e-12) -> Equilibria:
     method; all roots lie in ``|X| <= u0``.  The count is therefore exact, not sampled.
     A root where ``|L| < sqrt(tol)`` (a fold, u0 cos = 1) is reported as marginal.
     """
-    from scipy.optimize import brentq
-
     _check_u0_psi(u0, psi)
     u0 = float(u0)
     psi = float(psi)
@@ -443,7 +458,7 @@ def attractor(x0, u0, v, psi, c, dt, n_trans, n_rec, n_sub, out_strobe, out_stat
         out_stats[i, 7] = sy1 / n_rec
 
 @numba.njit(cache=True, nogil=True)
-def trajectory(x0, u0, v, psi, c, dt, nsteps, every, out):
+def trajectory_kernel(x0, u0, v, psi, c, dt, nsteps, every, out):
     y1, p1, y2, p2 = x0[0], x0[1], x0[2], x0[3]
     t = 0.0
     k = 0
@@ -456,13 +471,6 @@ def trajectory(x0, u0, v, psi, c, dt, nsteps, every, out):
         y1, p1, y2, p2 = rk4(y1, p1, y2, p2, t, dt, u0, v, psi, c)
         t = (s + 1) * dt
 
-
-
-_KERNELS: dict[str, Any] = {"basins": basins, "attractor": attractor, "trajectory": trajectory}
-
-
-def _kernels() -> dict[str, Any]:
-    return _KERNELS
 
 
 # --------------------------------------------------------------------------------------
@@ -519,7 +527,7 @@ def basin_labels(
     # Energy margin: RK4's energy error per step is O((omega dt)^5) relative; 1e-9 (1+u0)
     # keeps the certificate conservative without delaying it measurably.
     margin = 1e-9 * (1.0 + u0)
-    _kernels()["basins"](
+    basins(
         x0, float(u0), float(psi), model.coefficients(), float(dt), float(tmax),
         nodes, left, right, barrier, float(tol), margin, lab, xe, te,
     )
@@ -543,23 +551,6 @@ def default_basin_window(u0: float) -> tuple[tuple[float, float], tuple[float, f
     """Default initial-condition window: x3(0) in +-1.5 max(u0, 1), x4(0) in +-max(u0, 1)."""
     s = max(float(u0), 1.0)
     return (-1.5 * s, 1.5 * s), (-s, s)
-
-
-def basin_reference(x3_0: float, x4_0: float, u0: float, psi: float, model: TwoMassModel = DEFAULT_MODEL,
-                    t_end: float = 400.0, rtol: float = 1e-10, atol: float = 1e-12) -> dict[str, float]:
-    """One cell with scipy's DOP853 to a fixed end time (no certificate): the reference of
-    the benchmark and tests.  Label = nearest node to the final x3."""
-    from scipy.integrate import solve_ivp
-
-    eq = equilibria(u0, psi)
-    x0 = initial_states(np.array([x3_0]), np.array([x4_0]), model)[0]
-    sol = solve_ivp(model.rhs, (0.0, t_end), x0, method="DOP853", rtol=rtol, atol=atol, args=(u0, 0.0, psi))
-    if not sol.success:
-        raise SolverError(f"DOP853 failed: {sol.message}")
-    xe = sol.y[:, -1]
-    nodes = eq.stable
-    lab = int(np.argmin(np.abs(nodes - xe[2])))
-    return {"label": lab, "x3_end": float(xe[2]), "x4_end": float(xe[3]), "dist": float(abs(nodes[lab] - xe[2]))}
 
 
 # --------------------------------------------------------------------------------------
@@ -603,13 +594,16 @@ def attractor_stats(
     u0f, vf, x3f, x4f = (q.ravel() for q in (u0a, va, x3a, x4a))
     if np.any(~np.isfinite(vf)) or np.any(vf <= 0):
         raise ParameterError("speed v must be positive and finite for the moving-base dynamics (use basins for v = 0)")
+    if np.any(vf > V_MAX):
+        raise ParameterError(f"speed v = {vf.max():g} is beyond {V_MAX:g}: the transient alone would take about "
+                             f"6000 v integration steps per cell (give v <= {V_MAX:g})")
     if np.any(~np.isfinite(u0f)) or np.any(u0f < 0):
         raise ParameterError("u0 must be finite and >= 0")
     n = u0f.size
     stats = np.empty((n, len(STAT_NAMES)))
     strobe = np.full((n, s.record_periods, 2), np.nan)
     c = model.coefficients()
-    kern = _kernels()["attractor"]
+    kern = attractor
     x0 = initial_states(x3f, x4f, model)
     # group cells by speed (dt depends on v only through the period and on u0 through stability)
     for vv in np.unique(vf):
@@ -647,7 +641,7 @@ def trajectory(x0: np.ndarray, u0: float, v: float, psi: float, t_end: float, mo
     nsteps = int(math.ceil(t_end / dt))
     every = max(1, nsteps // n_out)
     out = np.full((nsteps // every + 1, 5), np.nan)
-    _kernels()["trajectory"](np.asarray(x0, dtype=float), float(u0), float(v), float(psi), model.coefficients(), float(dt), nsteps, every, out)
+    trajectory_kernel(np.asarray(x0, dtype=float), float(u0), float(v), float(psi), model.coefficients(), float(dt), nsteps, every, out)
     return out[~np.isnan(out[:, 0])]
 
 
@@ -784,6 +778,8 @@ def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 
     Also returns the number of distinct periodic attractors, the period of the attractor
     reached from x3(0) = 0 (0 = irregular), the extreme lab-speed ratios and its mean friction.
     """
+    if isinstance(n_ic, bool) or int(n_ic) != n_ic or n_ic < 1:
+        raise ParameterError(f"n_ic (initial conditions per cell) must be a positive integer, got {n_ic!r}")
     out = _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_periods, record_periods,
                        model_params)
     redo = np.nonzero((out["regime"] == 2) | (out["regime"] == 4))[0]
@@ -840,13 +836,6 @@ def _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_peri
         "w_max_ratio": st["w_max"].max(axis=1) / v,
         "friction_mean": st["friction_mean"][:, mid],
     }
-
-
-def regime_map(v_values: np.ndarray, u0_values: np.ndarray, **kw) -> dict[str, np.ndarray]:
-    """Regime map over (u0, v) (Fig 4.13), in process (the sweep engine runs the same cells)."""
-    V, U = np.meshgrid(np.asarray(v_values, float), np.asarray(u0_values, float))
-    r = regime_cell(U.ravel(), V.ravel(), **kw)
-    return {"v": np.asarray(v_values, float), "u0": np.asarray(u0_values, float), **{k: a.reshape(U.shape) for k, a in r.items()}}
 
 
 def steady_branches(u0_values: np.ndarray, v: float, n_ic: int = 12, psi: float = 5.0,

@@ -37,6 +37,7 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.signal import find_peaks
 
 from probedyn.core.errors import DataFormatError
 
@@ -59,8 +60,6 @@ def analyze(base, force, rel_prominence: float = 0.01, noise_factor: float = 6.0
     ``force``: lateral force [N]. Clean traces are resampled to ``n_grid`` uniform points
     (``None``: used as given). ``noise``: the force noise standard deviation [N]; 0 for a
     simulation (default), ``None`` to estimate it from the data (measured traces)."""
-    from scipy.signal import find_peaks
-
     b = np.asarray(base, float)
     f = np.asarray(force, float)
     if b.ndim != 1 or b.shape != f.shape or b.size < 10:

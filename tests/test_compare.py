@@ -1,8 +1,8 @@
-"""fem.compare: the Rayleigh quotient (2.46) on FEM mode shapes."""
+"""lumped.compare: the Rayleigh quotient (2.46) on FEM mode shapes."""
 
 import pytest
 
-from probedyn.fem.compare import comparison_rows
+from probedyn.lumped.compare import comparison_rows
 from probedyn.lumped import beam as bm
 from probedyn.probes import get_probe
 

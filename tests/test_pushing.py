@@ -61,14 +61,18 @@ def test_hexagonal_potential_reduces_to_the_1d_sinusoid_along_the_axis():
 
 def test_dmt_contact_is_continuous_and_has_the_pull_off_of_eq_2_20():
     m = P.make_model("mica", {})
-    c = m.contact
-    z0 = c.zeta0
-    assert c.force(z0 * (1 + 1e-12)) == pytest.approx(c.force(z0 * (1 - 1e-12)), rel=1e-9)
-    assert c.force(z0) == pytest.approx(-c.H * c.R / (6 * z0 ** 2))
+    z0, H = m.zeta0, m.p["H"]
+
+    def force(s):
+        return m.normal_contact(s)[0]
+
+    assert force(z0 * (1 + 1e-12)) == pytest.approx(force(z0 * (1 - 1e-12)), rel=1e-9)
+    assert force(z0) == pytest.approx(-H * m.R / (6 * z0 ** 2))
+    assert -m.contact.pull_off_force() == pytest.approx(H * m.R / (6 * z0 ** 2))
     # stiffness = -dF/ds in both branches
     for s in (-1e-9, 0.5 * z0, 2 * z0):
         h = 1e-15
-        assert c.stiffness(s) == pytest.approx(-(c.force(s + h) - c.force(s - h)) / (2 * h), rel=1e-5)
+        assert m.normal_contact(s)[1] == pytest.approx(-(force(s + h) - force(s - h)) / (2 * h), rel=1e-5)
 
 
 # ---------------------------------------------------------------- Fig 4.2: stairs with step = a
@@ -217,20 +221,28 @@ def test_cli_push_json(tmp_path, capsys):
     assert main(["simulate", "push", "--set", "R_s=-1e-9"]) == 2
 
 
-def test_local_dmt_agrees_with_the_contact_registry():
-    """The model's closed-form DMT (force, stiffness of the gap) against the registry's DMT, which
-    solves Maugis' parametrised curve by Newton iteration: same eq 2.20, independent code paths;
-    agreement to 1e-6 relative (the registry's Newton tolerance is near machine precision)."""
-    from probedyn.schemes.contact import get_contact_model
+def test_dmt_closed_form_agrees_with_the_contact_registry_curve_solve():
+    """The model's contact is the registry's DMT evaluated by its closed form (``DMT.point``: force,
+    stiffness, contact radius and its derivative); the same model's general path
+    (``ContactModel.point``) solves Maugis' parametrised curve by Newton iteration: same eq 2.20,
+    independent code paths; agreement to 1e-6 relative (the Newton tolerance is near machine
+    precision). The Mindlin patch stiffness of the model is ``2 E* a`` (Hertz)."""
+    from probedyn.schemes.contact import ContactModel
 
     m = P.make_model("mica", {})
-    c = m.contact
-    reg = get_contact_model("dmt", z0=c.zeta0, H=c.H)
-    for s in np.array([-2.0, -1.0, -0.3, 0.0, 0.5, 0.99, 1.01, 1.5, 3.0]) * c.zeta0:
-        delta = c.zeta0 - s
-        assert float(reg.force(delta)) == pytest.approx(c.force(s), rel=1e-6)
-        if abs(delta) > 1e-3 * c.zeta0:
-            assert float(reg.stiffness(delta)) == pytest.approx(c.stiffness(s), rel=1e-6)
+    c, z0 = m.contact, m.zeta0
+    for s in np.array([-2.0, -1.0, -0.3, 0.0, 0.5, 0.99, 1.01, 1.5, 3.0]) * z0:
+        delta = z0 - s
+        F, k, a, da = c.point(delta)
+        Fg, kg, ag, dag = ContactModel.point(c, delta)
+        assert F == pytest.approx(Fg, rel=1e-6)
+        assert m.normal_contact(s)[0] == F
+        if abs(delta) > 1e-3 * z0:
+            assert k == pytest.approx(kg, rel=1e-6)
+            assert a == pytest.approx(ag, rel=1e-6, abs=1e-6 * z0)
+            assert da == pytest.approx(dag, rel=1e-6)
+        if delta > 0:
+            assert m.normal_contact(s)[2] == pytest.approx(2 * m.E_star * math.sqrt(m.R * delta), rel=1e-12)
 
 
 def test_lattice_force_agrees_with_the_friction_registry_hexagonal_potential():

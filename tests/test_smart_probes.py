@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from probedyn.lumped import smart as S
+from probedyn.probes import studies as St
 from probedyn.lumped.smart_analytic import EccentricSection, end_body_frequencies, rigid_body_properties
 from probedyn.probes import get_probe
 
@@ -111,7 +112,7 @@ def test_piezotube_eccentricity_split_and_tilt():
     sqrt(I_max/I_min) - 1 diluted by the shear share of the end compliance (which the offset
     does not change to first order): ratio FEM / EB in [0.85, 1]; the lower mode vibrates along
     the offset (the thinner side) within 0.5 deg; without offset the split is at round-off."""
-    r = S.study_eccentricity([0.0, 5e-6], 45.0, {"element_size": 200e-6, "holder": "point"})
+    r = St.study_eccentricity([0.0, 5e-6], 45.0, {"element_size": 200e-6, "holder": "point"})
     r0, r5 = r["rows"]
     assert abs(r0["split"]) < 1e-8
     assert 0.85 <= r5["split"] / r5["split_predicted"] <= 1.0
@@ -125,7 +126,7 @@ def test_localisation_claim_section_341():
     takes the strain energy; stiff holder (100 N/m: the tip-on-spring frequency sqrt(k_t/m)
     = 7.1 kHz exceeds the tube's lateral mode, 4.8 kHz): the lowest mode deforms the body and
     the holder spring's strain-energy share is small."""
-    r = S.study_localisation("piezotube", [1.0, 100.0], {"element_size": 400e-6})
+    r = St.study_localisation("piezotube", [1.0, 100.0], {"element_size": 400e-6})
     first = {row["k_t"]: row for row in r["rows"] if row["mode"] == 1}
     assert first[1.0]["se_holder_spring"] > 0.9 and first[1.0]["ke_tip"] > 0.9
     assert first[100.0]["se_holder_spring"] < 0.1
@@ -138,7 +139,7 @@ def test_localisation_claim_section_341():
 def test_isotropic_option_moves_frequencies_little():
     """E along the tube axis is 1/s11 in both materials: the iso option changes only shear and
     Poisson couplings, so the lateral pair moves by less than 2 %, but it must move."""
-    r = S.study_materials("piezotube", {"element_size": 400e-6, "tip": "none"}, n_modes=2)
+    r = St.study_materials("piezotube", {"element_size": 400e-6, "tip": "none"}, n_modes=2)
     for row in r["rows"]:
         assert 1e-5 < abs(row["rel_diff"]) < 0.02
 
@@ -161,7 +162,7 @@ def test_piezotube_mesh_convergence_order():
     n^-2, which dominates the P2 field error (h^4 for eigenvalues), so the observed order of
     the frequencies on a ratio-2 sequence of structured meshes lies near 2."""
     arc = 2 * math.pi * 0.475e-3 / 12
-    r = S.study_convergence("piezotube", [arc * 1.0001, arc / 2 * 1.0001, arc / 4 * 1.0001], {"tip": "none"})
+    r = St.study_convergence("piezotube", [arc * 1.0001, arc / 2 * 1.0001, arc / 4 * 1.0001], {"tip": "none"})
     for m in r["modes"]:
         assert 1.6 < m["observed_order"] < 2.6, m
         assert abs(m["rel_change_last"]) < 0.01
@@ -173,7 +174,7 @@ def test_duo_bimorph_mesh_convergence_order():
     clamped edges of the layers carry the 3D clamped-edge stress singularity (r^(lambda-1),
     lambda ~ 0.7), so eigenvalues converge with order ~ 2 lambda ~ 1.4 instead of the P2
     smooth-solution order 4; accept 1.1 < p < 2.2 and a last change below 0.2 %."""
-    r = S.study_convergence("duo-bimorph", [10e-6, 5e-6, 2.5e-6], {"tip": "none", "elements_through_thickness": 2})
+    r = St.study_convergence("duo-bimorph", [10e-6, 5e-6, 2.5e-6], {"tip": "none", "elements_through_thickness": 2})
     for m in r["modes"]:
         assert 1.1 < m["observed_order"] < 2.2, m
         assert abs(m["rel_change_last"]) < 2e-3
@@ -185,10 +186,10 @@ def test_eccentric_lumped_model_and_first_order_axial_coupling():
     coupling is first order in the offset (the centroid moves by A_i delta / A), so doubling
     delta doubles it (second-order terms ~ delta / wall = 0.1 at most: 10 %)."""
     ov = {"element_size": 400e-6, "delta_y": 2.5e-6, "delta_z": 2.5e-6}
-    r = S.study_lumped("piezotube", ov)
+    r = St.study_lumped("piezotube", ov)
     assert all(row["within"] for row in r["rows"]) and len(r["rows"]) == 6
     K = np.asarray(r["lumped"]["K2"])
     assert abs(K[1, 2]) > 1e-6 * K[1, 1]  # y-z coupled in the electrode axes
-    e = S.study_eccentricity([2e-6, 4e-6], 45.0, {"element_size": 400e-6})["rows"]
+    e = St.study_eccentricity([2e-6, 4e-6], 45.0, {"element_size": 400e-6})["rows"]
     assert e[1]["coupling_axial_lateral"] / e[0]["coupling_axial_lateral"] == pytest.approx(2.0, rel=0.1)
     assert e[1]["split"] / e[0]["split"] == pytest.approx(4.0, rel=0.1)  # the split is second order

@@ -4,7 +4,10 @@ typed.
 Every value here is SI and carries the table it comes from. Where the printed table is wrong or
 incomplete, the value used is the corrected one and ``notes`` says what changed and why (the
 same item number as docs/source-departures.md). Models read their defaults from here
-(``preset("table-2.1")["k_x"]``); nothing else in probedyn types a table constant.
+(``preset("table-2.1")["k_x"]``); nothing else in probedyn types a table constant. A value
+printed in two tables (Table 4.1 repeats Table 2.1's tip mass, damping and V_s) is a row of
+each table; a value printed once is typed once (the mica lattice parameter lives in Table 4.2
+only).
 
 =================  ===============================================================  ==========
 key                what                                                              source
@@ -95,11 +98,10 @@ PRESETS: dict[str, Preset] = {p.key: p for p in [
         ("F_c_x", 12.45e-9, "N"), ("F_c_y", 12.45e-9, "N"),
         # scan of 2.1.5.1 (text, not the table)
         ("V", 2e-6, "m/s"), ("scan_length", 10e-9, "m"), ("normal_load", 141.75e-9, "N"),
-        ("lattice", 0.519e-9, "m"),
     ], {"F_v_x": _FFM_NOTE_FNU, "F_v_y": _FFM_NOTE_FNU,
         "V": "2000 nm/s, text of 2.1.5.1", "scan_length": "10 nm x 10 nm scan, text of 2.1.5.1",
         "normal_load": "normal load of the mica experiment, text of 2.1.5.1",
-        "lattice": "mica lattice parameter a = 5.19 A (Table 4.2)"}),
+        "*": "the mica lattice parameter is Table 4.2's: preset('table-4.2-mica')['a']"}),
     _p("table-2.2", "Table 2.2 (section 2.1.5.2)", "FFM of a VAMWCNT array: cantilever and friction", [
         ("m_x", 2.25e-17, "kg"), ("m_y", 2.25e-17, "kg"),
         ("c_x", 7e-9, "N s/m"), ("c_y", 7e-9, "N s/m"),

@@ -7,7 +7,8 @@ A model is a class. It declares
 * ``title``: one line saying what it is;
 * ``source``: the equations / tables / references it implements (``"eqs 2.7-2.9, Table 2.1"``);
 * ``params``: a :class:`~probedyn.core.params.ParamSet` of its parameters with units
-  (or, for diagnose causes, the family's own parameter declaration);
+  (or the family's own parameter declaration: a registry made with ``params_type=tuple``
+  accepts e.g. the diagnose causes' tuples of ``CauseParam``);
 * its behaviour: the members listed in the registry's ``required`` tuple (a friction law its
   compiled ``kernel``, a contact law its ``nd_curve``, a cause its ``effect`` ...).
 
@@ -17,6 +18,23 @@ class's placeholder is a :class:`RegistryError` at import, never a silent fallba
 imports every module (not starting with ``_``) of the family's package, so **adding a model is
 adding one file** that decorates its class with ``@REGISTRY.register``. A model defined
 elsewhere (a user's module, a test) registers the same way.
+
+Example (a friction law; the registry lives in ``probedyn.schemes.friction.base``)::
+
+    from probedyn.schemes.friction.base import FRICTION_MODELS, FrictionModel
+
+    @FRICTION_MODELS.register
+    class Coulomb(FrictionModel):
+        key = "coulomb"
+        title = "Coulomb friction, regularised"
+        source = "textbook"
+        params = ParamSet([...])
+        kernel = staticmethod(coulomb_kernel)   # a numba function, see FrictionModel
+        ...
+
+The registries of probedyn: ``probedyn.probes.PROBES``,
+``probedyn.schemes.friction.base.FRICTION_MODELS``,
+``probedyn.schemes.contact.base.CONTACT_MODELS`` (and the diagnose causes).
 """
 
 from __future__ import annotations
@@ -24,14 +42,35 @@ from __future__ import annotations
 import difflib
 import importlib
 import pkgutil
-from typing import Any, Callable, Generic, Iterator, TypeVar
+from typing import Any, Callable, ClassVar, Generic, Iterator, TypeVar
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import ParamSet
 
 T = TypeVar("T", bound=type)
 
-__all__ = ["Registry", "RegistryError"]
+__all__ = ["Model", "Registry", "RegistryError"]
+
+
+class Model:
+    """What every registered model declares; the base class of each family derives from it."""
+
+    #: registry key (lower case)
+    key: ClassVar[str] = ""
+    #: one line saying what the model is
+    title: ClassVar[str] = ""
+    #: the equations / tables / references it implements
+    source: ClassVar[str] = ""
+
+    @property
+    def name(self) -> str:
+        """The registry key (read-only alias kept for callers written before the registry)."""
+        return self.key
+
+    @property
+    def equations(self) -> str:
+        """The source equations (alias of :attr:`source`)."""
+        return self.source
 
 
 class RegistryError(TypeError):
@@ -46,19 +85,22 @@ class Registry(Generic[T]):
     define itself (not inherit unchanged from ``base``); ``package``: dotted name of the package
     whose modules are imported on first lookup (one module per model); ``aliases``: alternative
     names accepted by :meth:`get`; ``check``: an extra validation hook ``check(cls)`` that raises
-    :class:`RegistryError` for family-specific rules.
+    :class:`RegistryError` for family-specific rules (it may also prepare the class, e.g. give a
+    compiled kernel a stable identity); ``params_type``: the type (or tuple of types) the
+    ``params`` declaration must have, ``None`` for a family without one (``needs_params=False``
+    is the same as ``params_type=None``).
     """
 
     def __init__(self, kind: str, base: type, required: tuple[str, ...] = (), package: str | None = None,
                  aliases: dict[str, str] | None = None, check: Callable[[type], None] | None = None,
-                 needs_params: bool = True) -> None:
+                 needs_params: bool = True, params_type: type | tuple[type, ...] | None = ParamSet) -> None:
         self.kind = kind
         self.base = base
         self.required = tuple(required)
         self.package = package
-        self.aliases = {k.lower(): v for k, v in (aliases or {}).items()}
+        self.aliases = {k.lower(): v.lower() for k, v in (aliases or {}).items()}
         self._check = check
-        self._needs_params = needs_params
+        self._params_type = params_type if needs_params else None
         self._classes: dict[str, type] = {}
         self._discovered = package is None
 
@@ -74,8 +116,9 @@ class Registry(Generic[T]):
         for attr in ("title", "source"):
             if not (isinstance(getattr(cls, attr, None), str) and getattr(cls, attr)):
                 raise RegistryError(f"{where}: needs a non-empty '{attr}' (what it is, which equations)")
-        if self._needs_params and not isinstance(getattr(cls, "params", None), ParamSet):
-            raise RegistryError(f"{where}: needs 'params', a ParamSet of its parameters with units")
+        if self._params_type is not None and not isinstance(getattr(cls, "params", None), self._params_type):
+            what = getattr(self._params_type, "__name__", "the declared type")
+            raise RegistryError(f"{where}: needs 'params', a {what} of its parameters with units")
         for name in self.required:
             own = getattr(cls, name, None)
             if own is None or own is getattr(self.base, name, object()):
@@ -85,6 +128,8 @@ class Registry(Generic[T]):
         old = self._classes.get(key)
         if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
             raise RegistryError(f"{where}: key {key!r} is already taken by {old.__module__}.{old.__qualname__}")
+        if key in self.aliases:
+            raise RegistryError(f"{where}: key {key!r} is an alias of {self.aliases[key]!r}")
         self._classes[key] = cls
         return cls
 
@@ -97,11 +142,15 @@ class Registry(Generic[T]):
         """Import every public module of the family's package (each registers its models)."""
         if self._discovered:
             return
-        self._discovered = True
-        pkg = importlib.import_module(self.package)
-        for info in pkgutil.iter_modules(pkg.__path__):
-            if not info.name.startswith("_"):
-                importlib.import_module(f"{self.package}.{info.name}")
+        self._discovered = True  # set first: a model module may look the registry up while imported
+        try:
+            pkg = importlib.import_module(self.package)
+            for info in pkgutil.iter_modules(pkg.__path__):
+                if not info.name.startswith("_"):
+                    importlib.import_module(f"{self.package}.{info.name}")
+        except BaseException:
+            self._discovered = False  # a broken model module is an error at every lookup, not once
+            raise
 
     def names(self) -> list[str]:
         self.discover()
@@ -110,6 +159,10 @@ class Registry(Generic[T]):
     def __contains__(self, name: object) -> bool:
         self.discover()
         return isinstance(name, str) and self._resolve(name) in self._classes
+
+    def __len__(self) -> int:
+        self.discover()
+        return len(self._classes)
 
     def __iter__(self) -> Iterator[type]:
         self.discover()

@@ -1,7 +1,8 @@
 """FEM matrices the diagnosis adds to a probe's model, and their projections on a Ritz basis.
 
 All act on the interleaved DOF vector of :class:`probedyn.fem.model.ElasticModel`
-(``3 * node + component``, P2 nodes of ``model.basis``).
+(``3 * node + component``, the nodes of ``model.basis``: P2 tetrahedra or quadratic hexahedra;
+nothing here depends on the element type).
 
 * :func:`face_mass_scalar` -- ``S_ab = int_face phi_a phi_b dA`` (scalar P2 functions on a
   boundary); with a direction it gives the **elastic foundation** matrices of a clamp face,
@@ -33,12 +34,12 @@ __all__ = ["face_mass_scalar", "face_normal", "directional", "axial_gradient_mat
 
 def face_mass_scalar(model, face: str) -> sp.csr_matrix:
     """``int_face phi_a phi_b dA`` over the boundary ``face`` (scalar P2, N x N)."""
-    from skfem import BilinearForm, ElementTetP2, FacetBasis
+    from skfem import BilinearForm, FacetBasis
 
     mesh = model.mesh
     if face not in (mesh.boundaries or {}):
         raise GeometryError(f"boundary '{face}' not in the mesh (known: {', '.join(mesh.boundaries or {})})")
-    fb = FacetBasis(mesh, ElementTetP2(), facets=np.asarray(mesh.boundaries[face]), intorder=4)
+    fb = FacetBasis(mesh, model.basis.elem, facets=np.asarray(mesh.boundaries[face]), intorder=4)
 
     @BilinearForm
     def mass(u, v, w):
@@ -72,7 +73,7 @@ def axial_gradient_matrix(model, axis: int) -> sp.csr_matrix:
     """``int sum_i (d_a u_i)(d_a v_i) dV`` along ``axis`` a (3N x 3N, interleaved)."""
     from skfem import BilinearForm
 
-    basis = el.scalar_basis(model.mesh, 2)
+    basis = model.basis  # the model's own scalar element (tetrahedra or hexahedra)
 
     @BilinearForm
     def lap(u, v, w):
@@ -90,15 +91,15 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024) -> tuple[
     ``G[a] = int sum_i (d_a Phi_i)^T (d_a Phi_i) dV``. Same quadrature and material field as
     :func:`probedyn.fem.elasticity.assemble_stiffness`.
     """
-    from skfem import ElementTetP2
     from skfem.quadrature import get_quadrature
 
     mesh = model.mesh
-    elem = ElementTetP2()
+    elem = model.basis.elem  # the model's own scalar element (tetrahedra or hexahedra)
     X, W = get_quadrature(elem.refdom, el.STIFFNESS_INTORDER)
     mapping = mesh._mapping()
-    dref = np.stack([elem.lbasis(X, i)[1] for i in range(10)])  # (10, 3, nq)
-    edofs = model.basis.element_dofs  # (10, nel)
+    nloc = model.basis.element_dofs.shape[0]
+    dref = np.stack([elem.lbasis(X, i)[1] for i in range(nloc)])  # (nloc, 3, nq)
+    edofs = model.basis.element_dofs  # (nloc, nel)
     nel = mesh.t.shape[1]
     r = Phi.shape[1]
     U = np.asarray(Phi).reshape(model.n_nodes, 3, r)
@@ -115,8 +116,8 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024) -> tuple[
         ne = sel.size
         invDF = mapping.invDF(X, tind=sel)
         detDF = np.abs(mapping.detDF(X, tind=sel))
-        g = np.einsum("akq,kjeq->eqja", dref, invDF, optimize=True)  # (e, q, 3, 10)
-        Ue = U[edofs[:, sel].T].reshape(ne, 1, 10, 3 * r)  # (e, 1, 10, 3r)
+        g = np.einsum("akq,kjeq->eqja", dref, invDF, optimize=True)  # (e, q, 3, nloc)
+        Ue = U[edofs[:, sel].T].reshape(ne, 1, nloc, 3 * r)  # (e, 1, nloc, 3r)
         H = np.matmul(g, Ue).reshape(ne, -1, 3, 3, r)  # H[e, q, j, i, r] = d_j u_i
         x_qp = mapping.F(X, tind=sel)
         C = el.stiffness_field(model.elem_region, model.materials, model.orientations, x_qp, elements=sel)
@@ -159,14 +160,14 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
     split matrices are formed): ``f_i = int [ d_a N sigma_ia(V) + d_j N sigma^a_ij(V) ]`` where
     ``sigma^a`` is the stress of the strain built from the derivatives along a only.
     """
-    from skfem import ElementTetP2
     from skfem.quadrature import get_quadrature
 
     mesh = model.mesh
-    elem = ElementTetP2()
+    elem = model.basis.elem  # the model's own scalar element (tetrahedra or hexahedra)
     X, W = get_quadrature(elem.refdom, el.STIFFNESS_INTORDER)
     mapping = mesh._mapping()
-    dref = np.stack([elem.lbasis(X, i)[1] for i in range(10)])
+    nloc = model.basis.element_dofs.shape[0]
+    dref = np.stack([elem.lbasis(X, i)[1] for i in range(nloc)])
     edofs = model.basis.element_dofs
     nel = mesh.t.shape[1]
     n = V.shape[1]
@@ -177,8 +178,8 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
         ne = sel.size
         invDF = mapping.invDF(X, tind=sel)
         detDF = np.abs(mapping.detDF(X, tind=sel))
-        g = np.einsum("akq,kjeq->eqja", dref, invDF, optimize=True)  # (e, q, 3, 10)
-        Ue = U[edofs[:, sel].T].reshape(ne, 1, 10, 3 * n)
+        g = np.einsum("akq,kjeq->eqja", dref, invDF, optimize=True)  # (e, q, 3, nloc)
+        Ue = U[edofs[:, sel].T].reshape(ne, 1, nloc, 3 * n)
         H = np.matmul(g, Ue).reshape(ne, -1, 3, 3, n)  # H[e, q, j, i, :] = d_j u_i
         x_qp = mapping.F(X, tind=sel)
         C = el.stiffness_field(model.elem_region, model.materials, model.orientations, x_qp, elements=sel)
@@ -187,7 +188,7 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
         for I, (a, b) in enumerate(_VOIGT):
             eps[:, :, I] = H[:, :, a, a] if a == b else H[:, :, b, a] + H[:, :, a, b]
         sig = _voigt_tensor(np.matmul(C, eps)) * wq  # (e, q, 3, 3, n)
-        nodes = edofs[:, sel].T  # (e, 10)
+        nodes = edofs[:, sel].T  # (e, nloc)
         for ax in range(3):
             ea = np.zeros_like(eps)
             for I, (a, b) in enumerate(_VOIGT):

@@ -272,7 +272,7 @@ class ModalProblem:
             b = self.bases[L]
             out.append({"length_m": L, "fem_dofs": b.model.dofs, "fem_modes": len(b.families),
                         "fem_families": b.families, "fem_frequencies_hz": [float(x) for x in b.freqs],
-                        "fem_solve_s": b.solve_s, "discretisation": b.disc_note,
+                        "fem_solve_s": b.solve_s, "discretisation": b.disc_note, "thickness_stretch": b.stretch,
                         "reduced_basis": self.reds[L].r if L in self.reds else None})
         return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' (P2 tetrahedra)",
                 "fits": "Ritz reduction of the FEM (modes, stretch sensitivities, clamp-support, mass and prestress "

@@ -112,6 +112,61 @@ def _iso_E(model: ElasticModel) -> float:
                for m in model.materials)
 
 
+DOF_BUDGET = 30_000  # DOFs of one diagnosis FEM (a thin lever is meshed thick and stretched back)
+
+
+def stretched(m0: ElasticModel, sc, cls=ElasticModel, **kw) -> ElasticModel:
+    """The model ``m0`` with its mesh stretched by ``sc`` along the three axes (an affine map of
+    every node: a valid mesh of the stretched body with anisotropic elements); materials,
+    clamps, point masses and springs are kept (``kw`` overrides constructor arguments)."""
+    sc = np.asarray(sc, float)
+    mesh = m0.mesh
+    if np.any(sc != 1.0):
+        mesh = dataclasses.replace(mesh, doflocs=mesh.doflocs * sc[:, None])
+    bundle = dataclasses.replace(m0.bundle, mesh=mesh, path=None,
+                                 points={k: np.asarray(v) * sc for k, v in m0.bundle.points.items()})
+    args = dict(regions={name: (mat, R) for name, mat, R in zip(m0.region_names, m0.materials, m0.orientations)},
+                clamp=m0.clamp, point_masses=m0.point_masses, springs=m0.springs, tip=m0.tip,
+                beam_axis=m0.beam_axis, name=m0.name)
+    args.update(kw)
+    return cls(bundle, **args)
+
+
+def thickness_stretch(values: dict[str, Any], budget: int = DOF_BUDGET) -> float:
+    """The factor ``s`` by which a thin prismatic lever is meshed thicker (``t s``) and then
+    stretched back to ``t``: isotropic tetrahedra of size ``t / n`` on a lever with
+    ``L w / t^2`` large cost ``~ L w t / (t / n)^3`` DOFs, the stretched mesh ``s^2`` times fewer
+    (its elements are ``s`` times longer than thick; the discretisation-error estimate is made
+    on the same stretch). 1 when the plain mesh fits the budget, when the probe is not a plain
+    lever (a meshed tip would be distorted) or has no thickness parameter."""
+    from probedyn.fem.size import dofs_for_volume
+
+    try:
+        L, w, t = float(values["length"]), float(values["width"]), float(values["thickness"])
+        ett = int(values.get("elements_through_thickness") or 2)
+    except (KeyError, TypeError, ValueError):
+        return 1.0
+    if values.get("tip_shape", "none") not in (None, "none") or values.get("element_size"):
+        return 1.0
+    n = dofs_for_volume(L * w * t, min(w, t) / ett)
+    if n <= budget or w <= t:
+        return 1.0
+    return float(min(math.sqrt(n / budget), w / t, L / (4 * t)))
+
+
+def build_within_budget(probe, values: dict[str, Any], s: float = 1.0) -> ElasticModel:
+    """``probe.build(values)``, or for ``s > 1`` the probe built ``s`` times thicker and its mesh
+    stretched back to the declared thickness (see :func:`thickness_stretch`)."""
+    if s == 1.0:
+        return probe.build(values)
+    m = probe.build(dict(values, thickness=values["thickness"] * s))
+    ext = np.ptp(m.mesh.p, axis=1)
+    ax = int(np.argmin(np.abs(ext - values["thickness"] * s)))
+    sc = np.ones(3)
+    sc[ax] = 1.0 / s
+    return stretched(m, sc)
+
+
 class FEMBaseline:
     """The probe's FEM, its modes and what the reduced model needs to know about its geometry."""
 
@@ -120,7 +175,8 @@ class FEMBaseline:
         t0 = time.perf_counter()
         self.probe = probe
         self.values = dict(values)
-        self.model = probe.build(self.values)
+        self.stretch = thickness_stretch(self.values)
+        self.model = build_within_budget(probe, self.values, self.stretch)
         m = self.model
         self.axis = int(m.beam_axis)
         self.length_axis, self.width_axis, self.thickness_axis = self.axis, (self.axis + 1) % 3, (self.axis + 2) % 3
@@ -180,7 +236,7 @@ class FEMBaseline:
         coarse = dict(v, elements_through_thickness=max(1, ett // 2))
         ratio = ett / max(1, ett // 2)
         try:
-            mc = self.probe.build(self.probe.resolve(coarse))
+            mc = build_within_budget(self.probe, self.probe.resolve(coarse), self.stretch)
             rc = mc.modes(n)
         except ProbedynError as exc:
             self.disc_note = f"not estimated (coarse mesh failed: {exc})"
@@ -669,11 +725,6 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     t0 = time.perf_counter()
     m0 = base.model
     sc = np.asarray(s.scale, float)
-    mesh = m0.mesh
-    if np.any(sc != 1.0):
-        mesh = dataclasses.replace(mesh, doflocs=mesh.doflocs * sc[:, None])
-    bundle = dataclasses.replace(m0.bundle, mesh=mesh,
-                                 points={k: np.asarray(v) * sc for k, v in m0.bundle.points.items()})
     regions = {name: (_scaled_material(mat, s.E_factor, s.rho_factor), R)
                for name, mat, R in zip(m0.region_names, m0.materials, m0.orientations)}
     pms = list(m0.point_masses)
@@ -682,8 +733,8 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
             pms.append(PointMass(tuple(base.mass_path(np.array([xi]))[:, 0] * sc), mass))
     compliant = s.clamp[0] >= C_MIN or s.clamp[1] >= C_MIN
     clamp = [c for c in m0.clamp if not (compliant and c == base.clamp_face)]
-    model = _ExtendedModel(bundle, regions, clamp=clamp, point_masses=pms, springs=m0.springs, tip=m0.tip,
-                           beam_axis=m0.beam_axis, name=m0.name + " (extended)")
+    model = stretched(m0, sc, _ExtendedModel, regions=regions, clamp=clamp, point_masses=pms,
+                      name=m0.name + " (extended)")
     extra_K = None
     extra_M = None
     if compliant:

@@ -15,8 +15,10 @@
    mode at the tip). A common frequency scale ``s`` in [1/2, 2] (the geometry may be off by that
    much) maps predicted onto measured frequencies (the scale that matches most peaks within 3 %);
    a peak is accepted as mode (family, order) when it lies within 3 % of a scaled prediction, its Q
-   is below 3 Q_fluid (in a fluid), and its area is within a factor 100 of equipartition (when T
-   is declared). Everything else is rejected *and reported* with the reason (spur, unmatched,
+   is below 3 Q_fluid (in a fluid), and (when T is declared) its area is within a factor 100 of
+   equipartition times the common factor of the accepted peaks (the median of their area ratios:
+   1 for a PSD calibrated in tip displacement; an uncalibrated sensitivity or an optical lever
+   scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
    Q or amplitude implausible).
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
    declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
@@ -204,10 +206,7 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
         elif np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
             reasons.append(f"Q = {ft['Q']:.3g} exceeds {Q_FACTOR:g} x the {meas.medium_name}-damped Q_fluid = "
                            f"{near['Q_fluid']:.3g} of {near['family']} {near['order']}")
-        if meas.temperature and near.get("thermal_area_m2"):
-            ratio = ft["area_m2"] / near["thermal_area_m2"]
-            if not (1 / AREA_FACTOR < ratio < AREA_FACTOR):
-                reasons.append(f"peak area {ft['area_m2']:.3g} m^2 is {ratio:.3g} x the thermal k_B T / k_eff")
+        ratio = (ft["area_m2"] / near["thermal_area_m2"]) if meas.temperature and near.get("thermal_area_m2") else None
         key = (near["family"], near["order"])
         if not reasons and key in seen:
             reasons.append(f"{key[0]} {key[1]} already taken by a stronger peak")
@@ -216,9 +215,23 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
         accepted = not reasons
         if accepted:
             seen.add(key)
-        table.append({**ft, "accepted": accepted, "family": near["family"] if accepted else None,
+        table.append({**ft, "accepted": accepted, "thermal_ratio": ratio, "family": near["family"] if accepted else None,
                       "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
                       "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons})
+    # equipartition: the areas of the accepted peaks are k_B T / k_eff times one detector
+    # calibration factor c (their median ratio; 1 for a PSD calibrated in tip displacement, other
+    # values for an uncalibrated sensitivity or an optical lever); a peak whose area is more than
+    # AREA_FACTOR away from c times its thermal area is not thermal motion of that mode
+    ratios = [t["thermal_ratio"] for t in table if t["accepted"] and t["thermal_ratio"]]
+    c_cal = float(np.median(ratios)) if ratios else None
+    if c_cal is not None and len(ratios) > 1:
+        for t in table:
+            r = t["thermal_ratio"]
+            if t["accepted"] and r and not (1 / AREA_FACTOR < r / c_cal < AREA_FACTOR):
+                t["accepted"] = False
+                t["reasons"] = [f"peak area {t['area_m2']:.3g} m^2 is {r / c_cal:.3g} x the thermal k_B T / k_eff of "
+                                f"{t['family']} {t['order']} (times the spectrum's common factor {c_cal:.3g})"]
+                t["family"] = t["order"] = None
     acc = [t for t in table if t["accepted"]]
     if not acc:
         raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
@@ -237,6 +250,7 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
     L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
     prob = ModalProblem(md, bases={L: base})
     prob.kind = meas.kind
-    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s, "peaks": table}
+    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s, "peaks": table,
+                  "thermal_area_factor": c_cal}
     prob.extra_report = lambda: {"peaks": prob.peaks}
     return prob

@@ -1,9 +1,13 @@
 """Registry of probes: each ties a parametric geometry (meshes/) to materials, point masses and
-springs (fem/) and to its analytic references (lumped/).
+springs (fem/) and to its analytic references and reductions (lumped/).
 
-A probe is a subclass of :class:`Probe` registered with :func:`register_probe`; every module
-in this package is imported on first use of the registry, so a new probe only needs a module
-here that decorates its class.  A probe can also be given as a TOML file::
+A probe is a subclass of :class:`Probe` registered in :data:`PROBES` (a
+:class:`probedyn.core.registry.Registry`; ``@register_probe`` is its ``register``): it declares
+``key``, ``title``, ``source`` and ``params`` (a :class:`~probedyn.core.params.ParamSet` of
+geometry, material and mesh parameters in SI units) and implements :meth:`Probe.build` and
+:meth:`Probe.tip_point`. Every public module of this package is imported on the first lookup,
+so a new probe is one module here that decorates its class. A probe can also be given as a
+TOML file::
 
     probe = "cantilever"
     length = 450e-6
@@ -14,28 +18,27 @@ here that decorates its class.  A probe can also be given as a TOML file::
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from probedyn.core.errors import DataFormatError, ParameterError
+from probedyn.core.errors import DataFormatError
 from probedyn.core.params import ParamSet, load_toml
-
-_REGISTRY: dict[str, type["Probe"]] = {}
-_DISCOVERED = False
+from probedyn.core.registry import Model, Registry
 
 
-class Probe:
-    """Base class.  Subclasses set ``name``, ``description`` and ``params`` (a
-    :class:`~probedyn.core.params.ParamSet` of geometry, material and mesh parameters in SI units)
-    and implement :meth:`build` (and usually :meth:`references`)."""
+class Probe(Model):
+    """Base class.  Subclasses set ``key``, ``title``, ``source`` and ``params`` and implement
+    :meth:`build` and :meth:`tip_point` (and usually :meth:`references`)."""
 
-    name: str = ""
-    description: str = ""
-    params: ParamSet = ParamSet([])
+    #: geometry, material and mesh parameters (SI); every probe declares its own
+    params: ClassVar[ParamSet]
+
+    @property
+    def description(self) -> str:
+        """One line saying what the probe is (alias of :attr:`title`)."""
+        return self.title
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         """Defaults + validated overrides; subclasses add cross-parameter checks."""
@@ -54,39 +57,40 @@ class Probe:
         """Coordinates [m] of the probe tip (where effective masses are evaluated)."""
         raise NotImplementedError
 
+    def static_stiffness(self, values: dict[str, Any], model) -> dict[str, Any]:
+        """FEM static stiffness of the probe's loaded end beside its analytic references, as
+        ``{name: N/m}``; a probe that declares no such reference returns ``{}``."""
+        return {}
+
+    def mass_per_length(self, values: dict[str, Any], model) -> float:
+        """Mass per length [kg/m] of the body for the damping per length ``mu`` of eq 3.2: the
+        FE model's mass without the rigid tip mass, over ``values["length"]``."""
+        L = values.get("length")
+        if not L:
+            raise ParameterError(f"--mu needs a beam length; probe '{self.name}' has none, use --q")
+        return (model.total_mass() - (values.get("tip_mass") or 0.0)) / L
+
     def modes(self, overrides: dict[str, Any] | None = None, n_modes: int = 8):
         """Convenience: resolve, build and solve."""
         values = self.resolve(overrides)
         return self.build(values).modes(n_modes)
 
 
-def register_probe(cls: type[Probe]) -> type[Probe]:
-    """Class decorator adding a probe to the registry under ``cls.name``."""
-    if not cls.name:
-        raise ValueError(f"probe class {cls.__name__} has no name")
-    _REGISTRY[cls.name] = cls
-    return cls
+#: The probes: one module per probe in this package (discovered on first lookup).
+PROBES: Registry[type[Probe]] = Registry("probe", Probe, required=("build", "tip_point"), package="probedyn.probes")
 
-
-def _discover() -> None:
-    global _DISCOVERED
-    if _DISCOVERED:
-        return
-    _DISCOVERED = True
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
+#: class decorator adding a probe to :data:`PROBES`
+register_probe = PROBES.register
 
 
 def list_probes() -> list[str]:
-    _discover()
-    return sorted(_REGISTRY)
+    """Keys of the registered probes."""
+    return PROBES.names()
 
 
 def get_probe(name_or_path: str | Path) -> tuple[Probe, dict[str, Any]]:
-    """A probe by registry name, or from a TOML file (``probe = "<name>"`` plus parameter
+    """A probe by registry key, or from a TOML file (``probe = "<key>"`` plus parameter
     keys).  Returns ``(probe, overrides)``; unknown names and malformed files raise."""
-    _discover()
     s = str(name_or_path)
     overrides: dict[str, Any] = {}
     if s.endswith(".toml") or (Path(s).suffix and Path(s).exists()):
@@ -100,9 +104,7 @@ def get_probe(name_or_path: str | Path) -> tuple[Probe, dict[str, Any]]:
             overrides[k] = v
     else:
         name = s
-    if name not in _REGISTRY:
-        raise ParameterError(f"unknown probe '{name}' (known: {', '.join(sorted(_REGISTRY))})")
-    probe = _REGISTRY[name]()
+    probe = PROBES.create(name)
     if overrides:
         probe.params.resolve(overrides)  # validate now: names the bad key
     return probe, overrides

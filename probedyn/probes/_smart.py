@@ -1,171 +1,97 @@
-"""Shared machinery of the smart probes (duo-bimorph, piezotube): a lumped tip on a spring.
+"""What the two smart probes (duo-bimorph, piezotube) share: a PZT body, a tip holder that is
+either meshed (a block or collar with its stiffness-tuning piezolayer) or a point mass, and the
+cantilever tip as a lumped mass on the holder springs (eqs 3.4, 3.20), modelled by
+:class:`probedyn.fem.augmented.AugmentedModel`.
 
-The source models the cantilever tip as a mass ``m`` on the holder spring ``k_t`` (eqs 3.4,
-3.20). The FE model of :mod:`probedyn.fem.model` has springs between mesh attachments only, so
-:class:`SmartModel` extends :class:`~probedyn.fem.model.ElasticModel` by three extra degrees
-of freedom ``q_t`` (the tip displacement) coupled to an attachment of the mesh ``A`` (a face
-average, e.g. the holder end face) by a diagonal spring ``K_t = diag(k_tx, k_ty, k_tz)``::
-
-    K_aug = [[K + A^T K_t A, -A^T K_t], [-K_t A, K_t]],   M_aug = [[M, 0], [0, m I]].
-
-Modes of the augmented system are returned as ordinary :class:`~probedyn.fem.modes.Mode` s:
-``shape`` is the mesh part (for rendering and VTU), ``tip_displacement`` the tip DOFs,
-``effective_mass_tip[d] = 1 / q_t,d^2`` (the augmented shape is mass-normalised),
-``kinetic_energy_share`` has one entry per region, ``point_masses`` and ``tip`` (the lumped
-tip, m |q_t|^2), and ``strain_energy_share_holder_spring`` = ``(q_t - A phi)^T K_t (q_t - A phi)
-/ omega^2`` is stored in ``family_shares['holder_spring_strain']``.
+A smart probe also declares what the lumped model of eq 3.37 (:mod:`probedyn.lumped.smart`)
+needs from it, so the reduction never asks which probe it has: the modelled directions, how
+FEM modes are grouped by direction (a degenerate pair is one group), the regions of the body
+(the distributed drag of eq 3.2 acts there), the holder springs the localisation study sweeps,
+and ``rho A`` of the body.
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any, ClassVar
 
-import numpy as np
-import scipy.sparse as sp
+from probedyn.fem.augmented import AugmentedModel, LumpedTip
+from probedyn.fem.materials import get_material
+from probedyn.fem.model import PointMass
+from probedyn.meshes._gmsh import region_volumes
+from probedyn.probes import Probe
 
-from probedyn.core.errors import ParameterError
-from probedyn.fem.model import ElasticModel
-
-DIRS = ("x", "y", "z")
-
-
-@dataclass(frozen=True)
-class LumpedTip:
-    """Tip mass ``mass`` [kg] on a diagonal spring ``stiffness`` (k_x, k_y, k_z) [N/m] to the
-    attachment ``attach`` (a boundary name: face-averaged, or a named point)."""
-
-    mass: float
-    stiffness: tuple[float, float, float]
-    attach: str
-
-    def __post_init__(self) -> None:
-        if not (np.isfinite(self.mass) and self.mass > 0):
-            raise ParameterError(f"lumped tip mass must be positive, got {self.mass:g} kg")
-        k = np.asarray(self.stiffness, dtype=float)
-        if k.shape != (3,) or not np.all(np.isfinite(k)) or np.any(k <= 0):
-            raise ParameterError(f"lumped tip stiffnesses must be three positive values, got {self.stiffness}")
+#: meshed holder regions (block or collar + piezolayer)
+HOLDER_REGIONS = ("holder", "holder_piezolayer")
 
 
-class SmartModel(ElasticModel):
-    """:class:`ElasticModel` plus an optional :class:`LumpedTip` (module docstring)."""
+class SmartProbe(Probe):
+    """Base of the smart probes (module docstring). Subclasses set the class attributes below
+    and implement ``mesh``, ``body_regions_of`` (the PZT body's regions and materials),
+    ``holder_geometric_mass`` and ``body_rho_A``."""
 
-    def __init__(self, *args, lumped_tip: LumpedTip | None = None, **kw) -> None:
-        super().__init__(*args, **kw)
-        self.lumped_tip = lumped_tip
+    #: directions of the lumped model (order of its matrices), eq 3.4 / 3.20
+    lumped_directions: ClassVar[tuple[str, ...]] = ()
+    #: FEM modes compared per group of directions (a degenerate pair forms one group)
+    direction_groups: ClassVar[dict[str, tuple[str, ...]]] = {}
+    #: regions of the PZT body (the drag of eq 3.2 acts on them)
+    body_regions: ClassVar[tuple[str, ...]] = ()
+    #: holder-spring directions set to k in the localisation study (section 3.4.1)
+    sweep_directions: ClassVar[tuple[str, ...]] = ()
+    #: attachment carrying the point-mass holder (end face of the body)
+    body_end: ClassVar[str] = ""
+    #: attachment of the tip's holder springs (holder end face)
+    holder_end: ClassVar[str] = "holder_end"
 
-    def describe(self) -> dict[str, Any]:
-        d = super().describe()
-        if self.lumped_tip is not None:
-            d["lumped_tip"] = {"mass": self.lumped_tip.mass, "stiffness": list(self.lumped_tip.stiffness),
-                               "attach": self.lumped_tip.attach}
-        return d
+    def pzt(self, values: dict[str, Any]):
+        """The PZT of the body, with the table's density."""
+        return get_material(values["material"]).with_overrides(rho=values["density"])
 
-    def vertex_displacement(self, shape: np.ndarray) -> np.ndarray:
-        """(n_vertices, 3) displacement of a full DOF vector at the mesh vertices (the P2
-        vertex nodes; interleaved numbering ``3 * node + component``)."""
-        U = np.asarray(shape)[: self.ndofs_total].reshape(self.n_nodes, 3)
-        return U[np.asarray(self.basis.nodal_dofs[0])]
+    def s11(self, values: dict[str, Any]) -> float:
+        """Compliance along the probe axis x [1/Pa] of the PZT (a local 1-2 plane direction)."""
+        return float(self.pzt(values).S[0, 0])
 
-    def augmented(self) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray, sp.csr_matrix]:
-        """(K_aug, M_aug) restricted to the free mesh DOFs + 3 tip DOFs, the free DOF index
-        array and the attachment operator A (3, ndofs_total)."""
-        lt = self.lumped_tip
-        K, M = self.assemble()
-        free = self.free_dofs
-        A = self.attachment(lt.attach).tocsr()
-        Kt = sp.diags(np.asarray(lt.stiffness, dtype=float))
-        Af = A[:, free]
-        Kff = K[free][:, free] + Af.T @ Kt @ Af
-        Ka = sp.bmat([[Kff, -Af.T @ Kt], [-Kt @ Af, Kt]], format="csr")
-        Ma = sp.bmat([[M[free][:, free], None], [None, sp.identity(3) * lt.mass]], format="csr")
-        return Ka, Ma, free, A
+    def holder_mass(self, values: dict[str, Any]) -> float:
+        """The holder mass that drives the model [kg] (table m_h or geometry)."""
+        return values["holder_mass"] if values["holder_mass_source"] == "table" else self.holder_geometric_mass(values)
 
-    def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto"):
-        if self.lumped_tip is None:
-            return super().modes(n_modes, sigma=sigma, solver=solver)
-        from probedyn.fem import elasticity as el
-        from probedyn.fem.eigen import shift_invert_eigsh
-        from probedyn.fem.modes import ModalResult, Mode, classify_shapes
+    def holder_geometric_mass(self, values: dict[str, Any]) -> float:
+        raise NotImplementedError
 
-        if int(n_modes) != n_modes or n_modes < 1:
-            raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
-        Ka, Ma, free, A = self.augmented()
-        res = shift_invert_eigsh(Ka, Ma, int(n_modes), sigma=sigma, solver=solver)
-        t0 = time.perf_counter()
-        nf = free.size
-        k = res.vectors.shape[1]
-        Phi = np.zeros((self.ndofs_total, k))
-        Phi[free] = res.vectors[:nf]
-        qt = res.vectors[nf:].T  # (k, 3)
-        _, M = self.assemble()
-        weights = el.lumped_weights(self.mesh, self.elem_density)
-        fams, shares = classify_shapes(self.basis.doflocs, weights, Phi.reshape(self.n_nodes, 3, k), axis=self.beam_axis)
-        ke = self.energy_shares(Phi, qt)
-        uh = (A @ Phi).T  # holder attachment displacement (k, 3)
-        kt = np.asarray(self.lumped_tip.stiffness, dtype=float)
-        Ma_r = Ma @ res.vectors
-        modes = []
-        for i in range(k):
-            lam = max(float(res.eigenvalues[i]), 0.0)
-            omega = float(np.sqrt(lam))
-            meff, keff, gam, frac = {}, {}, {}, {}
-            big = float(np.max(np.abs(qt[i])))
-            for c, d in enumerate(DIRS):
-                u = float(qt[i, c])
-                if abs(u) <= 1e-6 * max(big, 1e-300):
-                    meff[d] = keff[d] = float("inf")
-                else:
-                    meff[d] = 1.0 / u**2
-                    keff[d] = lam / u**2
-                r = np.zeros(nf + 3)
-                r[np.nonzero((free % 3) == c)[0]] = 1.0
-                r[nf + c] = 1.0
-                g = float(r @ Ma_r[:, i])
-                mt = float(r @ (Ma @ r))
-                gam[d], frac[d] = g, g * g / mt
-            sh = dict(shares[i])
-            dq = qt[i] - uh[i]
-            sh["holder_spring_strain"] = float((kt * dq**2).sum() / lam) if lam > 0 else float("nan")
-            modes.append(Mode(
-                index=i + 1, frequency_hz=omega / (2 * np.pi), omega=omega, family=fams[i],
-                shape=Phi[:, i], tip_displacement=qt[i].copy(), effective_mass_tip=meff,
-                effective_stiffness_tip=keff, participation=gam, effective_mass_fraction=frac,
-                kinetic_energy_share=ke[i], family_shares=sh,
-            ))
-        timings = dict(self.timings)
-        timings.update(factor_s=res.factor_s, solve_s=res.factor_s + res.solve_s, arpack_s=res.solve_s,
-                       postprocess_s=time.perf_counter() - t0, n_opinv=res.n_opinv)
-        return ModalResult(modes, int(nf + 3), self, timings, self.ndofs_total + 3, res.backend,
-                           self.total_mass() + self.lumped_tip.mass, "tip")
+    def body_rho_A(self, values: dict[str, Any]) -> float:
+        """Mass per length of the PZT body [kg/m] (the damping c = mu int phi^2 of eq 3.2)."""
+        raise NotImplementedError
 
-    def energy_shares(self, Phi: np.ndarray, qt: np.ndarray | None = None) -> list[dict[str, float]]:
-        """Kinetic-energy shares (``phi^T M_region phi`` / total) per region, of the point
-        masses and of the lumped tip, for mesh shapes ``Phi`` (ndofs, k) and tip DOFs ``qt``."""
-        from probedyn.fem import elasticity as el
+    def _smart_model(self, values: dict[str, Any], bundle, body: dict[str, Any], orient=None,
+                     extra: dict[str, Any] | None = None, tip: str = "holder_end") -> AugmentedModel:
+        """The FE model: ``body`` regions, the holder (meshed: its density scaled so that block +
+        piezolayer weigh m_h for the ``table`` source; point: m_h on :attr:`body_end`), ``extra``
+        regions and, for ``tip = "lumped"``, the tip mass on the holder springs. ``orient``: the
+        piezolayer's poling orientation (None = the material's axes)."""
+        v = values
+        pzt = self.pzt(v)
 
-        k = Phi.shape[1]
-        parts: dict[str, np.ndarray] = {}
-        for r, name in enumerate(self.region_names):
-            dens = np.where(self.elem_region == r, self.elem_density, 0.0)
-            Mr = el.assemble_mass(self.mesh, dens)
-            parts[name] = np.einsum("ik,ik->k", Phi, Mr @ Phi)
-        if self.point_masses:
-            e = np.zeros(k)
-            for pm in self.point_masses:
-                u = self.attachment(pm.point) @ Phi
-                e += pm.mass * (np.asarray(u) ** 2).sum(axis=0)
-            parts["point_masses"] = e
-        if qt is not None and self.lumped_tip is not None:
-            parts["tip"] = self.lumped_tip.mass * (qt**2).sum(axis=1)
-        tot = sum(parts.values())
-        return [{n: float(v[i] / tot[i]) if tot[i] > 0 else float("nan") for n, v in parts.items()} for i in range(k)]
+        def piezo(mat):
+            return mat if orient is None else (mat, orient)
 
-
-def region_volumes(mesh, names: Sequence[str]) -> dict[str, float]:
-    """Volume [m^3] of each named subdomain of a tet mesh (sum of |det J| / 6)."""
-    p, t = mesh.p, mesh.t
-    a, b, c, d = (p[:, t[i]] for i in range(4))
-    vol = np.abs(np.einsum("ij,ij->j", b - a, np.cross(c - a, d - a, axis=0))) / 6.0
-    return {n: float(vol[mesh.subdomains[n]].sum()) for n in names if n in (mesh.subdomains or {})}
+        regions: dict[str, Any] = dict(body)
+        pms = []
+        if v["holder"] == "meshed":
+            hmat = get_material(v["holder_material"])
+            if v["holder_mass_source"] == "table":
+                vols = region_volumes(bundle.mesh, HOLDER_REGIONS)
+                rho_h = v["holder_mass"] / sum(vols.values())
+                regions["holder"] = hmat.with_overrides(rho=rho_h)
+                regions["holder_piezolayer"] = piezo(pzt.with_overrides(rho=rho_h))
+            else:
+                regions["holder"] = hmat
+                regions["holder_piezolayer"] = piezo(pzt)
+        else:
+            m_h = self.holder_mass(v)
+            if m_h > 0:
+                pms.append(PointMass(self.body_end, m_h))
+        regions.update(extra or {})
+        lumped = None
+        if v["tip"] == "lumped":
+            lumped = LumpedTip(v["tip_mass"], (v["k_tx"], v["k_ty"], v["k_tz"]), self.holder_end)
+        return AugmentedModel(bundle, regions, clamp=["clamp"], point_masses=pms, tip=tip, beam_axis=0,
+                              name=self.key, lumped_tip=lumped)

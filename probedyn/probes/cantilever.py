@@ -16,6 +16,11 @@ import numpy as np
 
 from probedyn.core.errors import GeometryError
 from probedyn.core.params import Param, ParamSet
+from probedyn.fem.materials import get_material
+from probedyn.fem.model import ElasticModel, PointMass
+from probedyn.lumped import beam as bm
+from probedyn.meshes.cache import MeshOptions
+from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
@@ -46,14 +51,13 @@ _PARAMS = ParamSet([
 class Cantilever(Probe):
     """Rectangular cantilever clamped at x = 0 (face ``clamp``), optional pyramid/cone tip."""
 
-    name = "cantilever"
-    description = "rectangular AFM cantilever (source 2.3), optional tip and tip mass"
+    key = "cantilever"
+    title = "rectangular AFM cantilever (source 2.3), optional tip and tip mass"
+    source = "section 2.3, eqs 2.36-2.46; tip mass eq 3.10"
     params = _PARAMS
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         v = self.params.resolve(overrides)
-        from probedyn.meshes.cantilever import validate_geometry
-
         validate_geometry(v["length"], v["width"], v["thickness"], v["tip_shape"], v["tip_height"], v["tip_half_angle"])
         if v["length"] < v["width"] or v["length"] < 2 * v["thickness"]:
             raise GeometryError(
@@ -63,24 +67,26 @@ class Cantilever(Probe):
         return v
 
     def material(self, values: dict[str, Any]):
-        from probedyn.fem.materials import get_material
-
         return get_material(values["material"]).with_overrides(
             values.get("youngs_modulus"), values.get("poisson_ratio"), values.get("density"))
 
     def mesh(self, values: dict[str, Any]):
-        from probedyn.meshes.cache import MeshOptions
-        from probedyn.meshes.cantilever import cantilever_mesh
-
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return cantilever_mesh(values["length"], values["width"], values["thickness"], values["tip_shape"],
                                values["tip_height"], values["tip_half_angle"], options=opts)
 
     def build(self, values: dict[str, Any]):
-        from probedyn.fem.model import ElasticModel, PointMass
+        from probedyn.core import progress
+        from probedyn.fem.size import check_model, dofs_for_volume
+        from probedyn.meshes.cache import MeshOptions
 
         mat = self.material(values)
-        bundle = self.mesh(values)
+        # before meshing: the model this mesh gives must fit (the beam's volume, the mesh size)
+        L, w, t = values["length"], values["width"], values["thickness"]
+        h = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"])).size_for(min(w, t))
+        check_model(dofs_for_volume(L * w * t, h), "cantilever model")
+        with progress.stage("meshing the cantilever"):
+            bundle = self.mesh(values)
         regions = {"body": mat}
         if "tip" in (bundle.mesh.subdomains or {}):
             regions["tip"] = mat
@@ -89,30 +95,34 @@ class Cantilever(Probe):
                             name="cantilever")
 
     def tip_point(self, values: dict[str, Any]) -> np.ndarray:
-        from probedyn.meshes.cantilever import tip_apex
-
         return tip_apex(values["length"], values["thickness"], values["tip_shape"], values["tip_height"],
                         values["tip_half_angle"])
 
     def beam(self, values: dict[str, Any]):
         """The equivalent :class:`probedyn.lumped.beam.RectBeam` (isotropic materials only;
         an anisotropic one uses E along x and nu from the x-y compliance)."""
-        from probedyn.lumped.beam import RectBeam
-
         mat = self.material(values)
         if mat.is_isotropic():
             E, nu = mat.isotropic_constants()
         else:
             S = mat.S
             E, nu = 1.0 / S[0, 0], float(np.clip(-S[0, 1] / S[0, 0], -0.99, 0.49))
-        return RectBeam(values["length"], values["width"], values["thickness"], E, nu, mat.density)
+        return bm.RectBeam(values["length"], values["width"], values["thickness"], E, nu, mat.density)
+
+    def static_stiffness(self, values: dict[str, Any], model) -> dict[str, Any]:
+        """FEM static stiffness of the free end (face-averaged, z) beside 3EI/L^3 with and
+        without the Timoshenko shear correction."""
+        from probedyn.lumped import beam as bm
+
+        b = self.beam(values)
+        return {"fem_n_per_m": float(model.static_stiffness("free_end", (0, 0, 1))),
+                "euler_bernoulli_3EI_L3": bm.static_tip_stiffness(b, "flapwise", shear=False),
+                "with_shear_correction": bm.static_tip_stiffness(b, "flapwise", shear=True)}
 
     def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
         """Per FEM mode, the beam formula of its family and order: Euler–Bernoulli (2.40–2.41)
         and Timoshenko bending, Saint-Venant torsion, axial rod; with a tip mass the two forms
         of (3.10) (Euler–Bernoulli).  The tip (pyramid/cone) is not in the beam models."""
-        from probedyn.lumped import beam as bm
-
         b = self.beam(values)
         mu = values.get("tip_mass", 0.0) or 0.0
         count: dict[str, int] = {}

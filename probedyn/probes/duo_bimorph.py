@@ -11,7 +11,7 @@ User choices (SOURCE-NOTES item 10):
 * ``holder = "meshed"`` (a silicon block L_h x holder_width x holder_thickness with its PZT
   stiffness-tuning piezolayer on top) or ``"point"`` (a rigid mass on the face-averaged
   displacement of the body end face, no rotary inertia, as in the beam equation 3.8);
-* ``holder_mass_source = "table"``: the holder carries Table 3.1's ``m_h`` = 2e-7 kg (the
+* ``holder_mass_source = "table"``: the holder carries Table 3.1's ``m_h`` (the
   meshed holder's density is scaled so that holder + piezolayer weigh m_h), or ``"geometry"``:
   the holder weighs what its volume and materials give (1.2e-10 kg for the default block,
   ~1700 times less than the table value);
@@ -28,50 +28,63 @@ E = 1/s11 option.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
 from probedyn.core.errors import GeometryError
 from probedyn.core.params import Param, ParamSet
-from probedyn.probes import Probe, register_probe
+from probedyn.core.presets import preset
+from probedyn.fem.materials import get_material
+from probedyn.lumped.smart import duo_bimorph_references
+from probedyn.lumped.smart_analytic import DuoBimorphBeam
+from probedyn.meshes._gmsh import region_volumes
+from probedyn.meshes.cache import MeshOptions
+from probedyn.meshes.duo_bimorph import DEFAULTS as GEOM
+from probedyn.meshes.duo_bimorph import duo_bimorph_mesh, named_points, validate
+from probedyn.probes import register_probe
+from probedyn.probes._smart import SmartProbe
 
 PZT_CHOICES = ("pzt-5h", "pzt-5h-iso")
 
+T31 = preset("table-3.1")
+
 _PARAMS = ParamSet([
-    Param("length", 300e-6, "m", "duo-bimorph length L (x)", lo=10e-6, hi=0.02, positive=True, source="Table 3.1"),
-    Param("width", 30e-6, "m", "duo-bimorph width w (y)", lo=1e-6, hi=0.005, positive=True, source="Table 3.1"),
-    Param("thickness", 10e-6, "m", "total thickness h of the two PZT layers (z)", lo=0.2e-6, hi=0.002,
+    Param("length", GEOM["length"], "m", "duo-bimorph length L (x)", lo=10e-6, hi=0.02, positive=True, source="Table 3.1"),
+    Param("width", GEOM["width"], "m", "duo-bimorph width w (y)", lo=1e-6, hi=0.005, positive=True, source="Table 3.1"),
+    Param("thickness", GEOM["thickness"], "m", "total thickness h of the two PZT layers (z)", lo=0.2e-6, hi=0.002,
           positive=True, source="Table 3.1"),
-    Param("electrode_gap", 5e-6, "m", "electrode separation w0 (splits each face into left/right)", lo=1e-8,
+    Param("electrode_gap", GEOM["electrode_gap"], "m", "electrode separation w0 (splits each face into left/right)", lo=1e-8,
           hi=0.005, positive=True, source="Table 3.1, eq 3.5"),
     Param("holder", "meshed", "", "tip holder: meshed block + piezolayer, or a point mass m_h on the end face",
           kind=str, choices=("meshed", "point")),
-    Param("holder_length", 50e-6, "m", "holder length L_h", lo=1e-7, hi=0.005, positive=True, source="Table 3.1"),
-    Param("holder_width", 30e-6, "m", "holder width (meshed holder)", lo=1e-7, hi=0.005, positive=True),
-    Param("holder_thickness", 8e-6, "m", "holder block thickness (meshed holder)", lo=1e-8, hi=0.002, positive=True),
-    Param("piezolayer_thickness", 2e-6, "m", "stiffness-tuning piezolayer on the holder", lo=1e-8, hi=0.002,
+    Param("holder_length", GEOM["holder_length"], "m", "holder length L_h", lo=1e-7, hi=0.005, positive=True,
+          source="Table 3.1"),
+    Param("holder_width", GEOM["holder_width"], "m", "holder width (meshed holder)", lo=1e-7, hi=0.005, positive=True),
+    Param("holder_thickness", GEOM["holder_thickness"], "m", "holder block thickness (meshed holder)", lo=1e-8, hi=0.002, positive=True),
+    Param("piezolayer_thickness", GEOM["piezolayer_thickness"], "m", "stiffness-tuning piezolayer on the holder", lo=1e-8, hi=0.002,
           positive=True, source="3.2.1"),
     Param("holder_material", "silicon", "", "material of the holder block", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
     Param("holder_mass_source", "table", "", "which mass drives the holder: Table 3.1 m_h or its geometry",
           kind=str, choices=("table", "geometry"), source="SOURCE-NOTES 10"),
-    Param("holder_mass", 2e-7, "kg", "holder mass m_h (used when holder_mass_source = table)", lo=0.0, hi=1e-2,
-          source="Table 3.1"),
+    Param("holder_mass", T31["m_h"], "kg", "holder mass m_h (used when holder_mass_source = table)", lo=0.0,
+          hi=1e-2, source="Table 3.1"),
     Param("tip", "lumped", "", "cantilever tip: mass m on the holder spring k_t, a meshed cone, or none",
           kind=str, choices=("lumped", "meshed", "none")),
-    Param("tip_mass", 0.5e-7, "kg", "tip (header) mass m", lo=1e-18, hi=1e-2, positive=True, source="Table 3.1"),
+    Param("tip_mass", T31["m"], "kg", "tip (header) mass m", lo=1e-18, hi=1e-2, positive=True, source="Table 3.1"),
     Param("k_tx", 100.0, "N/m", "holder spring along x (not in the source; an AFM cantilever is stiff axially)",
           lo=1e-4, hi=1e7, positive=True),
-    Param("k_ty", 0.1, "N/m", "holder spring along y, k_y2", lo=1e-4, hi=1e7, positive=True, source="Table 3.1"),
-    Param("k_tz", 10.0, "N/m", "holder spring along z, k_z2", lo=1e-4, hi=1e7, positive=True, source="Table 3.1"),
-    Param("tip_height", 5e-6, "m", "meshed tip cone height", lo=1e-8, hi=0.002, positive=True),
-    Param("tip_radius", 2e-6, "m", "meshed tip cone base radius", lo=1e-8, hi=0.002, positive=True),
+    Param("k_ty", T31["k_y2"], "N/m", "holder spring along y, k_y2", lo=1e-4, hi=1e7, positive=True,
+          source="Table 3.1"),
+    Param("k_tz", T31["k_z2"], "N/m", "holder spring along z, k_z2", lo=1e-4, hi=1e7, positive=True,
+          source="Table 3.1"),
+    Param("tip_height", GEOM["tip_height"], "m", "meshed tip cone height", lo=1e-8, hi=0.002, positive=True),
+    Param("tip_radius", GEOM["tip_radius"], "m", "meshed tip cone base radius", lo=1e-8, hi=0.002, positive=True),
     Param("material", "pzt-5h", "", "PZT of the layers: transversely isotropic, or isotropic E = 1/s11",
           kind=str, choices=PZT_CHOICES),
-    Param("density", 7800.0, "kg/m^3", "density of the PZT (overrides the material's)", lo=1000.0, hi=20000.0,
-          positive=True, source="Table 3.1"),
+    Param("density", T31["rho"], "kg/m^3", "density of the PZT (overrides the material's)", lo=1000.0,
+          hi=20000.0, positive=True, source="Table 3.1"),
     Param("mu", 0.0, "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
           source="3.2"),
     Param("elements_through_thickness", 1, "", "elements through one PZT layer (P2 tets)", lo=1, hi=20, kind=int),
@@ -84,17 +97,21 @@ GEOM_KEYS = ("length", "width", "thickness", "electrode_gap", "holder", "holder_
 
 
 @register_probe
-class DuoBimorph(Probe):
+class DuoBimorph(SmartProbe):
     """The duo-bimorph probe (module docstring)."""
 
-    name = "duo-bimorph"
-    description = "duo-bimorph smart probe (source 3.2): two PZT layers, tip holder + piezolayer, tip on holder spring"
+    key = "duo-bimorph"
+    title = "duo-bimorph smart probe (source 3.2): two PZT layers, tip holder + piezolayer, tip on holder spring"
+    source = "section 3.2, Fig 3.4, eqs 3.1-3.18, Table 3.1"
     params = _PARAMS
+    lumped_directions = ("y", "z")
+    direction_groups = {"y": ("y",), "z": ("z",)}
+    body_regions = ("upper_layer", "lower_layer")
+    sweep_directions = ("y", "z")
+    body_end = "holder_end"
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         v = self.params.resolve(overrides)
-        from probedyn.meshes.duo_bimorph import validate
-
         validate(self._geom(v))
         if v["length"] < 2 * v["width"] or v["length"] < 5 * v["thickness"]:
             raise GeometryError(
@@ -108,83 +125,37 @@ class DuoBimorph(Probe):
         return g
 
     def mesh(self, values: dict[str, Any]):
-        from probedyn.meshes.cache import MeshOptions
-        from probedyn.meshes.duo_bimorph import duo_bimorph_mesh
-
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return duo_bimorph_mesh(self._geom(values), options=opts)
 
-    def pzt(self, values: dict[str, Any]):
-        from probedyn.fem.materials import get_material
-
-        return get_material(values["material"]).with_overrides(rho=values["density"])
-
-    def s11(self, values: dict[str, Any]) -> float:
-        """Compliance along the beam axis x [1/Pa] of the layer material (poled along z)."""
-        return float(self.pzt(values).S[0, 0])
-
     def holder_geometric_mass(self, values: dict[str, Any]) -> float:
         """Mass [kg] of the nominal holder block + piezolayer with their own densities."""
-        from probedyn.fem.materials import get_material
-
         v = values
         vol_h = v["holder_length"] * v["holder_width"] * v["holder_thickness"]
         vol_p = v["holder_length"] * v["holder_width"] * v["piezolayer_thickness"]
         return vol_h * get_material(v["holder_material"]).density + vol_p * v["density"]
 
-    def holder_mass(self, values: dict[str, Any]) -> float:
-        """The holder mass that drives the model [kg] (table m_h or geometry)."""
-        return values["holder_mass"] if values["holder_mass_source"] == "table" else self.holder_geometric_mass(values)
+    def body_rho_A(self, values: dict[str, Any]) -> float:
+        return values["density"] * values["width"] * values["thickness"]
 
     def build(self, values: dict[str, Any]):
-        from probedyn.fem.materials import get_material
-        from probedyn.fem.model import PointMass
-        from probedyn.probes._smart import LumpedTip, SmartModel, region_volumes
-
         v = values
         bundle = self.mesh(v)
         pzt = self.pzt(v)
-        regions: dict[str, Any] = {"upper_layer": pzt, "lower_layer": pzt}
-        pms = []
-        if v["holder"] == "meshed":
-            hmat = get_material(v["holder_material"])
-            if v["holder_mass_source"] == "table":
-                vols = region_volumes(bundle.mesh, ["holder", "holder_piezolayer"])
-                rho_h = v["holder_mass"] / (vols["holder"] + vols["holder_piezolayer"])
-                regions["holder"] = hmat.with_overrides(rho=rho_h)
-                regions["holder_piezolayer"] = pzt.with_overrides(rho=rho_h)
-            else:
-                regions["holder"] = hmat
-                regions["holder_piezolayer"] = pzt
-        else:
-            m_h = self.holder_mass(v)
-            if m_h > 0:
-                pms.append(PointMass("holder_end", m_h))
-        tipattach = "holder_end"
-        lumped = None
-        tip = "holder_end"
+        extra, tip = {}, "holder_end"
         if v["tip"] == "meshed":
             si = get_material("silicon")
             vol = region_volumes(bundle.mesh, ["tip"])["tip"]
-            regions["tip"] = si.with_overrides(rho=v["tip_mass"] / vol) if v["holder_mass_source"] == "table" else si
+            extra["tip"] = si.with_overrides(rho=v["tip_mass"] / vol) if v["holder_mass_source"] == "table" else si
             tip = "tip"
-        elif v["tip"] == "lumped":
-            lumped = LumpedTip(v["tip_mass"], (v["k_tx"], v["k_ty"], v["k_tz"]), tipattach)
-        return SmartModel(bundle, regions, clamp=["clamp"], point_masses=pms, tip=tip, beam_axis=0,
-                          name="duo-bimorph", lumped_tip=lumped)
+        return self._smart_model(v, bundle, {"upper_layer": pzt, "lower_layer": pzt}, extra=extra, tip=tip)
 
     def tip_point(self, values: dict[str, Any]) -> np.ndarray:
-        from probedyn.meshes.duo_bimorph import named_points, validate
-
         return named_points(validate(self._geom(values)))["tip"]
 
-    def beam(self, values: dict[str, Any]):
-        from probedyn.lumped.smart_analytic import DuoBimorphBeam
-
+    def beam(self, values: dict[str, Any]) -> DuoBimorphBeam:
         return DuoBimorphBeam(values["length"], values["width"], values["thickness"], values["density"], self.s11(values))
 
     def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
         """Analytic rows (see :func:`probedyn.lumped.smart.duo_bimorph_references`)."""
-        from probedyn.lumped.smart import duo_bimorph_references
-
         return duo_bimorph_references(self, values, result)

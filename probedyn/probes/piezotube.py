@@ -14,7 +14,7 @@ User choices (SOURCE-NOTES item 10):
 * ``holder_mass_source = "table"`` (Table 3.2's m_h = 2e-5 kg; the meshed collar's density is
   scaled to it) or ``"geometry"``;
 * ``tip = "lumped"`` (mass ``tip_mass`` on k_tx, k_ty, k_tz at the holder end face) or
-  ``"none"``. Table 3.2 gives neither m nor k_t: the defaults take m = 0.5e-7 kg from Table 3.1
+  ``"none"``. Table 3.2 gives neither m nor k_t: the defaults take Table 3.1's m
   and k_t = 10 N/m (the "manipulation" stiffness of section 3.4.1).
 
 Defaults: Re = 0.5 mm, L = 5 mm (Table 3.2), **Ri = 0.45 mm** (section 3.5; Table 3.2 prints
@@ -25,44 +25,55 @@ taken about the outer circle's axis.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from probedyn.core.params import Param, ParamSet
-from probedyn.probes import Probe, register_probe
+from probedyn.core.presets import preset
+from probedyn.fem.materials import get_material, radial_poling
+from probedyn.lumped.smart import piezotube_references
+from probedyn.lumped.smart_analytic import Piezotube as Tube
+from probedyn.meshes.cache import MeshOptions
+from probedyn.meshes.piezotube import DEFAULTS as GEOM
+from probedyn.meshes.piezotube import piezotube_mesh, validate
+from probedyn.probes import register_probe
+from probedyn.probes._smart import SmartProbe
+
+T32 = preset("table-3.2")
 
 _PARAMS = ParamSet([
-    Param("Re", 0.5e-3, "m", "outer radius R_e", lo=10e-6, hi=0.05, positive=True, source="Table 3.2"),
-    Param("Ri", 0.45e-3, "m", "inner (bore) radius R_i (section 3.5; Table 3.2 prints 0.3e-3)", lo=1e-6, hi=0.05,
-          positive=True, source="3.5"),
-    Param("length", 5e-3, "m", "tube length L (probedyn x)", lo=50e-6, hi=0.1, positive=True, source="Table 3.2"),
+    Param("Re", GEOM["Re"], "m", "outer radius R_e", lo=10e-6, hi=0.05, positive=True, source="Table 3.2"),
+    Param("Ri", GEOM["Ri"], "m", "inner (bore) radius R_i (section 3.5; Table 3.2 prints 0.3e-3)", lo=1e-6,
+          hi=0.05, positive=True, source="3.5"),
+    Param("length", GEOM["length"], "m", "tube length L (probedyn x)", lo=50e-6, hi=0.1, positive=True, source="Table 3.2"),
     Param("delta_y", 0.0, "m", "bore offset along y (source delta_y)", lo=-0.01, hi=0.01, source="Fig 3.19"),
     Param("delta_z", 0.0, "m", "bore offset along z (source delta_x)", lo=-0.01, hi=0.01, source="Fig 3.19"),
     Param("holder", "meshed", "", "tip holder: meshed collar + piezolayer ring, or a point mass m_h", kind=str,
           choices=("meshed", "point")),
-    Param("holder_length", 0.5e-3, "m", "holder (collar) length L_h", lo=1e-6, hi=0.05, positive=True),
-    Param("holder_wall", 0.25e-3, "m", "radial thickness of the holder collar outside Re", lo=1e-6, hi=0.05,
+    Param("holder_length", GEOM["holder_length"], "m", "holder (collar) length L_h", lo=1e-6, hi=0.05, positive=True),
+    Param("holder_wall", GEOM["holder_wall"], "m", "radial thickness of the holder collar outside Re", lo=1e-6, hi=0.05,
           positive=True),
-    Param("piezolayer_thickness", 25e-6, "m", "stiffness-tuning piezolayer ring on the holder", lo=1e-7, hi=0.005,
+    Param("piezolayer_thickness", GEOM["piezolayer_thickness"], "m", "stiffness-tuning piezolayer ring on the holder", lo=1e-7, hi=0.005,
           positive=True, source="3.3.1"),
     Param("holder_material", "silicon", "", "material of the holder collar", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
     Param("holder_mass_source", "table", "", "which mass drives the holder: Table 3.2 m_h or its geometry",
           kind=str, choices=("table", "geometry"), source="SOURCE-NOTES 10"),
-    Param("holder_mass", 0.02e-3, "kg", "holder mass m_h", lo=0.0, hi=1.0, source="Table 3.2"),
+    Param("holder_mass", T32["m_h"], "kg", "holder mass m_h", lo=0.0, hi=1.0, source="Table 3.2"),
     Param("tip", "lumped", "", "cantilever tip: mass m on the holder springs k_t, or none", kind=str,
           choices=("lumped", "none")),
-    Param("tip_mass", 0.5e-7, "kg", "tip mass m (Table 3.2 gives none; Table 3.1's value)", lo=1e-18, hi=1.0,
-          positive=True, source="Table 3.1"),
+    Param("tip_mass", preset("table-3.1")["m"], "kg", "tip mass m (Table 3.2 gives none; Table 3.1's value)",
+          lo=1e-18, hi=1.0, positive=True, source="Table 3.1"),
     Param("k_tx", 10.0, "N/m", "holder spring along the tube axis", lo=1e-4, hi=1e8, positive=True, source="3.4.1"),
     Param("k_ty", 10.0, "N/m", "holder spring along y", lo=1e-4, hi=1e8, positive=True, source="3.4.1"),
     Param("k_tz", 10.0, "N/m", "holder spring along z", lo=1e-4, hi=1e8, positive=True, source="3.4.1"),
     Param("material", "pzt-5h", "", "PZT of the tube: transversely isotropic radially poled, or isotropic E = 1/s11",
           kind=str, choices=("pzt-5h", "pzt-5h-iso")),
-    Param("density", 7800.0, "kg/m^3", "density of the PZT (overrides the material's)", lo=1000.0, hi=20000.0,
-          positive=True, source="Table 3.2"),
-    Param("mu", 0.1, "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
+    Param("density", T32["rho"], "kg/m^3", "density of the PZT (overrides the material's)", lo=1000.0,
+          hi=20000.0, positive=True, source="Table 3.2"),
+    Param("mu", T32["mu"], "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
           source="Table 3.2"),
     Param("elements_through_thickness", 1, "", "elements through the tube wall (structured P2 tets)", lo=1, hi=12,
           kind=int),
@@ -75,31 +86,27 @@ GEOM_KEYS = ("Re", "Ri", "length", "delta_y", "delta_z", "holder", "holder_lengt
 
 
 @register_probe
-class Piezotube(Probe):
+class Piezotube(SmartProbe):
     """The piezotube probe (module docstring)."""
 
-    name = "piezotube"
-    description = "piezotube smart probe (source 3.3): radially poled PZT tube, holder + piezolayer, tip on holder spring"
+    key = "piezotube"
+    title = "piezotube smart probe (source 3.3): radially poled PZT tube, holder + piezolayer, tip on holder spring"
+    source = "sections 3.3, 3.5, Figs 3.9-3.11, 3.19, eqs 3.19-3.29, Table 3.2"
     params = _PARAMS
+    lumped_directions = ("x", "y", "z")
+    direction_groups = {"lateral": ("y", "z"), "axial": ("x",)}
+    body_regions = ("tube",)
+    sweep_directions = ("x", "y", "z")
+    body_end = "tube_end"
 
     def resolve(self, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
         v = self.params.resolve(overrides)
-        from probedyn.meshes.piezotube import validate
-
         validate({k: v[k] for k in GEOM_KEYS})
         return v
 
     def mesh(self, values: dict[str, Any]):
-        from probedyn.meshes.cache import MeshOptions
-        from probedyn.meshes.piezotube import piezotube_mesh
-
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return piezotube_mesh({k: values[k] for k in GEOM_KEYS}, options=opts)
-
-    def pzt(self, values: dict[str, Any]):
-        from probedyn.fem.materials import get_material
-
-        return get_material(values["material"]).with_overrides(rho=values["density"])
 
     def s11(self, values: dict[str, Any]) -> float:
         """Axial compliance [1/Pa]: the tube axis is perpendicular to the radial poling, so it is
@@ -111,58 +118,26 @@ class Piezotube(Probe):
         return float(self.pzt(values).S[5, 5])
 
     def holder_geometric_mass(self, values: dict[str, Any]) -> float:
-        from probedyn.fem.materials import get_material
-
         v = values
         R2 = v["Re"] + v["holder_wall"]
         a = np.pi * (R2**2 - v["Ri"] ** 2) * v["holder_length"]
         b = np.pi * ((R2 + v["piezolayer_thickness"]) ** 2 - R2**2) * v["holder_length"]
         return float(a * get_material(v["holder_material"]).density + b * v["density"])
 
-    def holder_mass(self, values: dict[str, Any]) -> float:
-        return values["holder_mass"] if values["holder_mass_source"] == "table" else self.holder_geometric_mass(values)
+    def body_rho_A(self, values: dict[str, Any]) -> float:
+        return values["density"] * math.pi * (values["Re"] ** 2 - values["Ri"] ** 2)
 
     def build(self, values: dict[str, Any]):
-        from probedyn.fem.materials import get_material, radial_poling
-        from probedyn.fem.model import PointMass
-        from probedyn.probes._smart import LumpedTip, SmartModel, region_volumes
-
         v = values
-        bundle = self.mesh(v)
-        pzt = self.pzt(v)
         Rr = radial_poling(axis_point=(0.0, 0.0, 0.0), axis_dir=(1.0, 0.0, 0.0))
-        regions: dict[str, Any] = {"tube": (pzt, Rr)}
-        pms = []
-        if v["holder"] == "meshed":
-            hmat = get_material(v["holder_material"])
-            if v["holder_mass_source"] == "table":
-                vols = region_volumes(bundle.mesh, ["holder", "holder_piezolayer"])
-                rho_h = v["holder_mass"] / (vols["holder"] + vols["holder_piezolayer"])
-                regions["holder"] = hmat.with_overrides(rho=rho_h)
-                regions["holder_piezolayer"] = (pzt.with_overrides(rho=rho_h), Rr)
-            else:
-                regions["holder"] = hmat
-                regions["holder_piezolayer"] = (pzt, Rr)
-        else:
-            m_h = self.holder_mass(v)
-            if m_h > 0:
-                pms.append(PointMass("tube_end", m_h))
-        lumped = None
-        if v["tip"] == "lumped":
-            lumped = LumpedTip(v["tip_mass"], (v["k_tx"], v["k_ty"], v["k_tz"]), "holder_end")
-        tip = "holder_end"  # the mesh part's reference attachment (the lumped tip has its own DOFs)
-        return SmartModel(bundle, regions, clamp=["clamp"], point_masses=pms, tip=tip, beam_axis=0,
-                          name="piezotube", lumped_tip=lumped)
+        # tip = "holder_end": the mesh part's reference attachment (the lumped tip has its own DOFs)
+        return self._smart_model(v, self.mesh(v), {"tube": (self.pzt(v), Rr)}, orient=Rr)
 
     def tip_point(self, values: dict[str, Any]) -> np.ndarray:
         return np.array([values["length"] + (values["holder_length"] if values["holder"] == "meshed" else 0.0), 0.0, 0.0])
 
-    def tube(self, values: dict[str, Any]):
-        from probedyn.lumped.smart_analytic import Piezotube as Tube
-
+    def tube(self, values: dict[str, Any]) -> Tube:
         return Tube(values["Re"], values["Ri"], values["length"], values["density"], self.s11(values))
 
     def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
-        from probedyn.lumped.smart import piezotube_references
-
         return piezotube_references(self, values, result)

@@ -1,47 +1,41 @@
-"""Contact mechanics registry (section 2.2 of the source): one module per model.
+"""Tip–sample contact models (section 2.2 of the source): one module per model, one registry.
 
-``get_contact_model(name, **params)`` returns an instance; ``list_models()`` the names. All
-models share the interface of :class:`.base.ContactModel`: force, contact radius and contact
-stiffness against penetration on the loading / unloading / unstable branches, pull-off forces,
-equilibrium at a given load, and the normalised (Maugis) curve of Fig 2.19.
+Every model is a class registered in :data:`~.base.CONTACT_MODELS` (a
+:class:`probedyn.core.registry.Registry`) that declares ``key``, ``title``, ``source``,
+``params`` (default :data:`~.base.COMMON_PARAMS`) and its normalised load–penetration curve
+(``nd_curve``, ``nd_endpoint``; see :class:`~.base.ContactModel`, which derives the branches,
+pull-off, equilibrium at a load and the normalised curve of Fig 2.19 from it). The modules of
+this package are imported on the first lookup, so **a new model is one new file**.
 
 ================  ===========================================  =========================
-name              model                                         source
+key               model                                         source
 ================  ===========================================  =========================
 ``dmt``           Derjaguin–Muller–Toporov + vdW tail           (2.20), (2.21)
 ``jkr``           Johnson–Kendall–Roberts                        text of 2.2.2.2 (not the printed 2.22)
 ``md``            Maugis–Dugdale + continuous vdW tail           (2.24)–(2.35), SOURCE-NOTES 3
 ================  ===========================================  =========================
+
+``get_contact_model(name, **params)`` and ``list_models()`` are the registry's ``create`` and
+``names``.
 """
 
 from __future__ import annotations
 
-from probedyn.core.errors import ParameterError
-
-from .base import COMMON_PARAMS, ContactModel
+from .base import COMMON_PARAMS, CONTACT_MODELS, ContactModel
 from .dmt import DMT
 from .jkr import JKR
 from .maugis_dugdale import MaugisDugdale
 
-_REGISTRY: dict[str, type[ContactModel]] = {
-    DMT.name: DMT,
-    JKR.name: JKR,
-    MaugisDugdale.name: MaugisDugdale,
-}
-_ALIASES = {"maugis-dugdale": "md", "maugis_dugdale": "md", "maugis": "md"}
-
 
 def list_models() -> list[str]:
-    """Names of the registered contact models."""
-    return list(_REGISTRY)
+    """Keys of the registered contact models."""
+    return CONTACT_MODELS.names()
 
 
 def get_contact_model(name: str, **params) -> ContactModel:
-    """An instance of contact model ``name`` with parameter overrides (SI units)."""
-    key = _ALIASES.get(str(name).lower(), str(name).lower())
-    if key not in _REGISTRY:
-        raise ParameterError(f"unknown contact model {name!r} (known: {', '.join(_REGISTRY)})")
-    return _REGISTRY[key](**params)
+    """An instance of contact model ``name`` (key or alias) with parameter overrides (SI units)."""
+    return CONTACT_MODELS.create(name, **params)
 
 
-__all__ = ["COMMON_PARAMS", "ContactModel", "DMT", "JKR", "MaugisDugdale", "get_contact_model", "list_models"]
+__all__ = ["COMMON_PARAMS", "CONTACT_MODELS", "ContactModel", "DMT", "JKR", "MaugisDugdale", "get_contact_model",
+           "list_models"]

@@ -42,9 +42,9 @@ interpolation of ``A`` against ``D_bar`` on the monotone branch, a bracket and a
 a safeguarded Newton iteration on ``D_bar(A) - D_target`` with the analytic ``dD_bar/dA``
 then lands on the curve to machine precision. All of it is vectorised.
 
-Parameters (SI, shared by all models): Table 4.1 of the source (tip 200 GPa / 0.33 / 50 nm,
-sample 0.27 GPa / 0.33 / 160 nm, Hamaker constant 1.452e-20 J) and zeta_0 = 3.75e-10 m from
-Table 4.4. The work of adhesion defaults to the Hamaker value ``W = H / (12 pi zeta_0^2)``
+Parameters (SI, shared by all models): Table 4.1 of the source (tip and sample moduli, Poisson
+ratios and radii, Hamaker constant) and zeta_0 from Table 4.4, read from
+:mod:`probedyn.core.presets`. The work of adhesion defaults to the Hamaker value ``W = H / (12 pi zeta_0^2)``
 (the value for which the DMT contact force -2 pi W R equals the van der Waals force
 -H R / (6 zeta_0^2) of (2.20) at contact); ``W`` or the transition parameter ``lam`` (2.24)
 may be given instead (``lam`` sets ``W``; then ``H = 12 pi W zeta_0^2`` so that one Hamaker
@@ -60,8 +60,12 @@ from typing import Any, ClassVar, Literal, Mapping
 
 import numpy as np
 
+from scipy.interpolate import CubicSpline
+
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset
+from probedyn.core.registry import Model, Registry
 
 Branch = Literal["loading", "unloading", "stable", "unstable"]
 
@@ -71,20 +75,22 @@ A_FLOOR = 1e-10
 #: Maugis' numerical factor in (2.24): 2 / 0.97 (Dugdale range h0 = 0.97 zeta_0).
 MAUGIS_206 = 2.06
 
+_T41 = preset("table-4.1")
+
 COMMON_PARAMS = ParamSet([
-    Param("E_t", 200e9, "Pa", "Young's modulus of the tip", lo=1e5, hi=2e12, positive=True,
+    Param("E_t", _T41["E_t"], "Pa", "Young's modulus of the tip", lo=1e5, hi=2e12, positive=True,
           source="Table 4.1, (2.21)"),
-    Param("nu_t", 0.33, "", "Poisson ratio of the tip", lo=-0.999, hi=0.5, source="Table 4.1, (2.21)"),
-    Param("E_s", 0.27e9, "Pa", "Young's modulus of the sample", lo=1e5, hi=2e12, positive=True,
+    Param("nu_t", _T41["nu_t"], "", "Poisson ratio of the tip", lo=-0.999, hi=0.5, source="Table 4.1, (2.21)"),
+    Param("E_s", _T41["E_s"], "Pa", "Young's modulus of the sample", lo=1e5, hi=2e12, positive=True,
           source="Table 4.1, (2.21)"),
-    Param("nu_s", 0.33, "", "Poisson ratio of the sample", lo=-0.999, hi=0.5, source="Table 4.1, (2.21)"),
-    Param("R_t", 50e-9, "m", "tip radius", lo=1e-10, hi=1e-3, positive=True, source="Table 4.1, (2.21)"),
-    Param("R_s", 160e-9, "m", "sample radius (0 = flat sample)", lo=0.0, hi=1e-2,
+    Param("nu_s", _T41["nu_s"], "", "Poisson ratio of the sample", lo=-0.999, hi=0.5, source="Table 4.1, (2.21)"),
+    Param("R_t", _T41["R_t"], "m", "tip radius", lo=1e-10, hi=1e-3, positive=True, source="Table 4.1, (2.21)"),
+    Param("R_s", _T41["R_s"], "m", "sample radius (0 = flat sample)", lo=0.0, hi=1e-2,
           source="Table 4.1, (2.21)"),
-    Param("H", 1.452e-20, "J", "Hamaker constant (sets W when W and lam are not given)",
+    Param("H", _T41["H"], "J", "Hamaker constant (sets W when W and lam are not given)",
           lo=0.0, hi=1e-17, source="Table 4.1, (2.20), (2.23)"),
-    Param("z0", 3.75e-10, "m", "inter-atomic distance zeta_0", lo=1e-11, hi=1e-8, positive=True,
-          source="Table 4.4, (2.20), (2.24)"),
+    Param("z0", preset("table-4.4")["zeta0"], "m", "inter-atomic distance zeta_0", lo=1e-11, hi=1e-8,
+          positive=True, source="Table 4.4, (2.20), (2.24)"),
     Param("W", None, "J/m^2", "work of adhesion (default H / (12 pi z0^2))", lo=0.0, hi=100.0,
           source="(2.24)"),
     Param("lam", None, "", "Maugis transition parameter (if given, sets W through (2.24))",
@@ -172,17 +178,17 @@ def _as_array(x) -> tuple[np.ndarray, bool]:
     return np.atleast_1d(arr), arr.ndim == 0
 
 
-class ContactModel(ABC):
+class ContactModel(Model, ABC):
     """A tip–sample contact model: force, contact radius and stiffness vs. penetration.
 
     Subclasses provide the normalised curve (:meth:`nd_curve`), its ``A -> 0`` end point
-    (:meth:`nd_endpoint`) and the normalised non-contact tail (:meth:`nd_tail`). Everything
-    else (branches, interpolation, pull-off, dimensional wrappers) lives here.
+    (:meth:`nd_endpoint`) and, if it differs from the Hamaker tail, the normalised non-contact
+    tail (:meth:`nd_tail`). Everything else (branches, interpolation, pull-off, dimensional
+    wrappers) lives here. A model registers with ``@CONTACT_MODELS.register`` and declares
+    ``key``, ``title``, ``source`` (and ``params``, by default :data:`COMMON_PARAMS`); a module in
+    this package is found by discovery, so **a new contact model is one file**.
     """
 
-    name: ClassVar[str] = ""
-    title: ClassVar[str] = ""
-    equations: ClassVar[str] = ""
     params: ClassVar[ParamSet] = COMMON_PARAMS
 
     #: table resolution of the parametric curve (points in A)
@@ -248,28 +254,35 @@ class ContactModel(ABC):
         ]))
         D, P, dD, dP = self.nd_curve(A)
         if not (np.all(np.isfinite(D)) and np.all(np.isfinite(P))):
-            raise SolverError(f"{self.name}: non-finite point on the contact curve (lambda={self.lam:g})")
+            raise SolverError(f"{self.key}: non-finite point on the contact curve (lambda={self.lam:g})")
         D0, P0 = self.nd_endpoint()
         A = np.concatenate([[0.0], A])
         D = np.concatenate([[D0], D])
         P = np.concatenate([[P0], P])
         dD = np.concatenate([[dD[0]], dD])
         dP = np.concatenate([[dP[0]], dP])
-        i_min = int(np.argmin(D))
-        A_star, D_min = A[i_min], D[i_min]
-        if 0 < i_min < len(A) - 1:  # refine the turning point: dD/dA = 0 by bisection on the table bracket
-            lo, hi = A[i_min - 1], A[i_min + 1]
-            for _ in range(80):
-                mid = 0.5 * (lo + hi)
-                if self.nd_curve(np.array([mid]))[2][0] < 0:
-                    lo = mid
-                else:
-                    hi = mid
-            A_star = 0.5 * (lo + hi)
-            D_min = float(self.nd_curve(np.array([A_star]))[0][0])
+        # the turning point (jump-out under displacement control): dD/dA = 0
+        A_star, D_min = self._refine_minimum(A, D, int(np.argmin(D)), value=0, slope=2, n_iter=80)
         tab = dict(A=A, D=D, P=P, dD=dD, dP=dP, A_star=A_star, D_min=D_min, A_max=A_max)
         self._table_cache[key] = tab
         return tab
+
+    def _refine_minimum(self, A: np.ndarray, f: np.ndarray, i: int, value: int, slope: int,
+                        n_iter: int) -> tuple[float, float]:
+        """Minimum of a curve quantity ``f`` (entry ``value`` of :meth:`nd_curve`) found at table
+        index ``i``, refined inside the table bracket by bisection on the sign of its derivative
+        (entry ``slope``); at the table's ends the table value is kept."""
+        if not 0 < i < len(A) - 1:
+            return A[i], f[i]
+        lo, hi = A[i - 1], A[i + 1]
+        for _ in range(n_iter):
+            mid = 0.5 * (lo + hi)
+            if self.nd_curve(np.array([mid]))[slope][0] < 0:
+                lo = mid
+            else:
+                hi = mid
+        a = 0.5 * (lo + hi)
+        return a, float(self.nd_curve(np.array([a]))[value][0])
 
     def _table_covering(self, D_target: float) -> dict[str, np.ndarray]:
         A_max = 4.0
@@ -278,7 +291,7 @@ class ContactModel(ABC):
             if tab["D"][-1] >= D_target:
                 return tab
             A_max *= 2.0
-        raise SolverError(f"{self.name}: penetration {D_target:g} (normalised) out of reach")
+        raise SolverError(f"{self.key}: penetration {D_target:g} (normalised) out of reach")
 
     def _solve_branch(self, D_t: np.ndarray, stable: bool) -> np.ndarray:
         """Contact radius ``A`` with ``D_bar(A) = D_t`` on the stable (or unstable) branch."""
@@ -375,18 +388,7 @@ class ContactModel(ABC):
         """
         tab = self._table()
         A, P = tab["A"], tab["P"]
-        i = int(np.argmin(P))
-        A_pc, P_pc = A[i], P[i]
-        if 0 < i < len(A) - 1:
-            lo, hi = A[i - 1], A[i + 1]
-            for _ in range(100):
-                mid = 0.5 * (lo + hi)
-                if self.nd_curve(np.array([mid]))[3][0] < 0:
-                    lo = mid
-                else:
-                    hi = mid
-            A_pc = 0.5 * (lo + hi)
-            P_pc = float(self.nd_curve(np.array([A_pc]))[1][0])
+        A_pc, P_pc = self._refine_minimum(A, P, int(np.argmin(P)), value=1, slope=3, n_iter=100)
         P_pc = min(P_pc, self.nd_endpoint()[1])
         A_star = tab["A_star"]
         if A_star > 0:
@@ -435,6 +437,20 @@ class ContactModel(ABC):
         if scalar:
             res = {k_: (v[0].item() if hasattr(v[0], "item") else v[0]) for k_, v in res.items()}
         return res
+
+    def point(self, delta: float) -> tuple[float, float, float, float]:
+        """One penetration ``delta`` [m] on the loading branch, as plain floats for the
+        right-hand sides of time integrators: ``(force [N], dF/ddelta [N/m], contact radius a
+        [m], da/ddelta)`` (radius and its derivative 0 out of contact). This general version
+        solves the curve (:meth:`state`); a model with a closed form overrides it."""
+        st = self.state(float(delta), "loading")
+        F, k = float(st["force"]), float(st["stiffness"])
+        a = float(st["radius"]) if st["contact"] else 0.0
+        if not st["contact"] or a <= 0.0:
+            return F, k, 0.0, 0.0
+        s = self.scales
+        dD = float(self.nd_curve(np.array([max(a / s.a_unit, A_FLOOR)]))[2][0])
+        return F, k, a, s.a_unit / (s.d_unit * dD)
 
     def pull_off_force(self) -> float:
         """Pull-off force [N] under load control (negative = tensile); 0 without adhesion."""
@@ -505,8 +521,6 @@ class ContactModel(ABC):
         defaults (tested). ``delta_max`` (m) bounds the spline (default 20 Maugis units);
         beyond it the exact solver is used.
         """
-        from scipy.interpolate import CubicSpline
-
         if branch not in ("loading", "unloading"):
             raise ParameterError(f"interpolant branch must be 'loading' or 'unloading', got {branch!r}")
         s = self.scales
@@ -561,6 +575,12 @@ class ContactModel(ABC):
 
     def describe(self) -> dict[str, Any]:
         s = self.scales
-        return dict(model=self.name, title=self.title, equations=self.equations,
+        return dict(model=self.key, title=self.title, equations=self.source,
                     E_star_pa=s.E_star, K_pa=s.K, R_m=s.R, W_j_m2=s.W, H_j=s.H, z0_m=s.z0,
                     lam=s.lam, a_unit_m=s.a_unit, P_unit_n=s.P_unit, d_unit_m=s.d_unit)
+
+
+#: The contact models: one module per model in this package (discovered on first lookup).
+CONTACT_MODELS: Registry[type[ContactModel]] = Registry(
+    "contact", ContactModel, required=("nd_curve", "nd_endpoint"), package="probedyn.schemes.contact",
+    aliases={"maugis-dugdale": "md", "maugis_dugdale": "md", "maugis": "md"})

@@ -16,19 +16,21 @@ Assumptions: no hysteresis (the model has none); tip and sample elastic, radii f
 
 from __future__ import annotations
 
+import math
 from typing import ClassVar
 
 import numpy as np
 
-from .base import ContactModel
+from .base import CONTACT_MODELS, ContactModel
 
 
+@CONTACT_MODELS.register
 class DMT(ContactModel):
     """DMT contact (2.20) with its van der Waals tail; ``P_bar = A^3 - 2``, ``D_bar = A^2``."""
 
-    name: ClassVar[str] = "dmt"
+    key: ClassVar[str] = "dmt"
     title: ClassVar[str] = "Derjaguin-Muller-Toporov"
-    equations: ClassVar[str] = "(2.20), (2.21)"
+    source: ClassVar[str] = "(2.20), (2.21)"
 
     def nd_curve(self, A):
         A = np.atleast_1d(np.asarray(A, dtype=float))
@@ -36,3 +38,16 @@ class DMT(ContactModel):
 
     def nd_endpoint(self):
         return 0.0, -2.0
+
+    def point(self, delta: float) -> tuple[float, float, float, float]:
+        """Closed form of (2.20) for time integrators (same values as the general curve solve of
+        :meth:`ContactModel.point`; tests/test_pushing.py compares them): in contact
+        (``delta > 0``) ``F = K sqrt(R) delta^1.5 - H R / (6 zeta_0^2)``, ``a = sqrt(R delta)``;
+        out of contact the Hamaker tail ``-H R / (6 (zeta_0 - delta)^2)``."""
+        s = self.scales
+        if delta > 0.0:
+            a = math.sqrt(s.R * delta)
+            return (s.K * math.sqrt(s.R) * delta * math.sqrt(delta) - s.H * s.R / (6.0 * s.z0 * s.z0),
+                    1.5 * s.K * a, a, 0.5 * a / delta)
+        gap = s.z0 - delta
+        return -s.H * s.R / (6.0 * gap * gap), -s.H * s.R / (3.0 * gap ** 3), 0.0, 0.0

@@ -24,17 +24,18 @@ from typing import ClassVar
 
 import numpy as np
 
-from .base import ContactModel
+from .base import CONTACT_MODELS, ContactModel
 
 _S6 = math.sqrt(6.0)
 
 
+@CONTACT_MODELS.register
 class JKR(ContactModel):
     """JKR contact: no force out of contact, adhesion inside it."""
 
-    name: ClassVar[str] = "jkr"
+    key: ClassVar[str] = "jkr"
     title: ClassVar[str] = "Johnson-Kendall-Roberts"
-    equations: ClassVar[str] = "JKR (1971); replaces the printed (2.22)"
+    source: ClassVar[str] = "JKR (1971); replaces the printed (2.22)"
 
     def nd_curve(self, A):
         A = np.atleast_1d(np.asarray(A, dtype=float))

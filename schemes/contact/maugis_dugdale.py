@@ -42,7 +42,7 @@ import numpy as np
 
 from probedyn.core.errors import SolverError
 
-from .base import ContactModel
+from .base import CONTACT_MODELS, ContactModel
 
 _SERIES_S = 0.1  # below this, s - atan(s) by its series (14 terms: error < 1e-17 relative)
 
@@ -156,6 +156,7 @@ def md_curve(A, lam: float):
     return D, P, dD, dP, s
 
 
+@CONTACT_MODELS.register
 class MaugisDugdale(ContactModel):
     """Maugis–Dugdale contact (2.24–2.35, corrected per SOURCE-NOTES item 3) with the
     continuous van der Waals tail (2.33–2.34).
@@ -164,9 +165,9 @@ class MaugisDugdale(ContactModel):
     2.24). ``lam = 0`` is the DMT limit (2.20), ``lam -> infinity`` the JKR limit.
     """
 
-    name: ClassVar[str] = "md"
+    key: ClassVar[str] = "md"
     title: ClassVar[str] = "Maugis-Dugdale"
-    equations: ClassVar[str] = "(2.24)-(2.35), corrected: SOURCE-NOTES 3"
+    source: ClassVar[str] = "(2.24)-(2.35), corrected: SOURCE-NOTES 3"
 
     def nd_curve(self, A):
         D, P, dD, dP, _ = md_curve(A, self.lam)
@@ -174,9 +175,3 @@ class MaugisDugdale(ContactModel):
 
     def nd_endpoint(self):
         return endpoint(self.lam)
-
-    def m_ratio(self, A) -> np.ndarray:
-        """``m = c / a`` (outer radius of the adhesive annulus over the contact radius)."""
-        if self.lam == 0:
-            return np.full(np.shape(np.atleast_1d(A)), np.inf)
-        return np.hypot(1.0, solve_s(A, self.lam))

@@ -17,8 +17,25 @@ whole component is described by one scalar kernel
 
 compiled with numba (``p`` is the float64 parameter vector of :meth:`FrictionModel.pack`). The
 same compiled kernel is used by the numpy-facing methods below, by the fast FFM integrator of
-:mod:`probedyn.schemes.ffm` and by any other scheme (pushing, coupling), so there is a single
-source of truth for each formula.
+:mod:`probedyn.schemes.ffm` (which receives the kernel as an argument: no dispatch on the model)
+and by any other scheme, so there is a single source of truth for each formula.
+
+**Adding a model** is one module in this package (or anywhere, e.g. a test)::
+
+    @njit(cache=True)
+    def my_kernel(p, x, v, z): ...               # the 8-tuple above
+
+    @FRICTION_MODELS.register
+    class MyModel(FrictionModel):
+        key = "mine"; title = "..."; source = "eq ..."
+        params = ParamSet([...]); packed = ("F_0", ...); n_state = 0
+        kernel = staticmethod(my_kernel)
+        def scales(self): return (self["F_0"], 1.0)
+
+Registration checks the declaration (:data:`FRICTION_MODELS`, a
+:class:`probedyn.core.registry.Registry`): ``key``, ``title``, ``source``, ``params``, a numba
+``kernel`` of the model's own, ``scales`` and the packed names being parameters. ``probedyn
+simulate ffm --model mine`` then runs it.
 
 **Normal-load input.** Single-asperity friction levels scale with the normal load (or the
 contact area); :meth:`FrictionModel.scaled` returns a copy whose force levels (every parameter
@@ -28,6 +45,8 @@ with ``scales=True`` in :attr:`FrictionModel.load_params`) are multiplied by a f
 
 from __future__ import annotations
 
+import hashlib
+import inspect
 import math
 from typing import Any, ClassVar
 
@@ -35,16 +54,16 @@ import numpy as np
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset
+from probedyn.core.registry import Model, Registry, RegistryError
+
+#: Table 2.1 (mica FFM experiment): default friction levels of the bristle-type models
+TABLE_2_1 = preset("table-2.1")
 
 
-class FrictionModel:
+class FrictionModel(Model):
     """Base class: a parameter set, validation, a numba kernel and numpy wrappers."""
 
-    #: registry name
-    name: ClassVar[str] = ""
-    #: one-line description and the source equations implemented
-    title: ClassVar[str] = ""
-    equations: ClassVar[str] = ""
     #: declared parameters (SI units)
     params: ClassVar[ParamSet]
     #: names of the parameters packed (in order) into the kernel's parameter vector
@@ -53,10 +72,8 @@ class FrictionModel:
     load_params: ClassVar[tuple[str, ...]] = ()
     #: number of internal state variables (0 or 1)
     n_state: ClassVar[int] = 1
-    #: integer tag used by the fast FFM integrator to dispatch to the kernel
-    kind: ClassVar[int] = -1
     #: reference normal load of the default force levels [N] (mica FFM experiment, 2.1.5.1)
-    reference_load: ClassVar[float] = 141.75e-9
+    reference_load: ClassVar[float] = TABLE_2_1["normal_load"]
 
     def __init__(self, **overrides: Any) -> None:
         self.values: dict[str, Any] = self.params.resolve(overrides)
@@ -68,6 +85,21 @@ class FrictionModel:
 
     def __getitem__(self, name: str) -> Any:
         return self.values[name]
+
+    def scales(self) -> tuple[float, float]:
+        """``(force scale [N], internal-state scale)``: the natural size of the friction force
+        and of ``z`` (absolute tolerances of the integrators are fractions of them)."""
+        raise NotImplementedError
+
+    def levels(self) -> tuple[float, float] | None:
+        """``(F_s, F_c)``, static and kinetic friction levels [N] of models that have them (the
+        quasi-static estimates ``F_s / k`` of the first slip and ``(F_s - F_c) / k`` of the
+        sawtooth period use them); ``None`` for a model without such levels."""
+        return None
+
+    def presliding_stiffness(self) -> float | None:
+        """Contact (bristle) stiffness of the stick phase [N/m], if the model has one."""
+        return None
 
     def pack(self) -> np.ndarray:
         """The kernel's float64 parameter vector."""
@@ -91,12 +123,12 @@ class FrictionModel:
         return self.scaled(normal_load / ref)
 
     def describe(self) -> dict[str, Any]:
-        return dict(name=self.name, title=self.title, equations=self.equations,
+        return dict(name=self.key, title=self.title, equations=self.source,
                     n_state=self.n_state, values=dict(self.values), params=self.params.table())
 
     # -- evaluation ---------------------------------------------------------------------------
     @staticmethod
-    def kernel(p, x, v, z):  # pragma: no cover - replaced by a numba function in subclasses
+    def kernel(p, x, v, z):  # pragma: no cover - every registered model brings its own (numba)
         raise NotImplementedError
 
     def evaluate(self, x, v, z) -> dict[str, np.ndarray]:
@@ -124,7 +156,68 @@ class FrictionModel:
         raise NotImplementedError
 
 
+class BristleModel(FrictionModel):
+    """A bristle-type model (LuGre 2.3-2.5, the generalised bristle 2.7-2.9): static and kinetic
+    levels ``F_s``, ``F_c`` and the bristle stiffness ``sigma0`` among its parameters."""
+
+    def scales(self) -> tuple[float, float]:
+        """Static friction and the bristle deflection at it, ``F_s / sigma0``."""
+        return self.values["F_s"], self.values["F_s"] / self.values["sigma0"]
+
+    def levels(self) -> tuple[float, float]:
+        return self.values["F_s"], self.values["F_c"]
+
+    def presliding_stiffness(self) -> float:
+        return self.values["sigma0"]
+
+
 def positive_param(name: str, default: float, unit: str, doc: str, source: str,
                    lo: float | None = None, hi: float | None = None) -> Param:
     """A strictly positive parameter (negative stiffness, mass, friction are rejected)."""
     return Param(name, default, unit, doc, lo=lo, hi=hi, positive=True, source=source)
+
+
+def _stable_identity(kernel: Any, owner: str) -> None:
+    """Give a numba kernel a process-independent identity.
+
+    The FFM integrator receives the kernel as an argument, so numba compiles one specialisation
+    per kernel; the on-disk cache finds it again in a new process only if the kernel's
+    serialised identity is the same there. numba names a dispatcher by a random UUID; here it is
+    the kernel's module, name and source hash (a changed kernel gets a new identity, so a cached
+    integrator never runs an old formula). Without this the integrator still runs, only it is
+    compiled again in every process (seconds). Uses numba's ``_set_uuid`` (ReduceMixin)."""
+    try:
+        if getattr(kernel, "_MemoMixin__uuid", None) is not None:
+            return
+        src = inspect.getsource(kernel.py_func)
+        digest = hashlib.sha1(src.encode()).hexdigest()[:16]
+        kernel._set_uuid(f"probedyn.friction:{owner}:{kernel.py_func.__module__}."
+                         f"{kernel.py_func.__qualname__}:{digest}")
+    except (AttributeError, OSError, TypeError, AssertionError):  # pragma: no cover - other numba
+        pass
+
+
+def _check_friction(cls: type) -> None:
+    """Family rules of :data:`FRICTION_MODELS` (see :class:`probedyn.core.registry.Registry`)."""
+    where = f"friction model {cls.__qualname__!r}"
+    kern = getattr(cls, "kernel", None)
+    if not hasattr(kern, "py_func"):
+        raise RegistryError(f"{where}: 'kernel' must be a numba-compiled function (@njit)")
+    missing = [n for n in cls.packed if n not in cls.params]
+    if missing or not cls.packed:
+        raise RegistryError(f"{where}: 'packed' must name its kernel's parameters "
+                            f"(not parameters: {', '.join(missing) or 'none given'})")
+    bad = [n for n in cls.load_params if n not in cls.params]
+    if bad:
+        raise RegistryError(f"{where}: load_params {bad} are not parameters")
+    if cls.n_state not in (0, 1):
+        raise RegistryError(f"{where}: n_state must be 0 or 1, got {cls.n_state!r}")
+    _stable_identity(kern, f"{cls.__module__}.{cls.__qualname__}")
+
+
+#: The friction models: one module per model in this package (discovered on first lookup).
+FRICTION_MODELS: Registry[type[FrictionModel]] = Registry(
+    "friction", FrictionModel, required=("kernel", "scales"), package="probedyn.schemes.friction",
+    aliases={"generalised-bristle": "bristle", "generalized-bristle": "bristle", "source": "bristle",
+             "prandtl-tomlinson": "pt", "tomlinson": "pt"},
+    check=_check_friction)

@@ -39,7 +39,7 @@ from numba import njit
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
 
-from .base import FrictionModel, positive_param
+from .base import FRICTION_MODELS, TABLE_2_1, BristleModel, positive_param
 
 
 @njit(cache=True)
@@ -64,19 +64,20 @@ def bristle_kernel(p, x, v, z):
     return (s0 * z + Fv * v, zd, 0.0, Fv, s0, 0.0, dzd_dv, dzd_dz)
 
 
-class GeneralisedBristle(FrictionModel):
-    name = "bristle"
+@FRICTION_MODELS.register
+class GeneralisedBristle(BristleModel):
+    key = "bristle"
     title = "generalised-bristle nano-friction model of the source (1D reduction, V_y = 0)"
-    equations = "(2.7)-(2.9) [(2.10)-(2.12) in 2D]"
-    kind = 1
+    source = "(2.7)-(2.9) [(2.10)-(2.12) in 2D]"
     n_state = 1
     params = ParamSet([
-        positive_param("sigma0", 1e4, "N/m", "bristle stiffness sigma_0x", "(2.7); Table 2.1", hi=1e9),
-        positive_param("F_s", 12.95e-9, "N", "static friction F_sx", "(2.9); Table 2.1", hi=1e-3),
-        positive_param("F_c", 12.45e-9, "N", "kinetic friction F_cx", "(2.9); Table 2.1", hi=1e-3),
-        positive_param("V_s", 1e-5, "m/s", "Stribeck velocity", "(2.9); Table 2.1", hi=1e3),
-        Param("F_v", 1e-7, "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0, hi=1.0,
-              source="(2.7); Table 2.1"),
+        positive_param("sigma0", TABLE_2_1["sigma0_x"], "N/m", "bristle stiffness sigma_0x", "(2.7); Table 2.1",
+                       hi=1e9),
+        positive_param("F_s", TABLE_2_1["F_s_x"], "N", "static friction F_sx", "(2.9); Table 2.1", hi=1e-3),
+        positive_param("F_c", TABLE_2_1["F_c_x"], "N", "kinetic friction F_cx", "(2.9); Table 2.1", hi=1e-3),
+        positive_param("V_s", TABLE_2_1["V_s"], "m/s", "Stribeck velocity", "(2.9); Table 2.1", hi=1e3),
+        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0,
+              hi=1.0, source="(2.7); Table 2.1"),
         Param("vmax", "literal", "", "reading of max(V_i) in (2.8): signed max or largest magnitude",
               kind=str, choices=("literal", "magnitude"), source="(2.8)"),
     ])

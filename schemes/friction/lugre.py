@@ -21,7 +21,7 @@ from numba import njit
 
 from probedyn.core.params import Param, ParamSet
 
-from .base import FrictionModel, positive_param
+from .base import FRICTION_MODELS, TABLE_2_1, BristleModel, positive_param
 
 
 @njit(cache=True)
@@ -40,20 +40,21 @@ def lugre_kernel(p, x, v, z):
     return (F, zd, 0.0, s1 * dzd_dv + Fv, s0 + s1 * dzd_dz, 0.0, dzd_dv, dzd_dz)
 
 
-class LuGre(FrictionModel):
-    name = "lugre"
+@FRICTION_MODELS.register
+class LuGre(BristleModel):
+    key = "lugre"
     title = "LuGre bristle friction with Stribeck effect"
-    equations = "(2.3)-(2.5)"
-    kind = 0
+    source = "(2.3)-(2.5)"
     n_state = 1
     params = ParamSet([
-        positive_param("sigma0", 1e4, "N/m", "bristle stiffness sigma_0", "(2.4), (2.5); Table 2.1", hi=1e9),
+        positive_param("sigma0", TABLE_2_1["sigma0_x"], "N/m", "bristle stiffness sigma_0", "(2.4), (2.5); Table 2.1",
+                       hi=1e9),
         Param("sigma1", 0.0, "N s/m", "bristle damping sigma_1", lo=0.0, hi=1.0, source="(2.5)"),
-        positive_param("F_s", 12.95e-9, "N", "static friction", "(2.4); Table 2.1", hi=1e-3),
-        positive_param("F_c", 12.45e-9, "N", "kinetic (Coulomb) friction", "(2.4); Table 2.1", hi=1e-3),
-        positive_param("V_s", 1e-5, "m/s", "Stribeck velocity", "(2.4); Table 2.1", hi=1e3),
-        Param("F_v", 1e-7, "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0, hi=1.0,
-              source="(2.5); Table 2.1"),
+        positive_param("F_s", TABLE_2_1["F_s_x"], "N", "static friction", "(2.4); Table 2.1", hi=1e-3),
+        positive_param("F_c", TABLE_2_1["F_c_x"], "N", "kinetic (Coulomb) friction", "(2.4); Table 2.1", hi=1e-3),
+        positive_param("V_s", TABLE_2_1["V_s"], "m/s", "Stribeck velocity", "(2.4); Table 2.1", hi=1e3),
+        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0,
+              hi=1.0, source="(2.5); Table 2.1"),
     ])
     packed = ("sigma0", "sigma1", "F_s", "F_c", "V_s", "F_v")
     load_params = ("F_s", "F_c")

@@ -34,13 +34,14 @@ from numba import njit
 
 from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
+from probedyn.core.presets import preset
 
-from .base import FrictionModel, positive_param
+from .base import FRICTION_MODELS, TABLE_2_1, FrictionModel, positive_param
 
 K_B = 1.380649e-23  # J/K
 
 #: mica lattice constant (Table 4.2 of the source)
-MICA_LATTICE = 0.519e-9
+MICA_LATTICE = preset("table-4.2-mica")["a"]
 
 
 @njit(cache=True)
@@ -52,11 +53,11 @@ def pt_kernel(p, x, v, z):
     return (F0 * math.sin(q * x) + gam * v, 0.0, F0 * q * math.cos(q * x), gam, 0.0, 0.0, 0.0, 0.0)
 
 
+@FRICTION_MODELS.register
 class PrandtlTomlinson(FrictionModel):
-    name = "pt"
+    key = "pt"
     title = "Prandtl-Tomlinson sinusoidal substrate potential (1D)"
-    equations = "U = -U0 cos(2 pi x / a) (not in the source; standard atomic stick-slip model)"
-    kind = 2
+    source = "U = -U0 cos(2 pi x / a) (not in the source; standard atomic stick-slip model)"
     n_state = 0
     params = ParamSet([
         positive_param("U0", 4.1e-21, "J", "corrugation amplitude (U = -U0 cos(2 pi x/a))", "PT model",
@@ -68,6 +69,10 @@ class PrandtlTomlinson(FrictionModel):
     packed = ("U0", "a", "gamma")
     load_params = ("U0",)
     kernel = staticmethod(pt_kernel)
+
+    def scales(self) -> tuple[float, float]:
+        """Peak substrate force ``2 pi U0 / a``; no internal state (scale 1)."""
+        return 2 * math.pi * self.values["U0"] / self.values["a"], 1.0
 
     def eta(self, k: float) -> float:
         """Tomlinson parameter ``4 pi^2 U0 / (k a^2)`` for a lateral spring ``k``."""
@@ -168,8 +173,8 @@ class PT2DResult:
     params: dict
 
 
-def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k: float = 0.2,
-              m: float = 1.98e-18, zeta: float = 0.5, angle_deg: float = 0.0, length: float | None = None,
+def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k: float = TABLE_2_1["k_x"],
+              m: float = TABLE_2_1["m_x"], zeta: float = 0.5, angle_deg: float = 0.0, length: float | None = None,
               speed: float = 1e-4, temperature: float = 0.0, seed: int = 0, start=(0.0, 0.0),
               steps_per_period: int = 40, n_out: int = 20000) -> PT2DResult:
     """2D PT line scan along ``angle_deg`` (from lattice vector a1 = x axis).
@@ -178,7 +183,7 @@ def pt2d_scan(lattice: str = "hex", eta: float = 3.0, a: float = MICA_LATTICE, k
     slips end in the next well, no multiple-site jumps for moderate eta). Time step:
     ``T_0 / steps_per_period`` with ``T_0 = 2 pi sqrt(m / (k (1 + eta)))`` (the stiffest
     curvature, 4 pi^2 U0/a^2 + k along an axis; for the hex lattice the curvature is the same).
-    Defaults: the Table 2.1 cantilever (k = 0.2 N/m, m = 1.98e-18 kg, isotropic) at 100 um/s:
+    Defaults: the Table 2.1 cantilever (k_x, m_x, taken isotropic) at 100 um/s:
     ``V T_0 ~ 1e-12 m = 0.002 a``, quasi-static (V << a / T_0) while the run stays short
     (about 5e4 steps per lattice constant).
     """

@@ -1,4 +1,5 @@
-"""FEM vs analytic references, mode by mode.
+"""FEM vs analytic references, mode by mode (a probe's FEM result against the formulas of
+lumped/: the reduction layer reads the FEM result, the FEM layer knows no formula).
 
 :func:`comparison_rows` joins the probe's own references (beam formulas per mode family, see
 ``Probe.references``) with the Rayleigh quotient (2.46) evaluated on the FEM mode itself:
@@ -13,6 +14,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.interpolate import make_interp_spline
+
+from probedyn.lumped.beam import rayleigh_quotient
 
 #: centreline samples per bending mode for the Rayleigh quotient
 N_SAMPLES = 81
@@ -24,8 +28,6 @@ def rayleigh_rows(probe: Any, values: dict[str, Any], result: Any) -> list[dict[
     A tip mass enters the denominator as ``m w(L)^2`` (the standard energy of a point mass)."""
     if not hasattr(probe, "beam"):
         return []
-    from probedyn.lumped.beam import rayleigh_quotient
-
     b = probe.beam(values)
     model = result.model
     x = np.linspace(0.0, b.L, N_SAMPLES)
@@ -50,8 +52,6 @@ def rayleigh_rows(probe: Any, values: dict[str, Any], result: Any) -> list[dict[
         if tip_mass > 0:
             # point mass at x = L: add m w(L)^2 to the kinetic integral via an equivalent
             # distributed term would bias the spline; evaluate the two parts separately instead
-            from scipy.interpolate import make_interp_spline
-
             spl = make_interp_spline(x, w, k=5)
             g, wg = np.polynomial.legendre.leggauss(8)
             a, bb = x[:-1, None], x[1:, None]
