@@ -76,3 +76,68 @@ def test_fit_the_data_cannot_inform(tmp_path):
     side = SIDE + '[baseline]\nfree = ["modulus", "density"]\n'
     with pytest.raises(DataFormatError, match=r"cannot inform the baseline parameters cal_modulus, cal_density"):
         diagnose(make_problem(_write(tmp_path, side=side)))
+
+
+# ---- issue 16, class 6: nonsense refused with one line, never a verdict ---------------------
+
+FR_SIDE = ('[measurement]\nkind = "friction"\ndata = "f.csv"\n[lever]\nk_x = 1.0\n[noise]\nforce = 5e-12\n'
+           '[[scans]]\nid = 0\nspeed = 1e-8\nload = 2e-9\n')
+
+
+def _friction_csv(force):
+    rows = ["scan,position_m,lateral_force_N"]
+    x = [i * 5e-11 for i in range(40)]
+    rows += [f"0,{xx:.6e},{force(i):.6e}" for i, xx in enumerate(x)]
+    return "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize("csv, side, what", [
+    # micrometres typed as metres: refused with the SI hint (the 2 um lever typed as "2")
+    (CSV, SIDE.replace("thickness = 10e-6", "thickness = 2"), "values are SI metres: 2 um is 2e-06 m"),
+    (CSV.replace("6.2e5", "1e308"), SIDE, "above 1e+11 Hz"),
+    (CSV.replace("6.2e5", "-6.2e5"), SIDE, "frequency must be positive"),
+    (CSV.replace("flapwise,2,", "flapwise,100000,"), SIDE, "order 100000 is beyond"),
+    (CSV, SIDE + '[baseline]\nfree = ["thickness", "thickness"]\n', "lists a quantity twice"),
+    (CSV, SIDE.replace("[probe]\n", "[probe]\ntip_mass = 1e-12\ntip_position = -0.2\n"), "in [0, 1]"),
+    (CSV, SIDE + "[medium]\nnmae = \"water\"\n", "did you mean 'name'"),
+    (CSV, SIDE.replace('data = "m.csv"', 'data = "../../../../../../etc/passwd"'), "outside"),
+])
+def test_class6_modal_inputs_refused(tmp_path, csv, side, what):
+    with pytest.raises(DataFormatError) as e:
+        read_measurement(_write(tmp_path, csv, side))
+    msg = str(e.value)
+    assert what in msg and "\n" not in msg and "root:" not in msg
+
+
+def test_class6_spectrum_frequencies(tmp_path):
+    side = ('[measurement]\nkind = "spectrum"\ndata = "m.csv"\n' + PROBE)
+    for csv, what in [("frequency_Hz,value\n-1,1\n2,1\n", "frequencies must be positive"),
+                      ("frequency_Hz,value\n1,1\n1e308,1\n", r"above 1e\+11 Hz"),
+                      ("frequency_Hz,value\n" + "".join(f"{1e3 * (i + 1)},0\n" for i in range(40)), "cannot inform")]:
+        with pytest.raises(DataFormatError, match=what):
+            read_measurement(_write(tmp_path, csv, side))
+
+
+@pytest.mark.parametrize("force, what", [(lambda i: 0.0, r"constant \(all zero\)"), (lambda i: 1e-10, "constant")])
+def test_class6_flat_friction_cannot_inform(tmp_path, force, what):
+    (tmp_path / "f.csv").write_text(_friction_csv(force))
+    (tmp_path / "f.toml").write_text(FR_SIDE)
+    with pytest.raises(DataFormatError, match=f"cannot inform the fit: .*{what}"):
+        read_measurement(tmp_path / "f.toml")
+
+
+def test_class6_flat_force_curve_cannot_inform(tmp_path):
+    (tmp_path / "c.csv").write_text("z_m,force_N\n" + "".join(f"{i * 1e-10:.3e},0\n" for i in range(50)))
+    (tmp_path / "c.toml").write_text('[measurement]\nkind = "force"\ndata = "c.csv"\n[lever]\nk = 1.0\n')
+    with pytest.raises(DataFormatError, match="cannot inform the fit: the force is constant"):
+        read_measurement(tmp_path / "c.toml")
+
+
+def test_class6_cli_one_line_exit_2(tmp_path, capsys):
+    from probedyn.cli import main
+
+    assert main(["diagnose", str(_write(tmp_path, CSV.replace("6.2e5", "1e308")))]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("probedyn: error: ") and err.count("\n") == 1
+    assert main(["diagnose", "/dev/zero"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1

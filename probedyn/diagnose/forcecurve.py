@@ -62,6 +62,9 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
         if sens is None:
             raise DataFormatError(f"{side}: deflection_V needs [lever] sensitivity [m/V]")
         F = k * sens * d["deflection_V"]
+    if not np.ptp(F) > 0:
+        raise DataFormatError(f"{csv}: the data cannot inform the fit: the force is constant"
+                              + (" (all zero)" if not np.any(F) else "") + " (no contact in the curve)")
     if np.max(np.abs(F)) > 1e-3:
         raise col_error(d, have[0], int(np.argmax(np.abs(F))), "force beyond 1 mN: check units (SI) and k")
     if "segment" in d:

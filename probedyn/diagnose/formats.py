@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, ProbedynError
+from probedyn.core.io import MAX_DATA_BYTES, read_text, resolve_input
 from probedyn.core.params import load_toml
 from probedyn.diagnose.hydrodynamics import MEDIA
 
@@ -58,6 +59,8 @@ __all__ = ["read_measurement", "read_csv", "Measurement", "ModalData", "Spectrum
            "FrictionScan", "ForceData", "FAMILIES", "KINDS"]
 
 KINDS = ("modal", "spectrum", "timeseries", "friction", "force")
+F_MAX = 1e11  # Hz: above any mechanical mode of a probe (a 1 um silicon beam's first mode is ~ 1e9 Hz)
+ORDER_MAX = 50  # highest mode order of one family the diagnosis resolves
 FAMILIES = ("flapwise", "lateral", "torsion", "axial")
 FAMILY_ALIASES = {"flap": "flapwise", "flexural": "flapwise", "vertical": "flapwise", "torsional": "torsion",
                   "twist": "torsion", "in-plane": "lateral", "longitudinal": "axial"}
@@ -93,12 +96,8 @@ def _did_you_mean(name: str, known) -> str:
 def read_csv(path: Path, required: list[str], optional: list[str], text_cols: tuple[str, ...] = ()) -> dict[str, Any]:
     """Read a numeric CSV with a header; '#' lines are comments. Columns as arrays (text columns
     as lists); every error names file, line and column."""
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except OSError as exc:
-        raise DataFormatError(f"{path}: cannot read file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise DataFormatError(f"{path}: not a UTF-8 text file") from None
+    # a regular file of bounded size, UTF-8 (FIFOs, devices and folders refused before opening)
+    lines = read_text(path, what="data file", max_bytes=MAX_DATA_BYTES).splitlines()
     header = None
     hline = 0
     rows: list[tuple[int, list[str]]] = []
@@ -252,6 +251,8 @@ def _sidecar(path: Path) -> Path:
     path = Path(path)
     if not path.exists():
         raise DataFormatError(f"{path}: no such file")
+    if not path.is_file():
+        raise DataFormatError(f"{path}: not a regular file (a measurement is a TOML sidecar or its CSV)")
     if path.suffix.lower() == ".toml":
         return path
     side = path.with_suffix(".toml")
@@ -309,7 +310,9 @@ def read_measurement(path: str | Path) -> Measurement:
     data = m.get("data")
     if not isinstance(data, str):
         raise DataFormatError(f"{side}: [measurement] data must name the CSV file")
-    csv = side.parent / data
+    # the data file is confined to the sidecar's folder (a sidecar cannot make probedyn read
+    # /etc/passwd or a device); existence and file type are checked when it is read
+    csv = resolve_input(data, side.parent, what=f"{side.name}: data file")
     if not csv.exists():
         raise DataFormatError(f"{side}: data file {csv} not found")
     common = _common(meta, side, kind)
@@ -411,7 +414,13 @@ def probe_from_meta(meta: dict, side: Path) -> tuple[Any, dict, frozenset, tuple
     try:
         values = probe.resolve(over)
     except ProbedynError as exc:
-        raise DataFormatError(f"{side}: [probe] {exc}") from None
+        msg = f"{side}: [probe] {exc}"
+        big = [k for k, v in over.items() if k in probe.params and probe.params[k].unit == "m"
+               and isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 1e-3 and k in str(exc)]
+        if big:
+            v = over[big[0]]
+            msg += f" (values are SI metres: {v:g} um is {v * 1e-6:g} m)"
+        raise DataFormatError(msg) from None
     return probe, values, frozenset(known), known_mass
 
 
@@ -444,6 +453,12 @@ def _read_modal(side: Path, csv: Path, meta: dict, common: dict) -> ModalData:
             raise col_error(d, "order", k, f"order must be an integer >= 1, got {o:g}")
         if not f[k] > 0:
             raise col_error(d, "frequency_Hz", k, f"frequency must be positive, got {f[k]:g} Hz")
+        if f[k] > F_MAX:
+            raise col_error(d, "frequency_Hz", k, f"frequency {f[k]:g} Hz is above {F_MAX:g} Hz: not a mechanical "
+                                                  "mode of a probe (values are Hz)")
+        if o > ORDER_MAX:
+            raise col_error(d, "order", k, f"order {o:g} is beyond {ORDER_MAX} (a mode order counts the modes of one "
+                                           "family from 1)")
     rel, stated = _noise(meta, side, "frequency_rel", 1e-3, 1e-9, 0.5)
     sig = d.get("frequency_sigma_Hz", np.full(n, np.nan)).copy()
     for k in range(n):
@@ -497,8 +512,14 @@ def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -
             raise col_error(d, "frequency_Hz", int(np.nonzero(f <= 0)[0][0]), "frequencies must be positive")
         if np.any(np.diff(f) <= 0):
             raise col_error(d, "frequency_Hz", int(np.nonzero(np.diff(f) <= 0)[0][0]) + 1, "frequencies must increase")
+        if np.any(f > F_MAX):
+            raise col_error(d, "frequency_Hz", int(np.nonzero(f > F_MAX)[0][0]), f"frequency above {F_MAX:g} Hz: not "
+                                                                                 "a mechanical mode of a probe (values are Hz)")
         if np.any(v < 0):
             raise col_error(d, "value", int(np.nonzero(v < 0)[0][0]), "spectral values must be >= 0")
+        if len(v) < 16 or not np.ptp(v) > 0:
+            raise DataFormatError(f"{csv}: the data cannot inform the fit: " + (
+                f"{len(v)} spectral values (need >= 16)" if len(v) < 16 else "the spectrum is flat (no peak)"))
         quantity = str(mm.get("quantity", "psd"))
         if quantity not in ("psd", "amplitude"):
             raise DataFormatError(f"{side}: [measurement] quantity must be psd or amplitude" + _did_you_mean(quantity, ("psd", "amplitude")))
@@ -510,6 +531,10 @@ def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -
     else:
         d = read_csv(csv, ["time_s", "displacement_m"], [])
         t, x = d["time_s"], d["displacement_m"]
+        if len(t) < 64:
+            raise DataFormatError(f"{csv}: the data cannot inform the fit: {len(t)} samples (a spectrum needs >= 64)")
+        if not np.ptp(x) > 0:
+            raise DataFormatError(f"{csv}: the data cannot inform the fit: the displacement is constant")
         dt = np.diff(t)
         if np.any(dt <= 0):
             raise col_error(d, "time_s", int(np.nonzero(dt <= 0)[0][0]) + 1, "times must increase")

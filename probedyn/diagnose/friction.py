@@ -120,6 +120,10 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
         if np.max(np.abs(f)) > 1e-3:
             raise col_error(d, "lateral_force_N", idx[int(np.argmax(np.abs(f)))], "force beyond 1 mN: values are SI newtons")
         scans.append(FrictionScan(sid, sp, ld, x, f, t, direction))
+    flat = [s.id for s in scans if not np.ptp(s.force) > 0]
+    if flat:
+        raise DataFormatError(f"{csv}: the data cannot inform the fit: the lateral force of scan {flat[0]} is constant"
+                              + (" (all zero)" if not np.any(scans[[s.id for s in scans].index(flat[0])].force) else ""))
     if not stated:  # from the point-to-point scatter (robust; the signal's own increments are removed twice)
         r = np.concatenate([np.diff(s.force, 2) for s in scans])
         sig = float(1.4826 * np.median(np.abs(r - np.median(r))) / math.sqrt(6))
