@@ -351,8 +351,13 @@ class ForceCurveProblem:
             CauseParam("b1", "N/m", -Fs / self.span, Fs / self.span, float(b1), "baseline tilt (virtual deflection)"),
         ]
         if self.E_star_declared is None:
-            self.base_params.append(CauseParam("E_star", "Pa", 1e3, 1e12, min(Es_guess, 1e11), "reduced modulus E*",
-                                               scale="log", starts=(min(Es_guess, 1e11) * 10,)))
+            # E* = 1 / ((1 - nu_t^2) / E_t + (1 - nu_s^2) / E_s) < E_t / (1 - nu_t^2), the rigid-sample
+            # limit; bounded at a sample of 1 TPa (diamond), the stiffest the contact registry takes
+            E_hi = 1.0 / ((1 - d.nu_tip**2) / d.E_tip + (1 - 0.3**2) / 1e12)
+            e0 = min(Es_guess, 0.5 * E_hi)
+            self.base_params.append(CauseParam("E_star", "Pa", 1e3, E_hi, e0, "reduced modulus E* (below the rigid-"
+                                               "sample limit E_tip / (1 - nu_tip^2))", scale="log",
+                                               starts=(min(10 * e0, 0.9 * E_hi),)))
         # snap-in and pull-off make the misfit piecewise smooth: capped least-squares runs, few starts
         self.nfev_per_param = 30
         self.max_starts = 3

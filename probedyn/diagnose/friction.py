@@ -175,20 +175,19 @@ def _barrier_table(U0: float, a: float, k: float, n: int = 400):
     xc = math.acos(-1.0 / eta) / q
     xm = np.linspace(-0.25 * a, xc * (1 - 1e-6), n)
     X = xm + (F0 / k) * np.sin(q * xm)
-    # saddle: the unstable equilibrium x_s in (x_c, a/2 + ...): k (X - x) = F0 sin(q x)
-    xs = np.empty_like(xm)
-    for i, Xi in enumerate(X):
-        lo, hi = xc, 0.5 * a + xc
-        g = lambda x: k * (Xi - x) - F0 * math.sin(q * x)  # noqa: E731
-        glo, ghi = g(lo), g(hi)
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            gm = g(mid)
-            if (gm > 0) == (glo > 0):
-                lo, glo = mid, gm
-            else:
-                hi = mid
-        xs[i] = 0.5 * (lo + hi)
+    # saddle: the unstable equilibrium x_s in (x_c, a/2 + x_c): k (X - x) = F0 sin(q x), by
+    # bisection on every support position at once
+    lo = np.full_like(X, xc)
+    hi = np.full_like(X, 0.5 * a + xc)
+    glo = k * (X - lo) - F0 * np.sin(q * lo)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        gm = k * (X - mid) - F0 * np.sin(q * mid)
+        same = (gm > 0) == (glo > 0)
+        lo = np.where(same, mid, lo)
+        glo = np.where(same, gm, glo)
+        hi = np.where(same, hi, mid)
+    xs = 0.5 * (lo + hi)
     E = lambda x, Xi: -U0 * np.cos(q * x) + 0.5 * k * (Xi - x) ** 2  # noqa: E731
     dE = E(xs, X) - E(xm, X)
     Xc = xc + (F0 / k) * math.sin(q * xc)
@@ -452,8 +451,8 @@ class FrictionProblem:
         # the integrated model is accurate to ~1e-5 of the force scale (RTOL): finite differences
         # need steps of 1e-3 of the parameter scale; fewer evaluations and starts per fit
         self.diff_step = 1e-3
-        self.nfev_per_param = 30
-        self.max_starts = 4
+        self.nfev_per_param = 20
+        self.max_starts = 2
         self.causes = []
         for cls in catalog("friction"):
             c = cls().constrain(self)
