@@ -296,8 +296,9 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
         d = 1.0 if Xb > Xa else -1.0
         Xcur = Xa
         seg = []
+        n = round(y[0] / a)  # the well the tip sits in (kept explicitly: a tip just placed over a
+        # saddle belongs to the next well although it is nearer the old one)
         while (Xb - Xcur) * d > 0:
-            n = round(y[0] / a)
             Xs = n * a + d * X_slip
             if (Xs - Xcur) * d <= 1e-9 * a:  # already past this well's slip point: slip now
                 Xs = Xcur
@@ -307,8 +308,10 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
                 seg.append(r)
                 y = np.array([r.x[-1], r.v[-1], r.z[-1]])
                 Xcur = Xend
+                n = round(y[0] / a)
             if Xend == Xs and (Xb - Xcur) * d > 0:
                 y = np.array([n * a + d * (xs_slip + 0.02 * a), 0.0, 0.0])  # over the saddle, at rest
+                n += int(d)
         parts.append(seg)
     # flatten into one result; segment boundaries are recovered from the turns by _segments
     t, base, x, v, z, F = [], [], [], [], [], []
