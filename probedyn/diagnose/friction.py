@@ -261,7 +261,10 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
 def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Split a path result into its monotone support segments (at the reversals)."""
     b = res.base
-    d = np.sign(np.diff(b))
+    db = np.diff(b)
+    # steps below 1e-9 of the path's span are round-off where integrated pieces meet (the end
+    # of one piece, X_a + V T, may overshoot the start of the next by an ulp): no direction
+    d = np.sign(np.where(np.abs(db) > 1e-9 * max(float(np.ptp(b)), 1e-300), db, 0.0))
     nz = np.nonzero(d)[0]  # repeated points keep the direction of travel
     d = d[nz[np.maximum(np.searchsorted(nz, np.arange(len(d)), side="right") - 1, 0)]]
     cuts = np.nonzero(d[1:] * d[:-1] < 0)[0] + 1

@@ -264,7 +264,7 @@ class ModalProblem:
                 "lengths_m": [float(x) for x in self.lengths if x is not None],
                 "noise_stated": d.noise_stated, "medium": self.medium_name or "not declared",
                 "known": sorted(self.data.known), "calibrated": list(d.free),
-                "probe": b.probe.name, "probe_mass_kg": self.probe_mass}
+                "probe": b.probe.name, "probe_mass_kg": self.probe_mass, "group_labels": list(self.group_labels)}
 
     def model_description(self) -> dict[str, Any]:
         out = []
