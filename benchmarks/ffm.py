@@ -8,7 +8,7 @@ Three solutions of the same 1D model, in this process:
   same absolute tolerances as the fast integrator, and once more with scipy's default tolerances
   (rtol 1e-3, atol 1e-6: the atol exceeds every state of this problem, x ~ 1e-8 m, z ~ 1e-12 m).
 
-Scans: the source's 10 nm (pure pre-sliding, SOURCE-NOTES 12) and 72 nm (first slip at 64.75 nm
+Scans: the source's 10 nm (pure pre-sliding, departure 11) and 72 nm (first slip at 64.75 nm
 plus two sawtooth periods; kept short so that the python-callback reference stays under a minute). Errors: max |F - F_ref| of the lateral force over the scan divided by
 F_s - F_c (the sawtooth amplitude), and the first-slip position error. LSODA is stopped after
 120 s of wall time (then reported as such).

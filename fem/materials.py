@@ -142,6 +142,19 @@ def radial_poling(axis_point=(0.0, 0.0, 0.0), axis_dir=(0.0, 0.0, 1.0)) -> Calla
     return R
 
 
+
+def transversely_isotropic_compliance(s11: float, s12: float, s13: float, s33: float, s44: float) -> np.ndarray:
+    """6x6 Voigt compliance [1/Pa] of hexagonal / 6mm symmetry about the local 3-axis,
+    ``s66 = 2 (s11 - s12)`` (engineering shear strains)."""
+    S = np.zeros((6, 6))
+    S[0, 0] = S[1, 1] = s11
+    S[2, 2] = s33
+    S[0, 1] = S[1, 0] = s12
+    S[0, 2] = S[2, 0] = S[1, 2] = S[2, 1] = s13
+    S[3, 3] = S[4, 4] = s44
+    S[5, 5] = 2 * (s11 - s12)
+    return S
+
 @dataclass(frozen=True)
 class Material:
     """A linear elastic material in its own (local) axes.
@@ -205,14 +218,7 @@ class Material:
     ) -> "Material":
         """Hexagonal / 6mm symmetry about the local 3-axis from compliances [1/Pa]
         (``s66 = 2 (s11 - s12)``), e.g. a piezoceramic at constant electric field (s^E)."""
-        S = np.zeros((6, 6))
-        S[0, 0] = S[1, 1] = s11
-        S[2, 2] = s33
-        S[0, 1] = S[1, 0] = s12
-        S[0, 2] = S[2, 0] = S[1, 2] = S[2, 1] = s13
-        S[3, 3] = S[4, 4] = s44
-        S[5, 5] = 2 * (s11 - s12)
-        return cls.from_compliance(S, rho, name, note)
+        return cls.from_compliance(transversely_isotropic_compliance(s11, s12, s13, s33, s44), rho, name, note)
 
     # ---- derived quantities ----------------------------------------------------------
     @property

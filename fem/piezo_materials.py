@@ -56,7 +56,7 @@ from typing import Callable, Sequence, Union
 import numpy as np
 
 from probedyn.core.errors import MaterialError
-from probedyn.fem.materials import PZT5H_SE, Material, bond_matrix
+from probedyn.fem.materials import PZT5H_SE, Material, bond_matrix, transversely_isotropic_compliance
 
 EPS0 = 8.8541878128e-12  # vacuum permittivity [F/m]
 
@@ -167,13 +167,7 @@ class PiezoMaterial:
 def six_mm_tensors(s11: float, s12: float, s13: float, s33: float, s44: float, d31: float, d33: float,
                    d15: float, eps11T: float, eps33T: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(s^E, d, eps^T) of a 6mm ceramic poled along 3 (SI units; ``s66 = 2 (s11 - s12)``)."""
-    S = np.zeros((6, 6))
-    S[0, 0] = S[1, 1] = s11
-    S[2, 2] = s33
-    S[0, 1] = S[1, 0] = s12
-    S[0, 2] = S[2, 0] = S[1, 2] = S[2, 1] = s13
-    S[3, 3] = S[4, 4] = s44
-    S[5, 5] = 2 * (s11 - s12)
+    S = transversely_isotropic_compliance(s11, s12, s13, s33, s44)
     d = np.zeros((3, 6))
     d[2, 0] = d[2, 1] = d31
     d[2, 2] = d33

@@ -55,7 +55,7 @@ of the free strain ``d31 V / t`` over the two quarters is ``2 sqrt(2) Y d31 V R^
     Delta_lateral = sqrt(2) d31 L^2 V / (pi R t) = 2 sqrt(2) d31 L^2 V / (pi D t),   D = 2R.
 
 The print's 3.34 has ``R_e`` where the standard form (Chen, J. Vac. Sci. Technol. A 10 (1992)
-3204) has the diameter D: it is **twice** too large (SOURCE-NOTES item 8; the FEM decides,
+3204) has the diameter D: it is **twice** too large (departure 17; the FEM decides,
 docs/piezo.md).  Thick wall (radial field ``V / (r ln(Re/Ri))``, exact annulus):
 ``Delta = 2 sqrt(2) d31 L^2 V / (pi (Re^2 + Ri^2) ln(Re/Ri))``.  Axial (all outer electrodes
 at +V: inward field against the poling, extension): 3.35 ``Delta_z = d31 L V / t`` (thin) or ``2 d31 L V / ((Re + Ri) ln(Re/Ri))`` (thick).
@@ -371,7 +371,7 @@ def gamma_matrix(Re: float, Ri: float, length: float, delta_x: float = 0.0, delt
       extension ``n L / A``.
 
     Differences from the print: R_o_bar = sqrt(x^2 + y^2) and squared radii under the roots
-    (SOURCE-NOTES 14); the cos(theta + theta_delta) of 3.40-3.41 is cos(theta) (a moment arm in
+    (departure 21); the cos(theta + theta_delta) of 3.40-3.41 is cos(theta) (a moment arm in
     fixed axes); the poles of R1/R2 (centroid) and of the electrode angles (c1) made consistent;
     f3 halved; the moments divided by I_c and the force by A to give displacements (the print's
     Gamma is a force map: see :meth:`GammaMatrix.force`).  Checked against the FEM in docs/piezo.md.

@@ -20,7 +20,7 @@ Contents (source equations in brackets):
 * :func:`static_tip_stiffness` – ``3 EI / L^3`` (section 2.3.1, ``k_f``), optionally with the
   Timoshenko shear compliance ``L / (kappa G A)``.
 * :func:`tip_mass_roots` – the tip-mass frequency equation (3.10) in the form **printed** in the
-  source and in the **standard** form (SOURCE-NOTES item 1), first N roots by bracketing.
+  source and in the **standard** form (departure 1), first N roots by bracketing.
 * :func:`rayleigh_quotient` – (2.46) on a sampled mode shape.
 """
 
@@ -313,7 +313,7 @@ def tip_mass_equation(x: float, mass_ratio: float, form: TipMassForm = "standard
 
     ``mass_ratio`` = m / (rho A L).
 
-    * ``standard`` (SOURCE-NOTES item 1; clamped beam with a point mass m at the free end):
+    * ``standard`` (departure 1; clamped beam with a point mass m at the free end):
       ``1 + cos x cosh x + (m/(rho A L)) x (cos x sinh x - sin x cosh x) = 0``.
       From the end condition ``EI v''' = m (d2v/dt2)`` (3.8 without damping): the mass term
       carries the factor ``lambda L`` that makes it an inertia ``m omega^2``.

@@ -326,21 +326,25 @@ class ReducedProbe:
                 out[d] = dict(static_stiffness=self.static_stiffness(d))
         return out
 
-    def save(self, path: str | Path, include_basis: bool = True) -> Path:
-        """Write ``path`` (JSON) and, with a Ritz basis, ``<stem>.ritz.npz`` beside it."""
+    def save(self, path: str | Path, include_basis: bool = True, defer: bool = True) -> Path:
+        """Write ``path`` (JSON) and, with a Ritz basis, ``<stem>.ritz.npz`` beside it.
+
+        Both go through :func:`probedyn.core.io.atomic_path`: inside an output transaction
+        (every CLI command runs in one) they appear when it commits; ``defer=False`` (a cache
+        entry) writes them at once."""
         path = Path(path)
         if path.suffix != ".json":
             raise ParameterError(f"reduced probe files end in .json, got {path.name}")
         d = self.to_dict()
         if self.ritz is not None:
             npz = path.with_name(path.stem + ".ritz.npz")
-            with atomic_path(npz) as tmp:
+            with atomic_path(npz, defer=defer) as tmp:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
+                d["ritz_sha256"] = hashlib.sha256(tmp.read_bytes()).hexdigest()
             d["ritz_file"] = npz.name
-            d["ritz_sha256"] = hashlib.sha256(npz.read_bytes()).hexdigest()
             d["ritz_meta"] = to_jsonable(self.ritz.meta)
-        write_json(path, d)
+        write_json(path, d, defer=defer)
         return path
 
     @classmethod

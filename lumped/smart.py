@@ -352,8 +352,8 @@ def duo_bimorph_references(probe, values: dict[str, Any], result) -> list[dict[s
         J = {"y": float(Jt[2, 2]), "z": float(Jt[1, 1])}  # lateral: rotation about z; vertical: about y
     refs: dict[tuple[str, str], np.ndarray] = {}
     notes = {
-        "(3.10) corrected + (3.18), holder as point mass": "SOURCE-NOTES 1-2; no holder offset/rotary inertia",
-        "(3.10) as printed": "printed form, wrong (SOURCE-NOTES 1)",
+        "(3.10) corrected + (3.18), holder as point mass": "departures 1, 3; no holder offset/rotary inertia",
+        "(3.10) as printed": "printed form, wrong (departure 1)",
         "Rayleigh tip mass 3EI/L^3, m_h + 33/140 m_b": "textbook one-mode estimate",
         "beam + holder rigid body (offset, rotary inertia)": "holder geometry from the mesh",
         "2-DOF (3.4): beam + holder body + tip on k_t": "analytic lumped model at the holder end",

@@ -5,12 +5,12 @@ For the piezotube the tube axis is x (the source calls it z); the source's later
 is probedyn z and the source's y is probedyn y. Every formula was checked against a limit
 case or an independent solution (tests/test_smart_analytic.py); departures from the print:
 
-* **(3.10)** tip-mass frequency equation: the standard form (SOURCE-NOTES item 1)
+* **(3.10)** tip-mass frequency equation: the standard form (departure 1)
   ``1 + cos x cosh x + mu x (cos x sinh x - sin x cosh x) = 0``, ``x = lambda L``,
   ``mu = m / (rho A L)`` (from the end condition 3.8 / 3.16 / 3.24 without damping). The printed
   form is available as ``form="printed"`` only to show its error.
 * **(3.13)/(3.18)** duo-bimorph vertical: bending stiffness ``w h^3 / (12 s11)`` and
-  ``omega_n = sqrt(h^2 / (12 rho s11)) lambda_n^2`` (SOURCE-NOTES item 2). Lateral (3.5):
+  ``omega_n = sqrt(h^2 / (12 rho s11)) lambda_n^2`` (departure 3). Lateral (3.5):
   ``h w^3 / (12 s11)``, ``omega_n = sqrt(w^2 / (12 rho s11)) lambda_n^2``.
 * **(3.21)** piezotube lateral: the thin-wall bending stiffness ``pi R^3 (Re - Ri) / s11``
   with ``R = (Re + Ri)/2``, and the exact annulus ``pi (Re^4 - Ri^4) / (4 s11)``; their ratio
@@ -110,7 +110,7 @@ class DuoBimorphBeam:
 
     def EI(self, direction: str) -> float:
         """Bending stiffness [N m^2]: lateral (y) ``h w^3/(12 s11)`` (3.5); vertical (z)
-        ``w h^3/(12 s11)`` (3.13 corrected, SOURCE-NOTES item 2)."""
+        ``w h^3/(12 s11)`` (3.13 corrected, departure 3)."""
         if direction in ("lateral", "y"):
             return self.h * self.w**3 / (12 * self.s11)
         if direction in ("vertical", "flapwise", "z"):

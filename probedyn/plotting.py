@@ -73,3 +73,40 @@ def fmt_hz(f: float, digits: int = 5) -> str:
         if a >= scale:
             return f"{f / scale:.{digits}g} {unit}"
     return f"{f:.{digits}g} Hz"
+
+
+def plain_ticks(fig) -> None:
+    """Plain tick labels on every axis of ``fig`` (``1e-06`` instead of mathtext ``10^-6``: the
+    mathtext parser dominates the drawing time of figures with many log axes) and no minor-tick
+    labels on log axes."""
+    pyplot()
+    from matplotlib.ticker import FuncFormatter, NullFormatter
+
+    def fmt(v, _pos):
+        if v == 0:
+            return "0"
+        a = abs(v)
+        return f"{v:.0e}".replace("e+0", "e").replace("e-0", "e-") if (a >= 1e4 or a < 1e-2) else f"{v:g}"
+
+    for ax in fig.axes:
+        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
+            if scale in ("log", "symlog"):
+                axis.set_major_formatter(FuncFormatter(fmt))
+                axis.set_minor_formatter(NullFormatter())
+            else:
+                axis.set_major_formatter(FuncFormatter(lambda v, _p: f"{v:g}"))
+
+
+def category_colormap(colors, codes=None):
+    """A colormap of one colour per category: ``(cmap, norm)`` for ``pcolormesh`` of integer
+    codes (``codes`` sorted, default ``0 .. len(colors) - 1``; without a norm, ``(cmap, None)``
+    maps the codes' range linearly)."""
+    pyplot()
+    import numpy as np
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    cmap = ListedColormap(list(colors))
+    if codes is None:
+        return cmap, None
+    codes = sorted(codes)
+    return cmap, BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)

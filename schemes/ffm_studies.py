@@ -26,28 +26,41 @@ def run_ffm_to_regime(preset: str = "mica", model: str = "bristle", overrides: M
                       length: float | None = None, probe: Any = None) -> tuple[F.ScanResult, dict[str, Any]]:
     """:func:`probedyn.schemes.ffm.run_ffm`; without an explicit ``length``, a scan of the
     preset's range that stays in pre-sliding is extended to ``1.05 F_s/k_x + 4 (F_s - F_c)/k_x``
-    (the first slip plus four periods) and the summary gets ``preset_scan`` (the preset range's
+    (the first slip plus four periods; doubled while no slip occurs) and the summary gets ``preset_scan`` (the preset range's
     regime, maximum force and slips, and a note saying why the scan was extended).  ``probe``: a
     reduced probe driving the cantilever (:func:`probedyn.schemes.ffm.run_ffm`)."""
     ov = dict(overrides or {})
     note = None
+    auto = length is None
     if probe is not None and length is None:
         # the preset's scan range was chosen for the table's soft spring; a probe's own spring sets
-        # the scale: the first slip plus eight quasi-static periods
+        # the scale: the first slip (probe spring in series with the contact's pre-sliding
+        # stiffness, if the model has one) plus eight quasi-static periods
         ffm = F.FFM.from_preset(preset, model, ov, probe=probe)
         lv = ffm.friction.levels()
         if lv:
             k = ffm.cantilever["k_x"]
-            length = 1.05 * lv[0] / k + 8.0 * (lv[0] - lv[1]) / k
-            note = (f"scan length set by the probe's spring: 1.05 F_s/k_x + 8 (F_s-F_c)/k_x = {length * 1e9:.4g} nm "
+            s0 = ffm.friction.presliding_stiffness()
+            k_first = k * s0 / (k + s0) if s0 else k
+            length = 1.2 * lv[0] / k_first + 8.0 * (lv[0] - lv[1]) / k
+            note = (f"scan length set by the probe's spring: 1.2 F_s/k_s + 8 (F_s-F_c)/k_x = {length * 1e9:.4g} nm "
+                    f"with k_s = k_x in series with the pre-sliding stiffness "
                     f"(the preset's range is {ffm.cantilever['length'] * 1e9:.4g} nm)")
     res, summary = F.run_ffm(preset, model, ov, length=length, probe=probe)
     if note:
         summary["scan_note"] = note
-    if length is None and summary["regime"] == "presliding" and summary.get("first_slip_estimate_m"):
+    if auto and summary["regime"] == "presliding" and summary.get("first_slip_estimate_m"):
         source = {k: summary[k] for k in ("scan_length_m", "regime", "max_force_n", "n_slips")}
-        auto = 1.05 * summary["first_slip_estimate_m"] + 4.0 * (summary["period_estimate_m"] or 0.0)
-        res, summary = F.run_ffm(preset, model, ov, length=max(auto, summary["scan_length_m"]), probe=probe)
+        ext = max(1.05 * summary["first_slip_estimate_m"] + 4.0 * (summary["period_estimate_m"] or 0.0),
+                  summary["scan_length_m"])
+        for _ in range(4):  # the first slip comes later than the quasi-static estimate: lengthen
+            if ext > summary["scan_length_m"]:
+                res, summary = F.run_ffm(preset, model, ov, length=ext, probe=probe)
+            if summary["regime"] != "presliding":
+                break
+            ext = 2.0 * summary["scan_length_m"]
+        if note:
+            summary["scan_note"] = note
         summary["preset_scan"] = {
             **source,
             "note": f"no slip within the preset's {source['scan_length_m'] * 1e9:.3g} nm scan: the first slip "

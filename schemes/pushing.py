@@ -20,7 +20,7 @@ friction levels of Table 4.2 are taken at a fixed load, as in the source).
   Mindlin ``k_t = 8 G* a_c``), present only while in contact. Sample rotation (rolling) is not
   modelled, as in the source.
 * **Sample–substrate friction** (section 2.1.4, eqs 2.4–2.9, with the lattice entering as a
-  modelling choice, SOURCE-NOTES item 12)::
+  modelling choice, departure 14)::
 
       F_sub = sigma0 z + sigma1 dz/dt + F_v v + S(w) grad U(r),      S(w) = exp(-(w/V_s)^2)
       dz/dt = v - |v| z sigma0 / F_c                                  (isotropic LuGre bristle)
@@ -40,8 +40,8 @@ friction levels of Table 4.2 are taken at a fixed load, as in the source).
   of eq 2.6; when sliding much faster than ``V_s`` the friction is ``F_c + F_v V``. The step
   length is *not* put in: it emerges as the distance between equivalent yield points of the
   lattice. The printed generalised bristle (2.7–2.12) alone has no length scale tied to ``a``; its
-  slip period is about ``2 (F_s - F_c) / k`` (SOURCE-NOTES item 12).
-* **Dissipation**: ``F_v`` is the viscous term of eq 2.7 (units N s/m, SOURCE-NOTES item 9); the
+  slip period is about ``2 (F_s - F_c) / k`` (departure 11).
+* **Dissipation**: ``F_v`` is the viscous term of eq 2.7 (units N s/m, departure 10); the
   default 1e-7 N s/m is the value fitted on mica in Table 2.1. It over-damps the slip of the
   sample on the contact spring (damping ratio ``F_v / 2 sqrt(k m_s) ~ 4``); air / capillary
   damping (Fig 4.6) is modelled by raising it to 2e-5 – 5e-5 N s/m.
@@ -100,9 +100,9 @@ _T41 = preset("table-4.1")
 
 PARAMS = ParamSet([
     # probe (Table 4.1)
-    Param("k_tx", _T41["k_tx"], "N/m", "tip stiffness along the push axis", lo=1e-3, hi=1e4, positive=True,
+    Param("k_tx", _T41["k_tx"], "N/m", "tip stiffness along the push axis", lo=1e-3, hi=1e7, positive=True,
           source="Table 4.1"),
-    Param("k_ty", _T41["k_ty"], "N/m", "tip stiffness across the push axis", lo=1e-3, hi=1e4, positive=True,
+    Param("k_ty", _T41["k_ty"], "N/m", "tip stiffness across the push axis", lo=1e-3, hi=1e7, positive=True,
           source="Table 4.1"),
     Param("m_tx", _T41["m_tx"], "kg", "tip effective mass (x)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
     Param("m_ty", _T41["m_ty"], "kg", "tip effective mass (y)", lo=1e-22, hi=1e-6, positive=True, source="Table 4.1"),
@@ -125,7 +125,7 @@ PARAMS = ParamSet([
           source="eq 2.5"),
     Param("V_s", _T41["V_s"], "m/s", "Stribeck velocity", lo=1e-9, hi=1.0, positive=True, source="Table 4.1"),
     Param("F_v", preset("table-2.1")["F_v_x"], "N s/m",
-          "viscous friction coefficient (Table 2.1 value; units per SOURCE-NOTES 9)",
+          "viscous friction coefficient (Table 2.1 value; units per departure 10)",
           lo=0.0, hi=1e-2, source="eq 2.7, Table 2.1"),
     Param("a", 0.0, "m", "lattice parameter; 0 = from the substrate (Table 4.2)", lo=0.0, hi=1e-8, source="Table 4.2"),
     Param("F_s", 0.0, "N", "static friction; 0 = from the substrate", lo=0.0, hi=1e-5, source="Table 4.2"),

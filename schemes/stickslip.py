@@ -27,7 +27,7 @@ the reduced potential at both saddles bounding the sample's well, the sample can
 that well and converges to its node.  This is the rigorous "steady state reached" certificate
 used by the basin computation (together with a tolerance on the distance to the node).
 
-SOURCE-NOTES item 5: for u0 = 25, psi = 5 the equation gives 8 stable and 7 unstable
+departure 15: for u0 = 25, psi = 5 the equation gives 8 stable and 7 unstable
 equilibria (the text says 16 nodes and 15 saddles); :func:`equilibria` reports what the
 equation gives.
 

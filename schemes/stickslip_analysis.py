@@ -28,7 +28,7 @@ of the periodic part"):
   a force plateau: the force over the last 20 % of the trace varies by less than the threshold;
   or a periodic force without abrupt changes, see abruptness) or ``presliding`` (no slip yet: the force still rises at the end of the scan, the initial
   sticking of the scan has not ended; this is what a 10 nm mica scan with Table 2.1 gives,
-  SOURCE-NOTES item 12).
+  departure 11).
 """
 
 from __future__ import annotations

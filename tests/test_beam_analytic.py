@@ -151,7 +151,7 @@ def test_tip_mass_heavy_mass_is_spring_mass():
 
 
 def test_tip_mass_source_notes_values():
-    # SOURCE-NOTES item 1: m/(rho A L) = 1 -> printed form 1.423, standard form 1.248.
+    # departure 1: m/(rho A L) = 1 -> printed form 1.423, standard form 1.248.
     assert B.tip_mass_roots(1.0, 1, "printed")[0] == pytest.approx(1.423, abs=5e-4)
     assert B.tip_mass_roots(1.0, 1, "standard")[0] == pytest.approx(1.248, abs=5e-4)
     # printed form, heavy mass: tan x = tanh x (a pinned tip), not a spring-mass system

@@ -1,4 +1,4 @@
-"""Maugis–Dugdale contact (eqs 2.24–2.35, corrected per SOURCE-NOTES item 3).
+"""Maugis–Dugdale contact (eqs 2.24–2.35, corrected per departure 7).
 
 Independent checks: the DMT and JKR limits (closed forms), convergence rates towards them,
 the A -> 0 end point re-derived here from the quadratic for the adhesive radius, a published

@@ -36,7 +36,7 @@ def test_mica_regular_stick_slip_between_F_s_and_F_c(mica_long):
 
 
 def test_source_scan_range_is_pure_presliding():
-    """SOURCE-NOTES 12: 10 nm < F_s/k_x = 65 nm -> no slip; force = k_x X up to the series
+    """departure 11: 10 nm < F_s/k_x = 65 nm -> no slip; force = k_x X up to the series
     compliance of the bristle, k_x X / (1 + k_x / sigma0) (relative 2e-5)."""
     res, s = F.run_ffm("mica")
     assert s["regime"] == "presliding" and s["n_slips"] == 0

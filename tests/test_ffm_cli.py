@@ -16,7 +16,7 @@ def test_json_has_the_required_fields(capsys):
     d = _json(["--preset", "mica"], capsys)
     for key in ("static_friction_n", "kinetic_friction_n", "period_m", "regime"):
         assert key in d
-    # the source's 10 nm scan never reaches F_s / k_x = 65 nm: no slip (SOURCE-NOTES 12);
+    # the source's 10 nm scan never reaches F_s / k_x = 65 nm: no slip (departure 11);
     # the command says so and extends the scan to measure the regular stick-slip
     assert d["preset_scan"]["regime"] == "presliding" and d["preset_scan"]["n_slips"] == 0
     assert d["preset_scan"]["scan_length_m"] == pytest.approx(10e-9)

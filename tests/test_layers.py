@@ -29,8 +29,9 @@ STAGES = ("meshes", "fem", "lumped", "schemes")
 SUBPACKAGES = ("core", "commands", "probes", "diagnose", "report")
 #: layers allowed to import probedyn.commands (the command line and the report on top of it)
 TOP = {"cli", "commands", "report"}
-#: the only places that may import matplotlib or pyvista
-PLOTTING_ALLOWED = ("fem/render.py", "probedyn/plotting.py", "probedyn/report.py", "probedyn/report/", "probedyn/commands/")
+#: the only places that may import matplotlib or pyvista: the plotting leaf and the renderer (the
+#: report and the commands draw through probedyn.plotting)
+PLOTTING_ALLOWED = ("fem/render.py", "probedyn/plotting.py")
 
 FORBIDDEN = {
     "meshes": {"fem", "lumped", "schemes", "probes"},

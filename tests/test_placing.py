@@ -51,7 +51,7 @@ def tables():
     return rel._tables(float(TABLE["lambda"]))
 
 
-# ------------------------------------------------------------------ probe, Table 4.4 (SOURCE-NOTES 10)
+# ------------------------------------------------------------------ probe, Table 4.4 (departure 35)
 
 
 def test_table_beam_has_the_table_stiffness_and_mass_ratio(beam_probe):
@@ -61,7 +61,7 @@ def test_table_beam_has_the_table_stiffness_and_mass_ratio(beam_probe):
     m_eq = EQUIV_MASS_RATIO * SILICON_RHO * g["width"] * g["thickness"] * g["length"]
     assert mp["m_equivalent_geometric_kg"] == pytest.approx(m_eq, rel=1e-9)
     assert mp["ratio_equivalent_to_table"] == pytest.approx(m_eq / float(TABLE["m"]), rel=1e-9)
-    assert mp["ratio_equivalent_to_table"] > 100  # the table's m is far too light (SOURCE-NOTES 10)
+    assert mp["ratio_equivalent_to_table"] > 100  # the table's m is far too light (departure 35)
     # the table mass rescales frequencies by sqrt(m_geo/m_table) and leaves statics alone
     tab = beam_probe.with_mass_source("table")
     assert tab.m == pytest.approx(float(TABLE["m"]), rel=1e-12)
@@ -132,7 +132,7 @@ def test_frequency_shift_small_amplitude_limit_and_exact_orbit(table_probe):
 
 def test_capture_equation_limits():
     assert np.allclose(cap.capture_roots(0, 0, 4), bm.eb_roots(4), rtol=1e-12)
-    for mass in (0.2, 1.0, 5.0):  # tip mass: (3.10) in the standard form (SOURCE-NOTES 1)
+    for mass in (0.2, 1.0, 5.0):  # tip mass: (3.10) in the standard form (departure 1)
         assert np.allclose(cap.capture_roots(0, mass, 3), bm.tip_mass_roots(mass, 3, "standard"), rtol=1e-10)
     assert np.allclose(cap.capture_roots(math.inf, 0, 3), cap.CLAMPED_PINNED[:3], rtol=1e-12)
     # K -> infinity approaches the pinned end like 1/K

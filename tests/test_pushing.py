@@ -94,7 +94,7 @@ def test_stairs_step_equals_lattice_constant(sub):
 @pytest.mark.parametrize("a", [3.5e-10, 8.0e-10])
 def test_step_follows_the_lattice_not_the_friction_levels(a):
     """Mica friction levels with another lattice constant: the step follows a (1 %, as above), while
-    the bristle model alone would slip by about (F_s - F_c)/k = 0.59 nm (SOURCE-NOTES 12), which
+    the bristle model alone would slip by about (F_s - F_c)/k = 0.59 nm (departure 11), which
     differs from both a by more than 20 %."""
     res, r = run("mica", a=a)
     m = res.model

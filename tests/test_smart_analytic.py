@@ -38,7 +38,7 @@ def test_heavy_end_mass_limit_is_spring_mass():
 
 
 def test_source_notes_item1_numbers():
-    # SOURCE-NOTES 1: for m/(rho A L) = 1 the FE beam gives bL = 1.248, the printed form 1.423
+    # departure 1: for m/(rho A L) = 1 the FE beam gives bL = 1.248, the printed form 1.423
     assert tip_mass_roots(1.0, 1, "standard")[0] == pytest.approx(1.248, abs=1e-3)
     assert tip_mass_roots(1.0, 1, "printed")[0] == pytest.approx(1.423, abs=1e-3)
 

@@ -42,7 +42,7 @@ def test_duo_bimorph_point_holder_vs_corrected_310_318(duo_point):
         fem = res.first(fam).frequency_hz
         ref = b.frequencies(d, v["holder_mass"], 1)[0]
         assert abs(fem / ref - 1) < 0.02, (d, fem, ref)
-        # the printed (3.10) is off by an order of magnitude (SOURCE-NOTES 1)
+        # the printed (3.10) is off by an order of magnitude (departure 1)
         assert abs(b.frequencies(d, v["holder_mass"], 1, form="printed")[0] / fem - 1) > 0.5
 
 

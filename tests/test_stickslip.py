@@ -43,7 +43,7 @@ def test_equilibrium_counts_match_independent_grid_count(u0):
 
 
 def test_source_notes_item5_counts():
-    # SOURCE-NOTES item 5: 8 stable / 7 unstable at psi = 5 (text: 16/15), 9/8 at psi = 2..4
+    # departure 15: 8 stable / 7 unstable at psi = 5 (text: 16/15), 9/8 at psi = 2..4
     e = ss.equilibria(25.0, 5.0)
     assert (e.n_stable, e.n_unstable) == (8, 7)
     for psi in (2.0, 3.0, 4.0):

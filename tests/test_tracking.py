@@ -271,7 +271,7 @@ def test_disturbance_force_is_minus_the_gradient():
         Jfd = (s.force(xy[0] + h * d) - s.force(xy[0] - h * d)) / (2 * h)
         assert np.max(np.abs(Jfd - s.jacobian(xy[0])[:, i])) <= h**2 / 6 * s.k**4 * (s.p1 + s.p2) \
             + 4 * EPS * s.force_amplitude / h
-    # the unit reading of SOURCE-NOTES 13: p1 = 0.33 eV, a force amplitude of 0.5-0.6 nN
+    # the unit reading of departure 38: p1 = 0.33 eV, a force amplitude of 0.5-0.6 nN
     assert s.p1 / dist.EV == pytest.approx(0.3296, rel=1e-3)
     assert 1e-12 < s.force_amplitude < 1e-9
 

@@ -29,6 +29,7 @@ def _human(d: dict) -> str:
         f"max lateral force {nn(d['max_force_n'])}",
         *([f"note: {d['preset_scan']['note']}"] if d.get("preset_scan") else []),
         *([f"note: {d['scan_note']}"] if d.get("scan_note") else []),
+        *([f"note: {d['kinetic_note']}"] if d.get("kinetic_note") else []),
         *([probe_line(d["probe"])] if d.get("probe") else [f"probe: {d.get('probe_source')}"]),
     ])
 

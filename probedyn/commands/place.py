@@ -110,7 +110,7 @@ def capture(probe: str = PROBE_ARG, sets: Optional[List[str]] = SET_OPT, mass_so
     _save_plots(out, "capture", res)
 
     def human(r):
-        lines = [f"end condition EI U''' = (k1 - M w^2) U (SOURCE-NOTES 4): a sample mass lowers the frequency"]
+        lines = [f"end condition EI U''' = (k1 - M w^2) U (departure 25): a sample mass lowers the frequency"]
         rows = [{"K": x["K"], "mu": x["mu"], "n": x["mode"], "bL": x["bL"], "bLp": x["bL_printed"], "b": x["beta_L3"]}
                 for x in r["rows"]]
         lines.append(_rows(rows, [("K", "K = k1 L^3/EI", ".4g"), ("mu", "mu = M/(rho A L)", ".3g"), ("n", "mode", ""),

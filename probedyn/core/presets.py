@@ -121,7 +121,7 @@ PRESETS: dict[str, Preset] = {p.key: p for p in [
         ("h", 10e-6, "m"), ("d31", -185e-12, "C/N"), ("s11_E", 16.5e-12, "m^2/N"),
     ], {"s11_E": "printed 20.7e-12 m/N is PZT-5H's s33; s11 = 16.5e-12 m^2/N (source-departures 'Tables 3.1/3.2, s11')",
         "d31": "printed +185e-12; d31 of PZT-5H is negative (-274e-12 data sheet; the table's magnitude is kept)",
-        "m_h": "about 1700x the geometric mass of a 50 um PZT holder (SOURCE-NOTES 10): offered beside the geometric mass"}),
+        "m_h": "about 1700x the geometric mass of a 50 um PZT holder (departure 5): offered beside the geometric mass"}),
     _p("table-3.2", "Table 3.2 (sections 3.3, 3.5)", "piezotube probe", [
         ("m_h", 0.02e-3, "kg"), ("rho", 7800.0, "kg/m^3"), ("mu", 0.1, "N s/m^2"),
         ("R_e", 0.5e-3, "m"), ("R_i", 0.45e-3, "m"), ("s11_E", 16.5e-12, "m^2/N"),
@@ -154,7 +154,7 @@ PRESETS: dict[str, Preset] = {p.key: p for p in [
         ("R_t", 50e-9, "m"), ("R_s", 160e-9, "m"), ("D", 5e-6, "m"),
         ("H_sb", 19.95e-20, "J"), ("H_ss", 13.2e-20, "J"), ("F_0", 5e-7, "N"),
         ("zeta0", 3.75e-10, "m"), ("L", 2e-3, "m"), ("M2", 2e-18, "kg"),
-    ], {"m": "far lighter than a 2 mm cantilever (SOURCE-NOTES 10): offered beside the geometric mass",
+    ], {"m": "far lighter than a 2 mm cantilever (departure 35): offered beside the geometric mass",
         "mu": "printed without unit; read as the damping factor of eq 3.2 (N s/m^2)"}),
 ]}
 

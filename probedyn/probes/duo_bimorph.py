@@ -6,7 +6,7 @@ identity; the opposite polarities of the two layers do not change the elastic te
 (header) of mass ``m`` on the holder spring ``k_t`` (eq 3.4; Table 3.1: k_y2 = 0.1 N/m,
 k_z2 = 10 N/m).
 
-User choices (SOURCE-NOTES item 10):
+User choices (departure 5):
 
 * ``holder = "meshed"`` (a silicon block L_h x holder_width x holder_thickness with its PZT
   stiffness-tuning piezolayer on top) or ``"point"`` (a rigid mass on the face-averaged
@@ -67,7 +67,7 @@ _PARAMS = ParamSet([
     Param("holder_material", "silicon", "", "material of the holder block", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
     Param("holder_mass_source", "table", "", "which mass drives the holder: Table 3.1 m_h or its geometry",
-          kind=str, choices=("table", "geometry"), source="SOURCE-NOTES 10"),
+          kind=str, choices=("table", "geometry"), source="departure 5"),
     Param("holder_mass", T31["m_h"], "kg", "holder mass m_h (used when holder_mass_source = table)", lo=0.0,
           hi=1e-2, source="Table 3.1"),
     Param("tip", "lumped", "", "cantilever tip: mass m on the holder spring k_t, a meshed cone, or none",

@@ -6,7 +6,7 @@ vector about the tube axis, evaluated at every quadrature point by
 the source's z), with the tip holder at the free end and the cantilever tip of mass ``m`` on
 the holder spring ``k_t`` (eq 3.20).
 
-User choices (SOURCE-NOTES item 10):
+User choices (departure 5):
 
 * ``holder = "meshed"`` (a silicon collar of length L_h with the tube's cross-section and its
   PZT stiffness-tuning piezolayer ring, radially poled) or ``"point"`` (a rigid mass m_h on the
@@ -60,7 +60,7 @@ _PARAMS = ParamSet([
     Param("holder_material", "silicon", "", "material of the holder collar", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
     Param("holder_mass_source", "table", "", "which mass drives the holder: Table 3.2 m_h or its geometry",
-          kind=str, choices=("table", "geometry"), source="SOURCE-NOTES 10"),
+          kind=str, choices=("table", "geometry"), source="departure 5"),
     Param("holder_mass", T32["m_h"], "kg", "holder mass m_h", lo=0.0, hi=1.0, source="Table 3.2"),
     Param("tip", "lumped", "", "cantilever tip: mass m on the holder springs k_t, or none", kind=str,
           choices=("lumped", "none")),

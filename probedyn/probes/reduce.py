@@ -127,7 +127,7 @@ def reduce_probe(probe: str | Path = "cantilever", overrides: Mapping[str, Any] 
     rp.provenance["build_s"] = time.perf_counter() - t0
     rp.provenance["cache"] = "miss" if cache else "off"
     if cache:
-        rp.save(path)
+        rp.save(path, defer=False)  # a cache entry: kept even if the run fails
         rp.provenance["cache_file"] = str(path)
     rp.ritz.model = model
     return rp

@@ -1,4 +1,4 @@
-"""Studies of the smart probes (sections 3.4.1, 3.5.1; SOURCE-NOTES item 10): each resolves a
+"""Studies of the smart probes (sections 3.4.1, 3.5.1; departure 5): each resolves a
 probe of the registry by name, builds its FE model, solves it and hands the probe's own
 declaration (directions, direction groups, body regions, ``rho A``: :class:`SmartProbe`) to
 the reductions and references of :mod:`probedyn.lumped.smart`. Used by ``probedyn smart-*``,
@@ -142,7 +142,7 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
 
 
 def study_holder_mass(name: str, overrides: dict[str, Any] | None = None, n_modes: int = 4) -> dict[str, Any]:
-    """SOURCE-NOTES item 10: the first modes of body + holder (no tip) with the holder mass of
+    """departure 5: the first modes of body + holder (no tip) with the holder mass of
     the table (m_h) and with the mass of the holder geometry."""
     out, masses = {}, {}
     for src in ("table", "geometry"):

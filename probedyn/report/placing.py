@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.plotting import axis_label, fmt_hz, pyplot, savefig
+from probedyn.plotting import axis_label, category_colormap, fmt_hz, plain_ticks, pyplot, savefig
 from probedyn.report._tables import markdown_table
 from probedyn.schemes.placing.probe import TABLE
 
@@ -36,23 +36,8 @@ def _a(v, *_args) -> np.ndarray:
 
 
 def _plain(fig) -> None:
-    """Plain tick labels on every axis (``1e-06`` instead of mathtext ``10^-6``: the mathtext parser
-    cost most of this section's drawing time) and no minor-tick labels."""
-    from matplotlib.ticker import FuncFormatter, NullFormatter
-
-    def fmt(v, _pos):
-        if v == 0:
-            return "0"
-        a = abs(v)
-        return f"{v:.0e}".replace("e+0", "e").replace("e-0", "e-") if (a >= 1e4 or a < 1e-2) else f"{v:g}"
-
-    for ax in fig.axes:
-        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
-            if scale in ("log", "symlog"):
-                axis.set_major_formatter(FuncFormatter(fmt))
-                axis.set_minor_formatter(NullFormatter())
-            else:
-                axis.set_major_formatter(FuncFormatter(lambda v, _p: f"{v:g}"))
+    """Plain tick labels (:func:`probedyn.plotting.plain_ticks`)."""
+    plain_ticks(fig)
 
 
 def _save(fig, path: Path) -> Path:
@@ -210,13 +195,10 @@ def _fig_4_22(rex: dict[str, Any], ax) -> None:
 
 
 def _map(m: dict[str, Any], ax, title: str, F_po: float | None, k1: float | None) -> None:
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-
     from probedyn.schemes.placing.release import threshold_amplitude
 
     codes = sorted(OUTCOME_COLORS)
-    cmap = ListedColormap([OUTCOME_COLORS[c] for c in codes])
-    norm = BoundaryNorm(np.arange(codes[0] - 0.5, codes[-1] + 1.5), cmap.N)
+    cmap, norm = category_colormap([OUTCOME_COLORS[c] for c in codes], codes)
     x, y = _a(m["x"]), _a(m["y"])
     o = _a(m["outcome"])
     ax.pcolormesh(x, y, o.T, cmap=cmap, norm=norm, shading="nearest")
@@ -506,7 +488,7 @@ def section(outdir: Path, quick: bool) -> str:
              f"[{cp['check_beta_range'][0]:.4g}, {cp['check_beta_range'][1]:.4g}]" if chk else
              "Quick mode (beam probe): no FEM comparison here")
     parts += [
-        "**Capture (4.22-4.41).** End condition EI U''' = (k1 - M omega^2) U (SOURCE-NOTES 4; printed "
+        "**Capture (4.22-4.41).** End condition EI U''' = (k1 - M omega^2) U (departure 25; printed "
         "k1 + M omega^2; departure 25): an attached mass lowers every frequency. " + check
         + " (tests/test_placing_slow.py: full FEM re-solves over bL 1.25-10.0 within 0.12 %).",
         "",
@@ -574,7 +556,7 @@ def section(outdir: Path, quick: bool) -> str:
         _selective_text(mul),
         "",
     ]
-    parts += ["**Table 4.4's mass (SOURCE-NOTES 10).**", "",
+    parts += ["**Table 4.4's mass (departure 35).**", "",
               _md(pl["rows"], [("mass_source", "mass", ""), ("m_equivalent_kg", "m [kg]", ".3g"), ("f1_hz", "f1", "hz"),
                                ("jump_z0_m", "z0* [m]", ".4g"), ("df_rel_at_1.5z", "df/f at 1.5 z0*", ".4f"),
                                ("F0_for_0.5um_at_1e8_n", "F0 for 0.5 µm at 1e8 rad/s [N]", ".3g"),

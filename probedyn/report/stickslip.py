@@ -12,10 +12,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.colors import ListedColormap
 
 from probedyn.core.io import make_dirs
-from probedyn.plotting import fmt_um, pyplot, savefig
+from probedyn.plotting import category_colormap, fmt_um, pyplot, savefig
 from probedyn.report._tables import markdown_table
 from probedyn.schemes.regimes import limit_cycles_result, run_basins, run_regime_map
 from probedyn.schemes.stickslip import DEFAULT_MODEL, REGIMES, equilibria, phase_portrait, steady_branches
@@ -53,7 +52,7 @@ def plot_regime_map(ds, path: Path, bis: dict[str, Any] | None = None) -> Path:
     """Regime map (Fig 4.13) over (v, u0), the period contours and the bisected boundary."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    cmap = ListedColormap(["#9ecae1", "#fd8d3c", "#d62728", "#74c476", "#6a51a3"])
+    cmap, _ = category_colormap(["#9ecae1", "#fd8d3c", "#d62728", "#74c476", "#6a51a3"])
     ax.pcolormesh(ds["v"].values, ds["u0"].values, ds["regime"].values, cmap=cmap, vmin=-0.5, vmax=4.5, shading="nearest")
     ax.set_xscale("log")
     ax.set_xlabel("non-dimensional speed v (eq 4.6)")

@@ -184,7 +184,7 @@ def section(outdir: Path, quick: bool) -> str:
     rg = S.range_study(plant_factory("analytic"))
     range_figure(rg, outdir / "tracking_range.png")
     rrows = [{"probe": p, **r} for p in ("duo-bimorph", "piezotube") for r in rg[p]["rows"]]
-    md += ["**Range per volt (Figs 3.17, 3.18)**: formulas (SOURCE-NOTES 8: 3.34 halved) and the simulated plants' "
+    md += ["**Range per volt (Figs 3.17, 3.18)**: formulas (departure 17: 3.34 halved) and the simulated plants' "
            "static tip stroke (analytic body: at the beam/tube end); the piezo FEM will replace the formulas.", "",
            markdown_table([{**r, "f": r["formula_m_per_V"] * 1e9, "p": r["plant_m_per_V"] * 1e9} for r in rrows],
                      [("probe", "probe", ""), ("axis", "axis", ""), ("formula", "formula", ""), ("f", "formula [nm/V]", ".4g"),

@@ -12,7 +12,7 @@ key               model                                         source
 ================  ===========================================  =========================
 ``dmt``           Derjaguin–Muller–Toporov + vdW tail           (2.20), (2.21)
 ``jkr``           Johnson–Kendall–Roberts                        text of 2.2.2.2 (not the printed 2.22)
-``md``            Maugis–Dugdale + continuous vdW tail           (2.24)–(2.35), SOURCE-NOTES 3
+``md``            Maugis–Dugdale + continuous vdW tail           (2.24)–(2.35), departure 7
 ================  ===========================================  =========================
 
 ``get_contact_model(name, **params)`` and ``list_models()`` are the registry's ``create`` and

@@ -7,7 +7,7 @@ Conventions (all models)
   contact disappears (see the tail below).
 * The interaction force ``P`` is the **load** the sample exerts on the tip along the common
   normal, in N, **positive = repulsive** (compressive), negative = adhesive (tensile).
-* Normalisation of Maugis (1992) and of eqs 2.28–2.30 of the source (with SOURCE-NOTES item 3:
+* Normalisation of Maugis (1992) and of eqs 2.28–2.30 of the source (with departure 7:
   eq 2.30 uses the same ``K`` as 2.28)::
 
       A     = a     / (pi W R^2 / K)^(1/3)          contact radius

@@ -6,8 +6,8 @@ In the normalised variables of :mod:`.base` (``A``, ``P_bar``, ``D_bar``, transi
 ``lam`` of 2.24) the model is, with ``s = sqrt(m^2 - 1)`` and ``t = atan(s)``:
 
 * (2.25)  ``1 = lam A^2 / 2 [s + (m^2 - 2) t] + 4 lam^2 A / 3 [1 - m + s t]``
-* (2.26)  ``D_bar = A^2 - 4/3 lam A s``               (SOURCE-NOTES 3: the factor A was missing)
-* (2.27)  ``P_bar = A^3 - lam A^2 [s + m^2 t]``        (SOURCE-NOTES 3: atan(sqrt(m^2-1)), not atan(m^2-1))
+* (2.26)  ``D_bar = A^2 - 4/3 lam A s``               (departure 7: the factor A was missing)
+* (2.27)  ``P_bar = A^3 - lam A^2 [s + m^2 t]``        (departure 7: atan(sqrt(m^2-1)), not atan(m^2-1))
 * (2.28–2.30) dimensional units, with ``K`` (not ``k``) in (2.30)
 
 Solution strategy (the robust one the source's "solve 2.25 and 2.26 simultaneously" is not):
@@ -158,7 +158,7 @@ def md_curve(A, lam: float):
 
 @CONTACT_MODELS.register
 class MaugisDugdale(ContactModel):
-    """Maugis–Dugdale contact (2.24–2.35, corrected per SOURCE-NOTES item 3) with the
+    """Maugis–Dugdale contact (2.24–2.35, corrected per departure 7) with the
     continuous van der Waals tail (2.33–2.34).
 
     Parameters: see :data:`.base.COMMON_PARAMS` (``lam`` sets the work of adhesion through
@@ -167,7 +167,7 @@ class MaugisDugdale(ContactModel):
 
     key: ClassVar[str] = "md"
     title: ClassVar[str] = "Maugis-Dugdale"
-    source: ClassVar[str] = "(2.24)-(2.35), corrected: SOURCE-NOTES 3"
+    source: ClassVar[str] = "(2.24)-(2.35), corrected: departure 7"
 
     def nd_curve(self, A):
         D, P, dD, dP, _ = md_curve(A, self.lam)

@@ -76,7 +76,7 @@ class GeneralisedBristle(BristleModel):
         positive_param("F_s", TABLE_2_1["F_s_x"], "N", "static friction F_sx", "(2.9); Table 2.1", hi=1e-3),
         positive_param("F_c", TABLE_2_1["F_c_x"], "N", "kinetic friction F_cx", "(2.9); Table 2.1", hi=1e-3),
         positive_param("V_s", TABLE_2_1["V_s"], "m/s", "Stribeck velocity", "(2.9); Table 2.1", hi=1e3),
-        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0,
+        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (departure 10: N s/m)", lo=0.0,
               hi=1.0, source="(2.7); Table 2.1"),
         Param("vmax", "literal", "", "reading of max(V_i) in (2.8): signed max or largest magnitude",
               kind=str, choices=("literal", "magnitude"), source="(2.8)"),

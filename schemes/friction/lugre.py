@@ -53,7 +53,7 @@ class LuGre(BristleModel):
         positive_param("F_s", TABLE_2_1["F_s_x"], "N", "static friction", "(2.4); Table 2.1", hi=1e-3),
         positive_param("F_c", TABLE_2_1["F_c_x"], "N", "kinetic (Coulomb) friction", "(2.4); Table 2.1", hi=1e-3),
         positive_param("V_s", TABLE_2_1["V_s"], "m/s", "Stribeck velocity", "(2.4); Table 2.1", hi=1e3),
-        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (SOURCE-NOTES 9: N s/m)", lo=0.0,
+        Param("F_v", TABLE_2_1["F_v_x"], "N s/m", "viscous friction coefficient (departure 10: N s/m)", lo=0.0,
               hi=1.0, source="(2.5); Table 2.1"),
     ])
     packed = ("sigma0", "sigma1", "F_s", "F_c", "V_s", "F_v")

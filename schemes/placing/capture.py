@@ -7,7 +7,7 @@ held by the linearised contact spring ``k1`` (4.29) at the end. Two end conditio
 
 ``end="grounded"`` (the source's model, 4.26-4.31: the contact spring is anchored at the
 sample position ``z0``, which does not move, while the mass moves with the tip). The shear
-force balance at ``x = L`` is (SOURCE-NOTES 4)::
+force balance at ``x = L`` is (departure 25)::
 
     EI U'''(L) = (k1 - M omega^2) U(L),    i.e.  beta_n = k1/EI - M omega_n^2 / EI   (corrected 4.37)
 
@@ -28,7 +28,7 @@ corrected beta): with ``x = bL``, ``K = k1 L^3 / EI``, ``mu = M / (rho A L)`` an
     x^3 (1 + cos x cosh x) = beta L^3 (cos x sinh x - sin x cosh x)            (4.38)
 
 Limits (tests): ``K = mu = 0`` gives (2.40)/(4.39); ``K = 0`` the tip-mass equation (3.10,
-standard form, SOURCE-NOTES 1); ``K -> infinity`` the clamped-pinned ``tan x = tanh x``
+standard form, departure 1); ``K -> infinity`` the clamped-pinned ``tan x = tanh x``
 (3.9266, 7.0686, ...); a spring alone (``mu = 0``, ``K = 3``, i.e. ``k1 = k``) stiffens mode 1 to
 ``bL = 2.2135`` (``omega`` x 1.39, close to the ``sqrt(2)`` of a doubled static stiffness).
 Mode shapes: (4.40) for every ``beta`` (the moment condition alone fixes the ratio of the two

@@ -18,10 +18,10 @@ normal ``(sin theta, cos theta)``. Two force laws (``law``):
   ``2 H R^3 / (3 s^4)`` (sphere-flat) beyond them. Derjaguin overestimates the substrate's pull
   at 5 um by a factor ``(1 + s / (2 R))^2`` = 270 (:func:`force_budget`).
 
-Tilt (4.44, SOURCE-NOTES 6). The printed ``tan^-1(theta) = F0 / L`` divides a force by a length;
+Tilt (4.44, departure 31). The printed ``tan^-1(theta) = F0 / L`` divides a force by a length;
 the tilt comes from the tip's oscillation amplitude ``A_tip`` (the forced response 4.41 / the
 retained modes, :func:`.release.setup_release`): ``theta = atan(A_tip / L)`` (``tilt="amplitude"``,
-as SOURCE-NOTES 6 states); ``tilt="slope"`` uses the first mode's end slope instead,
+as departure 31 states); ``tilt="slope"`` uses the first mode's end slope instead,
 ``theta = atan(1.3765 A_tip / L)`` (``phi'(L) / phi(L)`` of the clamped-free mode 1).
 
 Start of the flight. The release run (:mod:`.release`) integrates the sample's vertical motion on
@@ -87,7 +87,7 @@ def sphere_sphere_force(s, H: float, R1: float, R2: float, law: str = "derjaguin
 
 
 def tilt_angle(A_tip: float, L: float, tilt: str = "amplitude") -> float:
-    """(4.44) corrected (SOURCE-NOTES 6): ``atan(A_tip / L)`` or ``atan(1.3765 A_tip / L)``."""
+    """(4.44) corrected (departure 31): ``atan(A_tip / L)`` or ``atan(1.3765 A_tip / L)``."""
     if tilt not in TILTS:
         raise ParameterError(f"unknown tilt rule {tilt!r} ({', '.join(TILTS)})")
     if not (A_tip >= 0 and L > 0):

@@ -1,10 +1,10 @@
-"""Several samples on one probe: Rayleigh-Ritz, eqs 4.45-4.55, Figs 4.24-4.26, SOURCE-NOTES 7, 11.
+"""Several samples on one probe: Rayleigh-Ritz, eqs 4.45-4.55, Figs 4.24-4.26, departures 33, 34.
 
 Rayleigh-Ritz (4.45)-(4.51). With ``z(x) = sum_i a_i psi_i(x)`` the stiffness and mass matrices
 of the cantilever (``EI``, ``rho S``, ``L``) carrying samples ``M_k`` at ``l_k`` are::
 
     K_ij = EI int_0^L psi_i'' psi_j'' dx,
-    M_ij = rho S int_0^L psi_i psi_j dx + sum_k M_k psi_i(l_k) psi_j(l_k)        (4.51 with S: SOURCE-NOTES 7)
+    M_ij = rho S int_0^L psi_i psi_j dx + sum_k M_k psi_i(l_k) psi_j(l_k)        (4.51 with S: departure 33)
 
 and ``det(K - omega^2 M) = 0`` (4.49). Two bases:
 
@@ -20,9 +20,9 @@ and ``det(K - omega^2 M) = 0`` (4.49). Two bases:
 Reference: :func:`exact_frequencies`, the exact Euler-Bernoulli solution with point masses by
 transfer matrices (``EI w'''' = rho S omega^2 w`` on each segment; a mass's inertia load
 ``M omega^2 w delta(x - l)`` makes the shear jump by ``[EI w'''] = M omega^2 w``, so that at the tip
-``EI w'''(L) = -M omega^2 w(L)``, the sign of SOURCE-NOTES 4), and the 3D FEM with point masses (full re-solve).
+``EI w'''(L) = -M omega^2 w(L)``, the sign of departure 25), and the 3D FEM with point masses (full re-solve).
 
-Inverse problem (4.52, SOURCE-NOTES 11). The measured data are the relative frequency shifts
+Inverse problem (4.52, departure 34). The measured data are the relative frequency shifts
 ``f_n / f_n0 - 1`` of the first modes. :func:`identifiability` gives, for each set of unknowns
 among ``l_1, l_2, M_1, M_2`` and each number of measured modes, the rank and conditioning of the
 Jacobian (analytic, from eigenvalue perturbation: ``d lambda_n / d M_k = -lambda_n (psi_k^T v_n)^2``,
@@ -277,7 +277,7 @@ def ritz_flapwise(basis, masses: Sequence[tuple[float, float]], n: int = 4, mode
 
 
 # ------------------------------------------------------------------------------------------
-# Inverse problem and identifiability (SOURCE-NOTES 11)
+# Inverse problem and identifiability (departure 34)
 # ------------------------------------------------------------------------------------------
 
 UNKNOWN_SETS = (("M1",), ("l1",), ("M1", "M2"), ("l1", "l2"), ("l1", "M1"), ("l1", "l2", "M1"),

@@ -28,7 +28,7 @@ Sources of these numbers (``source``):
 * a reduced probe of ``lumped/reduced.py`` (issue 10) enters through
   :meth:`PlacingProbe.from_reduced` (duck-typed: static stiffness and normal modes).
 
-Table 4.4 plausibility (SOURCE-NOTES 10): Table 4.4 gives no cross-section. A silicon beam of
+Table 4.4 plausibility (departure 35): Table 4.4 gives no cross-section. A silicon beam of
 ``L = 2 mm`` and ``k = 1 N/m`` with the project's default width ``w = 30 um`` needs
 ``t = (4 k L^3 / (E w))^(1/3) = 18.5 um`` (:func:`table_beam_geometry`) and weighs
 ``rho w t L = 2.6e-9 kg``; its first-mode equivalent mass is ``0.2427 x`` that, 6.3e-10 kg:
@@ -358,7 +358,7 @@ def flapwise_indices(sol, model) -> list[int]:
 
 
 def mass_plausibility(probe: PlacingProbe) -> dict[str, Any]:
-    """SOURCE-NOTES 10: Table 4.4's ``m`` against the probe's geometric masses.
+    """departure 35: Table 4.4's ``m`` against the probe's geometric masses.
 
     Returns the table mass, the beam's mass, its first-mode equivalent mass ``k / omega_1^2``,
     their ratios, and the first frequency with either mass."""

@@ -447,7 +447,7 @@ def multi_study(probe: PlacingProbe, model=None, ns: Sequence[int] = (2, 3, 4, 6
 
 
 # ------------------------------------------------------------------------------------------
-# Table 4.4 plausibility (SOURCE-NOTES 10)
+# Table 4.4 plausibility (departure 35)
 # ------------------------------------------------------------------------------------------
 
 

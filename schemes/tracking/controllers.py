@@ -7,7 +7,7 @@ returns a linear law applied to the measured plant state ``x = [q1, q2, q1', q2'
 
 with ``w(t)`` the reference terms (feedforward minus feedback on the reference state).
 
-Singular-perturbation model, checked step by step (docs/tracking.md; SOURCE-NOTES 15):
+Singular-perturbation model, checked step by step (docs/tracking.md; departure 39):
 with ``z = K1 (q2 - q1)`` eq 3.37 (plus the body damping C2 probedyn keeps) is, exactly,
 
     D q1'' + C1 q1' = z                                                    (3.47a)

@@ -7,7 +7,7 @@ The adiabatic tip-surface potential of a square lattice, to first order in its F
 and the force on the tip is ``F = -grad P`` in the substrate plane. For KBr(100) the source takes
 a = 0.66 nm and prints p1 = 5.28e-9 N m, p2 = 1.056e-9 N m (from its ref. [73]).
 
-**Units (SOURCE-NOTES 13).** P is an energy, so p1, p2 are in J. The printed values would give a
+**Units (departure 38).** P is an energy, so p1, p2 are in J. The printed values would give a
 force amplitude ``k p1 = 9.5e9 1/m x 5.28e-9 J = 50 N``, ten orders of magnitude above any
 atomic force. probedyn reads the printed mantissas on the scale of the tip-surface corrugation
 energy of alkali-halide surfaces (tenths of an eV): **p1 = 5.28e-20 J = 0.33 eV,
