@@ -274,7 +274,8 @@ class ModalProblem:
                         "fem_families": b.families, "fem_frequencies_hz": [float(x) for x in b.freqs],
                         "fem_solve_s": b.solve_s, "discretisation": b.disc_note, "thickness_stretch": b.stretch,
                         "reduced_basis": self.reds[L].r if L in self.reds else None})
-        return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' (P2 tetrahedra)",
+        elem = type(self.reference_baseline.model.basis.elem).__name__
+        return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' ({elem})",
                 "fits": "Ritz reduction of the FEM (modes, stretch sensitivities, clamp-support, mass and prestress "
                         "shapes); final model re-solved with the FEM", "fems": out}
 
