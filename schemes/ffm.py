@@ -161,11 +161,11 @@ class FFM:
 # kernel inlined, so a new model runs at the speed of the built-in ones.
 
 @njit(cache=True)
-def _rhs_jac(kern, p, m, c, k, V, t, y, f, J):
+def _rhs_jac(kern, p, m, c, k, V, X0, t, y, f, J):
     x, v, z = y[0], y[1], y[2]
     F, zd, dFx, dFv, dFz, dzx, dzv, dzz = kern(p, x, v, z)
     f[0] = v
-    f[1] = (c * (V - v) + k * (V * t - x) - F) / m
+    f[1] = (c * (V - v) + k * (X0 + V * t - x) - F) / m
     f[2] = zd
     J[0, 0] = 0.0
     J[0, 1] = 1.0
@@ -180,11 +180,11 @@ def _rhs_jac(kern, p, m, c, k, V, t, y, f, J):
 
 
 @njit(cache=True)
-def _rhs(kern, p, m, c, k, V, t, y, f):
+def _rhs(kern, p, m, c, k, V, X0, t, y, f):
     x, v, z = y[0], y[1], y[2]
     r = kern(p, x, v, z)
     f[0] = v
-    f[1] = (c * (V - v) + k * (V * t - x) - r[0]) / m
+    f[1] = (c * (V - v) + k * (X0 + V * t - x) - r[0]) / m
     f[2] = r[1]
 
 
@@ -223,7 +223,7 @@ def _lu_solve(A, b):
 
 
 @njit(cache=True)
-def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
+def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
     d = 1.0 / (2.0 + math.sqrt(2.0))
     e32 = 6.0 + math.sqrt(2.0)
     n = 3
@@ -239,7 +239,7 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
     W = np.empty((n, n))
     Tt = np.zeros(n)
     Tt[1] = k * V / m
-    Fr = _rhs_jac(kern, p, m, c, k, V, t, y, f0, J)
+    Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
     ts[0] = 0.0
     ys[0] = y
     Fs[0] = Fr
@@ -257,10 +257,10 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
             W[a, a] += 1.0
         k1 = _lu_solve(W, f0 + h * d * Tt)
         ym = y + 0.5 * h * k1
-        _rhs(kern, p, m, c, k, V, t + 0.5 * h, ym, f1)
+        _rhs(kern, p, m, c, k, V, X0, t + 0.5 * h, ym, f1)
         k2 = _lu_solve(W, f1 - k1) + k1
         yn = y + h * k2
-        _rhs(kern, p, m, c, k, V, t + h, yn, f2)
+        _rhs(kern, p, m, c, k, V, X0, t + h, yn, f2)
         k3 = _lu_solve(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
         err = 0.0
         for a in range(n):
@@ -270,7 +270,7 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps):
         if err <= 1.0 or h < 1e-22:
             t = t + h
             y = yn
-            Fr = _rhs_jac(kern, p, m, c, k, V, t, y, f0, J)
+            Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
             i += 1
             ts[i] = t
             ys[i] = y
@@ -343,6 +343,62 @@ def line_scan(ffm: FFM, length: float | None = None, rtol: float = 1e-5, atol_re
                       friction=Fr, n_steps=int(nst), n_rejected=int(nrej),
                       setup=dict(preset=ffm.preset, model=fm.key, cantilever=dict(cp),
                                  friction=dict(fm.values), length=L, rtol=rtol, atol_rel=atol_rel))
+
+
+def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: float = 1e-6,
+                   atol_rel: float = 1e-7, hmax: float | None = None, max_steps: int = 2_000_000,
+                   atol_v: float | None = None) -> ScanResult:
+    """FFM scan (2.13) along a piecewise-linear support path: ``turns`` = support positions
+    ``[X_0, X_1, ...]`` visited in order at ``speed`` (default the cantilever's V), e.g.
+    ``[0, L, 0]`` for a trace and its retrace (a friction loop). Initial state ``y0`` =
+    (x, x', z) (default: at rest at ``X_0``, spring relaxed). The segments are integrated one after
+    the other with the state carried over, so the reversal is resolved (the tip sticks while the
+    support runs back through twice the friction force over k, then slips backwards).
+    ``hmax`` caps the step (default: a fiftieth of a segment); ``atol_v`` is the absolute tolerance
+    on the tip velocity (default ``atol_rel * speed``). The result concatenates the
+    segments (``base`` not monotonic)."""
+    cp = ffm.cantilever
+    fm = ffm.friction
+    m, c, k = cp["m_x"], cp["c_x"], cp["k_x"]
+    V0 = cp["V"] if speed is None else float(speed)
+    if not (V0 > 0 and math.isfinite(V0)):
+        raise ParameterError(f"scan speed must be positive, got {speed!r}")
+    turns = [float(x) for x in turns]
+    if len(turns) < 2:
+        raise ParameterError("line_scan_path needs at least two turning points")
+    p = fm.pack()
+    atol = _atol(ffm, atol_rel)
+    atol[1] = atol_rel * V0 if atol_v is None else atol_v
+    y = np.array([turns[0], 0.0, 0.0]) if y0 is None else np.asarray(y0, float).copy()
+    t_off = 0.0
+    parts_t, parts_b, parts_y, parts_F = [], [], [], []
+    steps = rej = 0
+    for Xa, Xb in zip(turns[:-1], turns[1:]):
+        if Xb == Xa:
+            continue
+        V = V0 if Xb > Xa else -V0
+        T = abs(Xb - Xa) / V0
+        h0 = 1e-3 * math.sqrt(m / k)
+        hm = T / 50.0 if hmax is None else min(hmax, T / 50.0)
+        ts, ys, Fr, nst, nrej = _ros23(fm.kernel, p, m, c, k, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
+        if nst < 0:
+            raise SolverError(f"FFM scan path: more than {max_steps} steps in one segment")
+        first = 0 if not parts_t else 1
+        parts_t.append(ts[first:] + t_off)
+        parts_b.append(Xa + V * ts[first:])
+        parts_y.append(ys[first:])
+        parts_F.append(Fr[first:])
+        y = ys[-1].copy()
+        t_off += T
+        steps += int(nst)
+        rej += int(nrej)
+    t = np.concatenate(parts_t)
+    base = np.concatenate(parts_b)
+    ys = np.concatenate(parts_y)
+    return ScanResult(t=t, base=base, x=ys[:, 0], v=ys[:, 1], z=ys[:, 2], lateral_force=k * (base - ys[:, 0]),
+                      friction=np.concatenate(parts_F), n_steps=steps, n_rejected=rej,
+                      setup=dict(preset=ffm.preset, model=fm.name, cantilever=dict(cp), friction=dict(fm.values),
+                                 turns=turns, speed=V0, rtol=rtol, atol_rel=atol_rel))
 
 
 def warm_up(model: str = "bristle") -> None:

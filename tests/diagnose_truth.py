@@ -1,350 +1,717 @@
-"""Truth models that generate measurements with a hidden effect (tests only; never imported by probedyn).
+"""Truth generators for the diagnosis tests and the rate study (tests only; never imported by probedyn).
 
-The modal truth is *independent* of probedyn's reduced FE beam: exact Euler-Bernoulli
-solutions by transfer matrices (matrix exponential of the first-order form of
-EI w'''' - P w'' = rho A omega^2 w), with root springs, an interior point mass (jump
-EI [w'''] = m omega^2 w) and axial force, the free-end condition EI w''' = P w' - m omega^2 w,
-St-Venant torsion in closed form, and fluid loading by its own copy of Sader's hydrodynamic
-function applied to the uniform beam exactly (omega_f = omega_v / sqrt(1 + T Gamma_r(omega_f)),
-Q = (1/T + Gamma_r) / Gamma_i). Frequencies get Gaussian noise of the relative size written
-into the sidecar; the hidden effect and its parameters are returned to the test only.
+Every truth is produced by a path independent of the diagnosis:
 
-The friction truth tracks the quasi-static Prandtl-Tomlinson tip position *point by point*
-(damped Newton from the previous equilibrium, a jump when the well disappears: descent to the
-next minimum), instead of probedyn's closed-form branch inversion, and adds the effect,
-then white force noise.
+* **modal**: probedyn's 3D FEM on a *finer mesh* than the diagnosis uses (3 instead of 2 elements
+  through the thickness), with the hidden effect built into the mesh or the matrices by code
+  here -- a point mass on a mesh *vertex* (the diagnosis interpolates a point of its mass path),
+  lumped nodal springs on the clamp-face nodes (the diagnosis uses a consistent face foundation
+  and a Ritz reduction), a *re-meshed* thicker / wider / longer lever (the diagnosis stretches its
+  mesh), another Young's modulus, a geometric stiffness assembled here, and fluid loading by this
+  module's own hydrodynamic function on the exact uniform-beam relation; plus a Timoshenko beam
+  (``probedyn.lumped.beam``) for the bending families;
+* **friction** and **force curves**: see the later sections of this module.
+
+The measurement written for the diagnosis holds only what an experimentalist has: the nominal
+spec, the measured values, the stated noise. The truth stays with the test.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
-from scipy.linalg import expm
-from scipy.optimize import brentq
+import scipy.sparse as sp
 from scipy.special import kve
 
-# ----------------------------------------------------------------- modal
-PROBE = dict(length=200e-6, width=30e-6, thickness=2e-6, E=169e9, rho=2330.0, nu=0.28)
-MODES = [("flap", 1), ("flap", 2), ("flap", 3), ("flap", 4), ("lateral", 1), ("torsion", 1)]
-MODAL_EFFECTS = ["clamp-compliance", "point-mass", "thickness-error", "width-error", "length-error",
-                 "anisotropy", "fluid-loading", "axial-prestress"]
+HERE = Path(__file__).resolve().parent
+CACHE = HERE / "data" / "diagnose_modal_truth.json"
+
+# levers of the study: (name, probe overrides) -- long, short-and-wide, narrow
+LEVERS = {
+    "A": dict(length=300e-6, width=30e-6, thickness=10e-6),
+    "B": dict(length=100e-6, width=40e-6, thickness=10e-6),
+    "C": dict(length=150e-6, width=20e-6, thickness=10e-6),
+}
+MODES = [("flapwise", 1), ("flapwise", 2), ("flapwise", 3), ("flapwise", 4), ("lateral", 1), ("torsion", 1)]
+MODAL_EFFECTS = ["point-mass", "clamp-compliance", "thickness-error", "width-error", "length-error",
+                 "modulus-error", "axial-prestress", "fluid-loading"]
+TRUTH_ETT = 3  # elements through the thickness of the truth meshes (the diagnosis: 2)
+E_SI, NU_SI, RHO_SI = 169e9, 0.28, 2330.0
 
 
-def _gamma(omega, b, rho_f, eta_f):
-    re = rho_f * omega * b * b / (4 * eta_f)
+# ------------------------------------------------------------------------------------------
+# Hydrodynamic function (own copy; Sader 1998 eqs 20-21)
+# ------------------------------------------------------------------------------------------
+
+
+def gamma_rect(omega, b, rho_f, eta_f):
+    re = min(max(rho_f * omega * b * b / (4 * eta_f), 1e-6), 1e4)
     s = np.sqrt(1j * re)
     gc = 1 + 4j * kve(1, -1j * s) / (s * kve(0, -1j * s))
     t = math.log10(re)
-    om_r = (0.91324 - 0.48274 * t + 0.46842 * t**2 - 0.12886 * t**3 + 0.044055 * t**4 - 0.0035117 * t**5 + 0.00069085 * t**6) / (
-        1 - 0.56964 * t + 0.48690 * t**2 - 0.13444 * t**3 + 0.045155 * t**4 - 0.0035862 * t**5 + 0.00069085 * t**6)
-    om_i = (-0.024134 - 0.029256 * t + 0.016294 * t**2 - 0.00010961 * t**3 + 0.000064577 * t**4 - 0.000044510 * t**5) / (
-        1 - 0.59702 * t + 0.55182 * t**2 - 0.18357 * t**3 + 0.079156 * t**4 - 0.014369 * t**5 + 0.0028361 * t**6)
+    om_r = (0.91324 - 0.48274 * t + 0.46842 * t**2 - 0.12886 * t**3 + 0.044055 * t**4 - 0.0035117 * t**5
+            + 0.00069085 * t**6) / (1 - 0.56964 * t + 0.48690 * t**2 - 0.13444 * t**3 + 0.045155 * t**4
+                                    - 0.0035862 * t**5 + 0.00069085 * t**6)
+    om_i = (-0.024134 - 0.029256 * t + 0.016294 * t**2 - 0.00010961 * t**3 + 0.000064577 * t**4
+            - 0.000044510 * t**5) / (1 - 0.59702 * t + 0.55182 * t**2 - 0.18357 * t**3 + 0.079156 * t**4
+                                     - 0.014369 * t**5 + 0.0028361 * t**6)
     g = (om_r + 1j * om_i) * gc
-    return g.real, abs(g.imag)
+    return float(g.real), float(abs(g.imag))
 
 
-def tm_det(beta, kr=math.inf, kt=math.inf, mu=0.0, xm=1.0, p=0.0):
-    """Frequency determinant of a uniform EB beam, x in [0, 1], Lambda = beta^4."""
-    lam = beta**4
-    A = np.array([[0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1], [lam, 0, p, 0]], float)
-    if math.isinf(kr) and math.isinf(kt):
-        Y0 = np.array([[0, 0], [0, 0], [1, 0], [0, 1]], float)
-    elif math.isinf(kt):  # w(0) = 0; unknowns w'(0) and the root shear
-        Y0 = np.array([[0, 0], [1, 0], [kr, 0], [p, 1]], float)
-    elif math.isinf(kr):  # w'(0) = 0; unknowns w(0) and the root moment
-        Y0 = np.array([[1, 0], [0, 0], [0, 1], [-kt, 0]], float)
-    else:
-        Y0 = np.array([[1, 0], [0, 1], [0, kr], [-kt, p]], float)
-    if mu and xm < 1.0:
-        Jm = np.eye(4); Jm[3, 0] += mu * lam
-        Y = expm(A * (1 - xm)) @ Jm @ expm(A * xm) @ Y0
-        tipmu = 0.0
-    else:
-        Y = expm(A) @ Y0
-        tipmu = mu
-    # end: w'' = 0 ; w''' - p w' + mu Lambda w = 0
-    row2 = Y[2]
-    row3 = Y[3] - p * Y[1] + tipmu * lam * Y[0]
-    return row2[0] * row3[1] - row2[1] * row3[0]
+def fluid_loaded(f_vac, w, t, rho, rho_f, eta_f):
+    """Exact uniform-beam fluid loading of one flapwise mode: omega_f = omega_v / sqrt(1 + T Gamma_r(omega_f)),
+    Q = (1/T + Gamma_r) / Gamma_i with T = pi rho_f w / (4 rho t) (Sader eq 25)."""
+    T = math.pi * rho_f * w / (4 * rho * t)
+    om_v = 2 * math.pi * f_vac
+    om = om_v
+    for _ in range(200):
+        gr, _ = gamma_rect(om, w, rho_f, eta_f)
+        new = om_v / math.sqrt(1 + T * gr)
+        if abs(new - om) < 1e-14 * om:
+            break
+        om = new
+    gr, gi = gamma_rect(om, w, rho_f, eta_f)
+    return om / (2 * math.pi), (1 / T + gr) / gi
 
 
-def tm_roots(n, **kw):
-    """First n beta roots (non-dimensional, beta^4 = rho A omega^2 L^4 / EI)."""
-    grid = np.arange(0.3, 4.0 * n + 6, 0.01)
-    vals = np.array([tm_det(b, **kw) for b in grid])
-    roots = []
-    for i in range(len(grid) - 1):
-        if vals[i] == 0 or vals[i] * vals[i + 1] < 0:
-            roots.append(brentq(lambda b: tm_det(b, **kw), grid[i], grid[i + 1], xtol=1e-13))
-            if len(roots) == n:
-                break
-    return np.array(roots)
+# ------------------------------------------------------------------------------------------
+# FEM truths with the effect built in
+# ------------------------------------------------------------------------------------------
 
 
-def torsion_J(w, t):
-    a, b = max(w, t), min(w, t)
-    r = b / a
-    return a * b**3 * (1 / 3 - 0.21 * r * (1 - r**4 / 12))
+def _probe():
+    from probedyn.probes import get_probe
+
+    return get_probe("cantilever")[0]
 
 
-def modal_truth(effect, params, probe=PROBE, modes=MODES, Q_int=2e4):
-    """Exact frequencies [Hz] and Q of the listed modes of the probe carrying ``effect``."""
-    L, w, t, E, rho, nu = (probe[k] for k in ("length", "width", "thickness", "E", "rho", "nu"))
-    kr = kt = math.inf; mu = 0.0; xm = 1.0; p_nd = 0.0; rho_f = 0.0; eta_f = 1.8e-5; Eb = E
-    EI0 = E * w * t**3 / 12
-    if effect == "clamp-compliance":
-        kr = params["kappa_r"]; kt = params.get("kappa_t", math.inf)
-    elif effect == "point-mass":
-        mu, xm = params["mu"], params["xi"]
-    elif effect == "thickness-error":
-        t = t * params["t_ratio"]
-    elif effect == "width-error":
-        w = w * params["w_ratio"]
-    elif effect == "length-error":
-        L = L * params["L_ratio"]
-    elif effect == "anisotropy":
-        Eb = E * params["e_ratio"]
-    elif effect == "fluid-loading":
-        rho_f, eta_f = params["rho_f"], params["eta_f"]
-    elif effect == "axial-prestress":
-        p_nd = params["p"]
-    elif effect is not None:
-        raise ValueError(effect)
-    A = w * t
-    m_nom = probe["rho"] * probe["width"] * probe["thickness"] * probe["length"]
-    out_f, out_q = [], []
-    for fam, order in modes:
-        if fam == "torsion":
-            G = E / (2 * (1 + nu))
-            Ip = w * t * (w * w + t * t) / 12
-            f = (2 * order - 1) / (4 * L) * math.sqrt(G * torsion_J(w, t) / (rho * Ip))
-            out_f.append(f); out_q.append(Q_int); continue
-        EI = Eb * (w * t**3 if fam == "flap" else t * w**3) / 12
-        # nondimensionalise the nominal-scaled quantities with this family's EI and actual L
-        kw = dict(kr=kr * EI0 / probe["length"] * L / EI if math.isfinite(kr) else math.inf,
-                  kt=kt * EI0 / probe["length"] ** 3 * L**3 / EI if math.isfinite(kt) else math.inf,
-                  mu=mu * m_nom / (rho * A * L), xm=xm, p=p_nd * EI0 / probe["length"] ** 2 * L**2 / EI)
-        beta = tm_roots(order, **kw)[order - 1]
-        om = beta**2 * math.sqrt(EI / (rho * A * L**4))
-        q = Q_int
-        if fam == "flap" and rho_f > 0:
-            T = math.pi * rho_f * w / (4 * rho * t)
-            om_v = om
-            om = brentq(lambda o: o - om_v / math.sqrt(1 + T * _gamma(o, w, rho_f, eta_f)[0]), om_v * 1e-3, om_v)
-            gr, gi = _gamma(om, w, rho_f, eta_f)
-            q = 1 / (1 / Q_int + 1 / ((1 / T + gr) / gi))
-        out_f.append(om / (2 * math.pi)); out_q.append(q)
-    return np.array(out_f), np.array(out_q)
+def _families_pick(freqs, fams, modes):
+    out = []
+    for fa, o in modes:
+        idx = [i for i, x in enumerate(fams) if x == fa]
+        out.append(freqs[idx[o - 1]] if len(idx) >= o else math.nan)
+    return np.array(out)
 
 
-def draw_modal_effect(effect, rng, strength=1.0):
-    """A seeded random magnitude of the effect, in the catalog's parameters.
+def _solve_custom(model, K, M, n, clamped: bool):
+    """Eigen-solve a (possibly unclamped) model with extra matrices; FEM classification."""
+    from probedyn.fem import elasticity as el
+    from probedyn.fem.eigen import shift_invert_eigsh
+    from probedyn.fem.modes import classify_shapes
 
-    The ranges span from about the detection limit (a few sigma of 1e-3 frequency noise on
-    the most sensitive mode) to clearly visible effects; ``strength`` < 1 keeps only the upper
-    part of each range (used by the fast default tests, which must not sit on the threshold).
-    """
-    sgn = rng.choice([-1.0, 1.0])
-    u = 1.0 - strength * rng.uniform(0.0, 1.0)  # 0..1, biased to the strong end for strength < 1
-    lerp = lambda a, b: a + (b - a) * (1.0 - u)  # noqa: E731  (strong end = b)
-    if effect == "clamp-compliance":
-        return {"kappa_r": float(10 ** lerp(math.log10(3000), math.log10(30)))}
-    if effect == "point-mass":
-        return {"mu": float(10 ** lerp(math.log10(0.003), math.log10(0.1))), "xi": float(rng.uniform(0.5, 1.0))}
+    free = model.free_dofs if clamped else np.arange(model.ndofs_total)
+    res = shift_invert_eigsh(K[free][:, free].tocsr(), M[free][:, free].tocsr(), n, sigma=0.0)
+    Phi = np.zeros((model.ndofs_total, len(res.eigenvalues)))
+    Phi[free] = res.vectors
+    w = el.lumped_weights(model.mesh, model.elem_density)
+    fams, _ = classify_shapes(model.basis.doflocs, w, Phi.reshape(model.n_nodes, 3, -1), axis=model.beam_axis)
+    return np.sqrt(np.maximum(res.eigenvalues, 0)) / (2 * math.pi), fams
+
+
+def _geometric_stiffness(model, sigma):
+    """sigma * int (d_x u).(d_x v) dV, assembled here with scikit-fem (scalar P2 Laplacian along x)."""
+    from skfem import Basis, BilinearForm, ElementTetP2
+
+    basis = Basis(model.mesh, ElementTetP2(), intorder=2)
+
+    @BilinearForm
+    def gxx(u, v, w):
+        return u.grad[0] * v.grad[0]
+
+    return sigma * sp.kron(gxx.assemble(basis), sp.identity(3), format="csr")
+
+
+def _face_nodal_areas(model, face):
+    """Lumped nodal areas of a face: the diagonal of its consistent P2 face mass, scaled to the
+    face area (HRZ lumping; every node gets a positive share)."""
+    from skfem import BilinearForm, ElementTetP2, FacetBasis
+
+    fb = FacetBasis(model.mesh, ElementTetP2(), facets=np.asarray(model.mesh.boundaries[face]), intorder=4)
+
+    @BilinearForm
+    def mass(u, v, w):
+        return u * v
+
+    S = mass.assemble(fb)
+    d = S.diagonal()
+    area = float(S.sum())
+    return d * (area / d.sum())
+
+
+def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12) -> dict:
+    """Vacuum frequencies [Hz] of the MODES of lever ``lever`` carrying ``effect`` (FEM, ``ett``
+    elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`)."""
+    from probedyn.fem.model import PointMass
+
+    probe = _probe()
+    geo = dict(LEVERS[lever])
+    over = dict(geo, elements_through_thickness=ett)
     if effect == "thickness-error":
-        return {"t_ratio": float(1 + sgn * lerp(0.002, 0.03))}
-    if effect == "width-error":
-        return {"w_ratio": float(1 + sgn * lerp(0.004, 0.05))}
-    if effect == "length-error":
-        return {"L_ratio": float(1 + sgn * lerp(0.001, 0.02))}
-    if effect == "anisotropy":
-        return {"e_ratio": float(1 + sgn * lerp(0.005, 0.1))}
-    if effect == "fluid-loading":
-        return {"rho_f": float(10 ** lerp(math.log10(0.3), 3)), "eta_f": float(10 ** rng.uniform(-5, -3))}
+        over["thickness"] = geo["thickness"] * params["t_ratio"]
+    elif effect == "width-error":
+        over["width"] = geo["width"] * params["w_ratio"]
+    elif effect == "length-error":
+        over["length"] = geo["length"] + params["dL"]
+    elif effect == "modulus-error":
+        over["youngs_modulus"] = E_SI * params["e_ratio"]
+    values = probe.resolve(over)
+    model = probe.build(values)
+    extra = {}
+    if effect == "point-mass":
+        p = model.mesh.p
+        target = np.array([params["xi"] * geo["length"], 0.0, 0.0])
+        j = int(np.argmin(np.linalg.norm(p - target[:, None], axis=0)))
+        node = p[:, j]
+        model.point_masses.append(PointMass(tuple(node), params["mass"]))
+        extra["xi_node"] = float(node[0] / geo["length"])
+        model._K = model._M = None
+    K, M = model.assemble()
+    clamped = True
+    if effect == "clamp-compliance":
+        L, t = geo["length"], geo["thickness"]
+        kn = E_SI / (L * params["c_rot"])
+        kt = E_SI * t * t / (12 * L**3 * params["c_trans"]) if params["c_trans"] > 0 else kn * 1e6
+        a = _face_nodal_areas(model, "clamp")
+        d = np.zeros(model.ndofs_total)
+        d[0::3] = kn * a  # normal (x) springs, lumped per node
+        d[1::3] = kt * a
+        d[2::3] = kt * a
+        K = (K + sp.diags(d)).tocsr()
+        clamped = False
     if effect == "axial-prestress":
-        return {"p": float(sgn * lerp(0.02, 1.0))}
-    raise ValueError(effect)
+        K = (K + _geometric_stiffness(model, params["sigma"])).tocsr()
+    f, fams = _solve_custom(model, K, M, n_modes, clamped)
+    return {"freqs": _families_pick(f, fams, MODES).tolist(), "fem_families": fams, "dofs": int(model.dofs), **extra}
 
 
-def write_modal(folder: Path, name, f, q, modes=MODES, probe=PROBE, rel=1e-3, qrel=0.05, with_q=True, lengths=None, extra_probe=None):
-    folder = Path(folder); folder.mkdir(parents=True, exist_ok=True)
-    lines = ["family,order,frequency_Hz" + (",Q" if with_q else "") + (",length_m" if lengths is not None else "")]
-    for k, (fam, o) in enumerate(modes):
-        row = f"{fam},{o},{f[k]:.9g}"
-        if with_q:
-            row += f",{q[k]:.6g}" if fam == "flap" else ","
-        if lengths is not None:
-            row += f",{lengths[k]:.6g}"
-        lines.append(row)
-    (folder / f"{name}.csv").write_text("\n".join(lines) + "\n")
-    pr = dict(probe, **(extra_probe or {}))
-    side = [
-        "[measurement]", 'kind = "modal"', f'data = "{name}.csv"', 'description = "generated"', "",
-        "[probe]", *[f"{k} = {v!r}" for k, v in pr.items()], "",
-        "[medium]", 'name = "vacuum"', "", "[noise]", f"frequency_rel = {rel!r}", f"Q_rel = {qrel!r}", "",
-    ]
-    (folder / f"{name}.toml").write_text("\n".join(side))
-    return folder / f"{name}.toml"
+def timoshenko_truth(lever: str) -> dict:
+    """Bending frequencies of the lever as a Timoshenko beam (shear + rotary inertia)."""
+    from probedyn.lumped import beam as bm
+
+    g = LEVERS[lever]
+    b = bm.RectBeam(g["length"], g["width"], g["thickness"], E_SI, NU_SI, RHO_SI)
+    fl = bm.timoshenko_frequencies(b, "flapwise", 4)
+    la = bm.timoshenko_frequencies(b, "lateral", 2)
+    return {"freqs": [*fl, la[0], math.nan]}
 
 
-def make_modal_case(folder, effect, seed, rel=1e-3, qrel=0.05, modes=MODES, with_q=True, strength=1.0):
-    """Write a measurement carrying ``effect`` (None: null case); return (path, truth params)."""
-    rng = np.random.default_rng(seed)
-    params = draw_modal_effect(effect, rng, strength) if effect else {}
-    f, q = modal_truth(effect, params, modes=modes)
-    f = f * (1 + rel * rng.standard_normal(len(f)))
-    q = q * np.exp(qrel * rng.standard_normal(len(q)))
-    return write_modal(folder, f"meas_{seed}", f, q, modes=modes, rel=rel, qrel=qrel, with_q=with_q), params
+# ------------------------------------------------------------------------------------------
+# Cache of FEM truths (keyed by lever, effect, parameters, mesh)
+# ------------------------------------------------------------------------------------------
 
 
-# -------------------------------------------------------------- friction
-FRICTION = dict(k_x=1.0, a=0.5e-9, mu_c=0.0637, sigma=5e-12, scan_len=5e-9, n_pts=100,
-                speeds=(1e-8, 1e-6), loads=(2e-9, 4e-9))  # n_pts per direction
-FRICTION_EFFECTS = ["velocity-log", "scanner-nonlinearity", "force-offset-drift", "lattice-misalignment",
-                    "viscous-friction", "adhesion-load"]
+def _key(lever, effect, params, ett) -> str:
+    s = json.dumps([lever, effect, {k: round(float(v), 12) for k, v in sorted(params.items())}, ett])
+    return hashlib.sha1(s.encode()).hexdigest()[:16]
 
 
-_GX, _GW = np.polynomial.legendre.leggauss(8)
-
-
-def track_pt(X, direction, F0, k, a, phi, slip_frac, boxcar=True):
-    """Sequential quasi-static PT: the tip's well is carried point by point (explicit state).
-
-    With ``boxcar`` each sample is the mean force over its sampling interval (midpoints to the
-    neighbours within the segment), by 8-point Gauss-Legendre quadrature of the tracked force,
-    the interval split at the slip position computed from the tracker's own state.
-    """
-    eta = 2 * math.pi * F0 / (k * a)  # = 4 pi^2 U0 / (k a^2): stability k + U'' > 0
-    xc = a / (2 * math.pi) * math.acos(-1 / eta) if eta > 1 else a / 2
-    xj = slip_frac * xc if eta > 1 else xc
-    state = {"c": phi + round((X[0] - phi) / a) * a}  # centre of the current well
-
-    def equilibrium(Xi, c):
-        lo, hi = c - xc, c + xc  # stable branch of this well
-        g = lambda x: k * (x - Xi) + F0 * math.sin(2 * math.pi * (x - phi) / a)  # noqa: E731
-        if g(lo) > 0 or g(hi) < 0:
-            return None
-        return brentq(g, lo, hi, xtol=1e-18)
-
-    def force(Xi, d):
-        for _ in range(10):
-            x = equilibrium(Xi, state["c"])
-            if x is not None and d * (x - state["c"]) <= xj * (1 + 1e-12):
-                return k * (Xi - x)
-            state["c"] += d * a  # slip into the next well along the motion
-        raise RuntimeError("tracker lost")
-
-    def slip_X(d):  # support position at which the tip reaches the slip point of its well
-        xs = state["c"] + d * xj
-        return xs + (F0 / k) * math.sin(2 * math.pi * (xs - phi) / a)
-
-    def integrate(x0, x1, d):  # mean force over [x0, x1] along the motion (x1 after x0)
-        if x1 == x0:
-            return force(x0, d)
-        tot = 0.0
-        pieces = [(x0, x1)]
-        xs = slip_X(d)
-        if d * (xs - x0) > 0 and d * (x1 - xs) > 0:
-            pieces = [(x0, xs), (xs, x1)]
-        for p0, p1 in pieces:
-            pts = 0.5 * (p0 + p1) + 0.5 * (p1 - p0) * _GX
-            vals = [force(q, d) for q in pts]
-            tot += 0.5 * abs(p1 - p0) * float(np.dot(_GW, vals))
-        return tot / abs(x1 - x0)
-
-    out = np.empty(len(X))
-    cuts = np.nonzero(np.diff(direction) != 0)[0] + 1
-    starts = np.concatenate([[0], cuts]); ends = np.concatenate([cuts, [len(X)]])
-    for s0, e0 in zip(starts, ends):
-        d = 1.0 if direction[s0] > 0 else -1.0
-        seg = X[s0:e0]
-        for i in range(len(seg)):
-            if not boxcar or len(seg) < 2:
-                out[s0 + i] = force(seg[i], d); continue
-            lo = seg[i] if i == 0 else 0.5 * (seg[i - 1] + seg[i])
-            hi = seg[i] if i == len(seg) - 1 else 0.5 * (seg[i] + seg[i + 1])
-            out[s0 + i] = integrate(lo, hi, d)
+def cached_fem_truth(lever, effect, params, ett=TRUTH_ETT, compute: bool = True) -> dict:
+    cache = json.loads(CACHE.read_text()) if CACHE.exists() else {}
+    k = _key(lever, effect, params, ett)
+    if k in cache:
+        return cache[k]
+    if not compute:
+        raise KeyError(f"FEM truth {lever} {effect} {params} not cached (run tests/diagnose_truth.py)")
+    out = fem_truth(lever, effect, params, ett)
+    out.update(lever=lever, effect=effect, params=params, ett=ett)
+    cache = json.loads(CACHE.read_text()) if CACHE.exists() else {}
+    cache[k] = out
+    CACHE.parent.mkdir(exist_ok=True)
+    tmp = CACHE.with_suffix(".tmp")
+    tmp.write_text(json.dumps(cache, indent=0, sort_keys=True))
+    os.replace(tmp, CACHE)
     return out
 
 
-def friction_truth(effect, params, cfg=FRICTION, rng=None):
-    """Scans (list of dicts) of the truth model carrying ``effect``; noise added when rng given."""
-    k, a = cfg["k_x"], cfg["a"]
-    L, n = cfg["scan_len"], cfg["n_pts"]
-    v_max = max(cfg["speeds"])
-    loads = cfg["loads"]
-    n_mean = float(np.mean([ld for _ in cfg["speeds"] for ld in loads]))
-    scans = []
-    sid = 0
-    for v in cfg["speeds"]:
-        for N in loads:
-            Xn = np.concatenate([np.linspace(0, L, n), np.linspace(L, 0, n)[1:]])
-            dirs = np.concatenate([np.ones(n), -np.ones(n - 1)])
-            t = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(Xn)))]) / v
-            X = Xn.copy()
-            if effect == "scanner-nonlinearity":
-                X = Xn + params["bow"] * Xn * (L - Xn) / L
-            F0 = cfg["mu_c"] * (N + (params["n_adh"] * n_mean if effect == "adhesion-load" else 0.0))
-            slip = 1 + params["slip_b"] * math.log(v / v_max) if effect == "velocity-log" else 1.0
-            phi = rng.uniform(0, a) if rng is not None else 0.1 * a
-            if effect == "lattice-misalignment":
-                th = math.radians(params["theta"])
-                phy = rng.uniform(0, a) if rng is not None else 0.3 * a
-                F = (math.cos(th) * track_pt(X * math.cos(th), dirs, F0, k, a, phi, slip)
-                     + math.sin(th) * track_pt(X * math.sin(th), dirs, F0, k, a, phy, slip))
-            else:
-                F = track_pt(X, dirs, F0, k, a, phi, slip)
-            if effect == "viscous-friction":
-                F = F + params["visc"] * k * a * (v / v_max) * dirs
-            if effect == "force-offset-drift":
-                F = F + k * a * (params["offset"] + params["drift"] * (t - t.mean() * 0 - 0.5 * t[-1]) / t[-1])
-            if rng is not None:
-                F = F + cfg["sigma"] * rng.standard_normal(len(F))
-            scans.append(dict(id=sid, speed=v, load=N, position=Xn, force=F, time=t))
-            sid += 1
-    return scans
+# ------------------------------------------------------------------------------------------
+# Cases: effect magnitudes, noise, files
+# ------------------------------------------------------------------------------------------
 
 
-def draw_friction_effect(effect, rng, strength=1.0):
+def probe_mass(lever):
+    g = LEVERS[lever]
+    return RHO_SI * g["length"] * g["width"] * g["thickness"]
+
+
+def draw_modal_effect(effect: str, lever: str, rng) -> dict:
+    """A random magnitude from about the detection limit up (1e-3 frequency noise)."""
+    g = LEVERS[lever]
     sgn = rng.choice([-1.0, 1.0])
-    u = 1.0 - strength * rng.uniform(0.0, 1.0)
-    lerp = lambda lo, hi: lo + (hi - lo) * (1.0 - u)  # noqa: E731
-    if effect == "velocity-log":
-        return {"slip_b": float(lerp(0.005, 0.08))}
-    if effect == "scanner-nonlinearity":
-        return {"bow": float(sgn * lerp(0.01, 0.1))}
-    if effect == "force-offset-drift":
-        return {"offset": float(sgn * lerp(0.01, 0.2)), "drift": float(rng.choice([-1, 1]) * lerp(0.0, 0.2))}
-    if effect == "lattice-misalignment":
-        return {"theta": float(lerp(3.0, 30.0))}
-    if effect == "viscous-friction":
-        return {"visc": float(lerp(0.01, 0.2))}
-    if effect == "adhesion-load":
-        return {"n_adh": float(lerp(0.05, 1.0))}
+    if effect == "point-mass":
+        return {"mass": float(probe_mass(lever) * 10 ** rng.uniform(np.log10(0.005), np.log10(0.2))),
+                "xi": float(rng.uniform(0.4, 1.0))}
+    if effect == "clamp-compliance":
+        return {"c_rot": float(10 ** rng.uniform(-2.5, -1.0)),
+                "c_trans": float(10 ** rng.uniform(-4.0, -2.5)) if rng.uniform() < 0.5 else 0.0}
+    if effect == "thickness-error":
+        return {"t_ratio": float(1 + sgn * rng.uniform(0.02, 0.15))}
+    if effect == "width-error":
+        return {"w_ratio": float(1 + sgn * rng.uniform(0.03, 0.2))}
+    if effect == "length-error":
+        return {"dL": float(sgn * rng.uniform(0.01, 0.08) * g["length"])}
+    if effect == "modulus-error":
+        return {"e_ratio": float(1 + sgn * rng.uniform(0.03, 0.3))}
+    if effect == "axial-prestress":
+        s_cr = math.pi**2 * E_SI * g["thickness"] ** 2 / (48 * g["length"] ** 2)
+        v = -rng.uniform(0.1, 0.6) if rng.uniform() < 0.3 else 10 ** rng.uniform(np.log10(0.2), np.log10(5))
+        return {"sigma": float(v * s_cr)}
+    if effect == "fluid-loading":
+        name = str(rng.choice(["water", "ethanol", "air"]))
+        rho_f, eta_f = {"water": (997.0, 8.9e-4), "ethanol": (789.0, 1.07e-3), "air": (1.18, 1.85e-5)}[name]
+        return {"medium": name, "rho_f": rho_f, "eta_f": eta_f}
     raise ValueError(effect)
 
 
-def write_friction(folder, name, scans, cfg=FRICTION, sigma_stated=True):
-    folder = Path(folder); folder.mkdir(parents=True, exist_ok=True)
-    lines = ["scan,position_m,lateral_force_N,time_s"]
-    for s in scans:
-        for x, f, t in zip(s["position"], s["force"], s["time"]):
-            lines.append(f"{s['id']},{x:.9e},{f:.9e},{t:.9e}")
-    (folder / f"{name}.csv").write_text("\n".join(lines) + "\n")
-    side = ["[measurement]", 'kind = "friction"', f'data = "{name}.csv"', "", "[probe]", f"k_x = {cfg['k_x']!r}", "",
-            "[sample]", f"lattice = {cfg['a']!r}", ""]
-    if sigma_stated:
-        side += ["[noise]", f"force = {cfg['sigma']!r}", ""]
-    for s in scans:
-        side += ["[[scans]]", f"id = {s['id']}", f"speed = {s['speed']!r}", f"load = {s['load']!r}", ""]
-    (folder / f"{name}.toml").write_text("\n".join(side))
-    return folder / f"{name}.toml"
+def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, noise: float = 1e-3,
+                    q_noise: float = 0.05, with_Q: bool | None = None, declared_medium: str | None = "vacuum",
+                    truth_kind: str = "fem", compute: bool = True) -> tuple[Path, dict]:
+    """Write a modal measurement of lever ``lever`` with a hidden ``effect`` (None: noise only)."""
+    rng = np.random.default_rng(seed)
+    params = draw_modal_effect(effect, lever, rng) if effect else {}
+    g = LEVERS[lever]
+    if truth_kind == "timoshenko":
+        tr = timoshenko_truth(lever)
+        modes = MODES[:5]
+        f = np.array(tr["freqs"][:5])
+    else:
+        fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
+        tr = cached_fem_truth(lever, effect if effect != "fluid-loading" else None, fem_params, compute=compute)
+        modes = MODES
+        f = np.array(tr["freqs"])
+    Q_int = float(10 ** rng.uniform(3, 4.5))
+    Q = np.full(len(modes), Q_int)
+    if effect == "fluid-loading":
+        declared_medium = None  # the experimentalist did not declare it: the diagnosis must find it
+    medium = params.get("medium") if effect == "fluid-loading" else declared_medium
+    if medium in ("air", "water", "ethanol"):
+        rho_f, eta_f = {"water": (997.0, 8.9e-4), "ethanol": (789.0, 1.07e-3), "air": (1.18, 1.85e-5)}[medium]
+        for k, (fa, _) in enumerate(modes):
+            if fa == "flapwise":
+                f[k], qf = fluid_loaded(f[k], g["width"], g["thickness"], RHO_SI, rho_f, eta_f)
+                Q[k] = 1 / (1 / Q_int + 1 / qf)
+    if with_Q is None:
+        with_Q = bool(rng.uniform() < 0.5) or effect == "fluid-loading"
+    f_meas = f * (1 + noise * rng.standard_normal(len(f)))
+    Q_meas = Q * np.exp(q_noise * rng.standard_normal(len(f)))
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"modal_{seed}"
+    rows = ["family,order,frequency_Hz" + (",Q" if with_Q else "")]
+    for (fa, o), ff, qq in zip(modes, f_meas, Q_meas):
+        if np.isfinite(ff):
+            rows.append(f"{fa},{o},{ff:.10g}" + (f",{qq:.6g}" if with_Q else ""))
+    (outdir / f"{name}.csv").write_text("\n".join(rows) + "\n")
+    med = "" if declared_medium is None else f'[medium]\nname = "{declared_medium}"\n'
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "modal"\ndata = "{name}.csv"\n\n[probe]\nname = "cantilever"\n'
+        f"length = {g['length']!r}\nwidth = {g['width']!r}\nthickness = {g['thickness']!r}\n\n{med}\n"
+        f"[noise]\nfrequency_rel = {noise!r}\nQ_rel = {q_noise!r}\n")
+    truth = {"effect": effect, "params": params, "lever": lever, "truth_kind": truth_kind, "Q_int": Q_int,
+             **{k: v for k, v in tr.items() if k in ("xi_node",)}}
+    return outdir / f"{name}.toml", truth
 
 
-def make_friction_case(folder, effect, seed, strength=1.0, cfg=FRICTION):
-    rng = np.random.default_rng(10_000 + seed)
-    params = draw_friction_effect(effect, rng, strength) if effect else {}
-    scans = friction_truth(effect, params, cfg, rng)
-    return write_friction(folder, f"scan_{seed}", scans, cfg), params
+# ------------------------------------------------------------------------------------------
+# Thermal spectra
+# ------------------------------------------------------------------------------------------
+
+
+def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, medium: str = "air",
+                       spur: bool = True, averages: int = 64, temperature: float = 295.0,
+                       compute: bool = True) -> tuple[Path, dict]:
+    """Thermal PSD of the lever's first three flapwise modes in ``medium`` (FEM truth + this module's
+    Sader loading, equipartition areas k_B T / k_n with k_n = m_beam omega_n^2 / 4, the tip-referred
+    modal stiffness of a uniform cantilever), a white + 1/f detector background, an optional
+    electronic spur (a sinusoid: one bin wide) below f1, and the chi^2 scatter of ``averages``
+    averaged periodograms."""
+    rng = np.random.default_rng(seed)
+    params = draw_modal_effect(effect, lever, rng) if effect else {}
+    if effect == "fluid-loading":
+        params = {"medium": medium, "rho_f": 0.0, "eta_f": 0.0}  # the declared medium is the truth
+        effect = None
+    g = LEVERS[lever]
+    tr = cached_fem_truth(lever, effect, params, compute=compute)
+    f_vac = np.array(tr["freqs"][:4])  # flapwise 1-4
+    rho_f, eta_f = {"air": (1.18, 1.85e-5), "water": (997.0, 8.9e-4), "vacuum": (0.0, 1.8e-5)}[medium]
+    Q_int = float(10 ** rng.uniform(3.5, 4.5))
+    fs, Qs = [], []
+    for fv in f_vac[:3]:
+        if rho_f > 0:
+            f1, qf = fluid_loaded(fv, g["width"], g["thickness"], RHO_SI, rho_f, eta_f)
+        else:
+            f1, qf = fv, math.inf
+        fs.append(f1)
+        Qs.append(1 / (1 / Q_int + 1 / qf))
+    T = temperature
+    kB = 1.380649e-23
+    m_b = probe_mass(lever)
+    if effect == "point-mass":
+        m_b += 0.0
+    f_hi = 1.25 * fs[2]
+    freq = np.linspace(fs[0] * 0.1, f_hi, 40000)
+    df = freq[1] - freq[0]
+    psd = np.zeros_like(freq)
+    for f0, Q in zip(fs, Qs):
+        k = m_b * (2 * math.pi * f0) ** 2 / 4
+        A = 2 * kB * T / (math.pi * k * f0 * Q)
+        psd += A / ((1 - (freq / f0) ** 2) ** 2 + (freq / (f0 * Q)) ** 2)
+    white = 1e-4 * float(psd[np.argmin(abs(freq - fs[0]))]) / Qs[0] ** 0 * 1e-3
+    psd += white * (1 + (fs[0] / freq))
+    truth = {"effect": effect, "params": params, "lever": lever, "f": fs, "Q": Qs, "Q_int": Q_int}
+    if spur:
+        f_sp = fs[0] * rng.uniform(0.15, 0.8)
+        j = int(np.argmin(abs(freq - f_sp)))
+        psd[j] += 300 * psd[j] * rng.uniform(1, 10)
+        truth["spur_Hz"] = float(freq[j])
+    psd = psd * rng.gamma(averages, 1.0 / averages, size=len(psd))
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"spectrum_{seed}"
+    np.savetxt(outdir / f"{name}.csv", np.column_stack([freq, psd]), delimiter=",", header="frequency_Hz,value",
+               comments="", fmt="%.10g")
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "spectrum"\ndata = "{name}.csv"\nquantity = "psd"\naverages = {averages}\n\n'
+        f'[probe]\nname = "cantilever"\nlength = {g["length"]!r}\nwidth = {g["width"]!r}\nthickness = {g["thickness"]!r}\n\n'
+        f'[medium]\nname = "{medium}"\ntemperature = {T!r}\n\n[noise]\nfrequency_rel = 1e-6\n')
+    return outdir / f"{name}.toml", truth
+
+
+# ------------------------------------------------------------------------------------------
+# Friction: Langevin Prandtl-Tomlinson with inertia and thermal noise, trace and retrace
+# ------------------------------------------------------------------------------------------
+
+FRICTION_EFFECTS = ["thermal-activation", "viscous-friction", "adhesion-load", "force-offset-drift",
+                    "scanner-nonlinearity", "lattice-misalignment", "force-calibration"]
+LEVER_FFM = dict(k_x=1.0, m_x=1e-12, Q_x=1.0)
+
+
+def _langevin_kernel():
+    from numba import njit
+
+    @njit(cache=True)
+    def run(U0, a, k, m, gam, gvisc, kT, Vx, Vy, turns_t, turns_X, X0, Y0, x0, y0, dt, t_samp, mode, seed):
+        """BAOAB Langevin (Leimkuhler & Matthews) of a tip in -U0[cos(q x) + cos(q y)] (Vy = 0: the
+        y axis is inert), pulled by an isotropic spring k from a support moving piecewise linearly
+        in time along the scan direction (turning times turns_t, positions turns_X along the scan);
+        extra viscous force -gvisc * (tip velocity). Returns the scan-direction spring force at the
+        sample times (mode 0: point values; 1: means over each sample interval) and the times of slips."""
+        np.random.seed(seed)
+        q = 2.0 * np.pi / a
+        n = t_samp.size
+        out = np.zeros(n)
+        acc = np.zeros(n)
+        cnt = np.zeros(n)
+        g_tot = gam + gvisc
+        c1 = np.exp(-gam * dt / m)
+        c2 = np.sqrt((1.0 - c1 * c1) * kT / m)
+        cv = np.exp(-gvisc * dt / m)
+        x, y, vx, vy = x0, y0, 0.0, 0.0
+        t = turns_t[0]
+        seg = 0
+        j = 0
+        nsteps = int((turns_t[-1] - turns_t[0]) / dt) + 2
+        ux = Vx
+        uy = Vy
+        # sample interval edges (midpoints)
+        edges = np.empty(n + 1)
+        edges[0] = t_samp[0] - 0.5 * (t_samp[1] - t_samp[0])
+        for i in range(1, n):
+            edges[i] = 0.5 * (t_samp[i] + t_samp[i - 1])
+        edges[n] = t_samp[n - 1] + 0.5 * (t_samp[n - 1] - t_samp[n - 2])
+        cur = 0
+        for it in range(nsteps):
+            while seg < turns_t.size - 2 and t >= turns_t[seg + 1]:
+                seg += 1
+            dirn = 1.0 if turns_X[seg + 1] > turns_X[seg] else -1.0
+            s_pos = turns_X[seg] + dirn * (t - turns_t[seg]) * np.sqrt(Vx * Vx + Vy * Vy)
+            Xb = X0 + s_pos * (ux / np.sqrt(Vx * Vx + Vy * Vy))
+            Yb = Y0 + s_pos * (uy / np.sqrt(Vx * Vx + Vy * Vy))
+            fx = k * (Xb - x) - U0 * q * np.sin(q * x)
+            fy = k * (Yb - y) - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0)
+            # record the scan-direction spring force
+            Fs = (k * (Xb - x) * ux + k * (Yb - y) * uy) / np.sqrt(Vx * Vx + Vy * Vy)
+            while cur < n and t >= edges[cur + 1]:
+                cur += 1
+            if cur < n and t >= edges[cur]:
+                acc[cur] += Fs
+                cnt[cur] += 1.0
+            while j < n and t >= t_samp[j]:
+                out[j] = Fs
+                j += 1
+            if j >= n and cur >= n:
+                break
+            # B
+            vx += 0.5 * dt * fx / m
+            vy += 0.5 * dt * fy / m
+            # A
+            x += 0.5 * dt * vx
+            y += 0.5 * dt * vy
+            # O (thermal bath on gam; the extra viscous term is deterministic)
+            vx = c1 * cv * vx + (c2 * np.random.randn() if kT > 0 else 0.0)
+            vy = c1 * cv * vy + (c2 * np.random.randn() if kT > 0 else 0.0)
+            # A
+            x += 0.5 * dt * vx
+            y += 0.5 * dt * vy
+            t += dt
+            s_pos = turns_X[seg] + dirn * (t - turns_t[seg]) * np.sqrt(Vx * Vx + Vy * Vy)
+            Xb = X0 + s_pos * (ux / np.sqrt(Vx * Vx + Vy * Vy))
+            Yb = Y0 + s_pos * (uy / np.sqrt(Vx * Vx + Vy * Vy))
+            fx = k * (Xb - x) - U0 * q * np.sin(q * x)
+            fy = k * (Yb - y) - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0)
+            # B
+            vx += 0.5 * dt * fx / m
+            vy += 0.5 * dt * fy / m
+        if mode == 1:
+            for i in range(n):
+                if cnt[i] > 0:
+                    out[i] = acc[i] / cnt[i]
+        return out
+
+    return run
+
+
+_LANGEVIN = None
+
+
+def langevin_scan(*, U0, a, k, m, Q, speed, length, n_per_period=40, T=0.0, gvisc=0.0, theta=0.0, bow=0.0,
+                  sampling="interval-mean", seed=0, phase=None):
+    """Trace and retrace of a Langevin PT tip. Returns (nominal support positions, force, times,
+    direction). The support runs 2 periods backwards first (like the end of a previous retrace),
+    then traces ``length`` and retraces it. ``bow``: the true support position is the nominal one
+    bowed by the scanner nonlinearity (the written positions are the nominal ones)."""
+    global _LANGEVIN
+    if _LANGEVIN is None:
+        _LANGEVIN = _langevin_kernel()
+    rng = np.random.default_rng(seed)
+    gam = math.sqrt(m * k) / Q
+    eta = 4 * math.pi**2 * U0 / (k * a * a)
+    T0 = 2 * math.pi * math.sqrt(m / (k * (1 + eta)))
+    dt = T0 / 60
+    n = int(round(length / a * n_per_period))
+    Xn = np.linspace(0.0, length, n)  # nominal support positions of the samples (trace)
+    pre = 2 * a
+    # support path along the scan: -pre -> 0 (data trace starts) -> length -> 0
+    Xtrue = Xn + bow * Xn * (length - Xn) / length
+    s_turns = np.array([-pre, 0.0, length, 0.0])
+    tt = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(s_turns))) / speed])
+    # sample times (true support positions follow the nominal ones through the bow: X_true(X_nom))
+    def t_of(xn, leg):
+        xt = xn + bow * xn * (length - xn) / length
+        return tt[leg] + (xt - s_turns[leg]) / speed if leg == 1 else tt[leg] + (s_turns[leg] - xt) / speed
+    # the support itself moves uniformly in true position; nominal positions are where it is sampled
+    t_tr = np.array([tt[1] + (xt - 0.0) / speed for xt in Xtrue])
+    t_re = np.array([tt[2] + (length - xt) / speed for xt in Xtrue[::-1][1:]])  # the turning point once
+    t_samp = np.concatenate([t_tr, t_re])
+    ph = rng.uniform(0, a) if phase is None else phase
+    X0 = -ph  # lattice registry: support coordinate 0 sits at -ph in the lattice frame
+    vx, vy = speed * math.cos(theta), speed * math.sin(theta)
+    # path for the kernel: turning times and positions along the scan line; start at rest in the
+    # well nearest to the starting support position
+    start = np.array([X0 + s_turns[0] * math.cos(theta), s_turns[0] * math.sin(theta)])
+    x0 = round(start[0] / a) * a
+    y0 = round(start[1] / a) * a if theta else 0.0
+    kT = 1.380649e-23 * T
+    F = _LANGEVIN(U0, a, k, m, gam, gvisc, kT, vx, vy if theta else 0.0, tt, s_turns, X0, 0.0, x0, y0, dt, t_samp,
+                  1 if sampling == "interval-mean" else 0, int(seed) % (2**31))
+    pos = np.concatenate([Xn, Xn[::-1][1:]])
+    direction = np.concatenate([np.ones(n), -np.ones(n - 1)])
+    return pos, F, t_samp, direction
+
+
+def draw_friction_effect(effect: str | None, rng) -> dict:
+    if effect == "thermal-activation":
+        return {"T": 300.0}
+    if effect == "viscous-friction":
+        return {"gvisc": float(10 ** rng.uniform(np.log10(2e-4), np.log10(5e-3)))}  # N s/m at um/s speeds
+    if effect == "adhesion-load":
+        return {"n_adh": float(rng.uniform(0.3, 3.0) * 5e-9)}
+    if effect == "force-offset-drift":
+        return {"offset": float(rng.choice([-1, 1]) * rng.uniform(0.02, 0.2) * 1e-9),
+                "drift": float(rng.choice([-1, 1]) * rng.uniform(0.0, 0.1) * 1e-9)}
+    if effect == "scanner-nonlinearity":
+        return {"bow": float(rng.choice([-1, 1]) * rng.uniform(0.03, 0.2))}
+    if effect == "lattice-misalignment":
+        return {"theta_deg": float(rng.uniform(6.0, 35.0))}
+    if effect == "force-calibration":
+        return {"g": float(10 ** (rng.choice([-1, 1]) * rng.uniform(0.05, 0.3)))}
+    return {}
+
+
+def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 5e-12,
+                       sampling: str = "interval-mean", length_periods: int = 8) -> tuple[Path, dict]:
+    """Three scans (two speeds a decade apart at one load, and the lower speed at twice the load) of a
+    Langevin PT truth with a hidden effect, trace and retrace, written as a friction measurement."""
+    rng = np.random.default_rng(seed)
+    params = draw_friction_effect(effect, rng)
+    a = 0.5e-9 * rng.uniform(0.97, 1.03)
+    k, m, Q = LEVER_FFM["k_x"], LEVER_FFM["m_x"], LEVER_FFM["Q_x"]
+    eta = rng.uniform(3.0, 6.0)
+    N1 = 5e-9
+    u0 = eta * k * a * a / (4 * math.pi**2) / N1  # U0 per unit load at the first load
+    T = params.get("T", 0.0)  # athermal unless the hidden effect is thermal activation
+    v_lo = 10 ** rng.uniform(np.log10(20e-9), np.log10(100e-9))
+    scans = [(0, v_lo, N1), (1, 10 * v_lo, N1), (2, v_lo, 2 * N1)]
+    rows = ["scan,position_m,lateral_force_N,time_s"]
+    tom = []
+    for sid, v, N in scans:
+        U0 = u0 * (N + params.get("n_adh", 0.0))
+        pos, F, t, d = langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
+                                     gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
+                                     bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid)
+        F = params.get("g", 1.0) * F
+        if "offset" in params:
+            tm = 0.5 * (t[0] + t[-1])
+            F = F + params["offset"] + params.get("drift", 0.0) * (t - tm) / (t[-1] - t[0])
+        F = F + noise * rng.standard_normal(len(F))
+        for x, f, tt in zip(pos, F, t):
+            rows.append(f"{sid},{x:.9e},{f:.9e},{tt - t[0]:.9e}")
+        tom.append(f"[[scans]]\nid = {sid}\nspeed = {v!r}\nload = {N!r}\n")
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"friction_{seed}"
+    (outdir / f"{name}.csv").write_text("\n".join(rows) + "\n")
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "{sampling}"\n\n'
+        f"[lever]\nk_x = {k!r}\nm_x = {m!r}\nQ_x = {Q!r}\n\n[sample]\nlattice = 5e-10\n\n"
+        + (f"[medium]\ntemperature = {T!r}\n\n" if T > 0 else "")
+        + f"[noise]\nforce = {noise!r}\n\n" + "\n".join(tom))
+    truth = {"effect": effect, "params": params, "a": a, "eta": eta, "u0": u0, "T": T, "v_lo": v_lo}
+    return outdir / f"{name}.toml", truth
+
+
+# ------------------------------------------------------------------------------------------
+# Force-distance curves: the contact registry with a lever, solved by continuation
+# ------------------------------------------------------------------------------------------
+
+FORCE_EFFECTS = ["adhesion-dmt", "adhesion-jkr", "adhesion-md", "tip-radius-error"]
+
+
+def _continuation_curve(z, P, k, start_delta):
+    """Quasi-static tip-sample force along piezo positions z (one direction), by continuation:
+    Newton on delta + P(delta)/k = z from the previous solution; where the solution branch ends
+    (the fold: P' < -k, Newton leaves the branch) the tip jumps: a bracketing search in the
+    direction of motion for the next root with P' > -k."""
+    out = np.empty(len(z))
+    d = start_delta
+    h = 1e-13
+    for i, zz in enumerate(z):
+        g = lambda x: x + float(np.asarray(P(x)).ravel()[0]) / k - zz  # noqa: E731
+        ok = False
+        x = d
+        for _ in range(60):
+            gp = (g(x + h) - g(x - h)) / (2 * h)
+            if not np.isfinite(gp) or gp <= 0:
+                break
+            step = g(x) / gp
+            x -= step
+            if abs(step) < 1e-16:
+                ok = True
+                break
+        if not ok or abs(x - d) > 2e-9:
+            # jump: scan in the direction of motion for the nearest stable root
+            sgn = 1.0 if (i == 0 or zz >= z[i - 1]) else -1.0
+            grid = d + sgn * np.linspace(0, 60e-9, 60001)
+            gv = grid + np.asarray(P(grid), float) / k - zz
+            cross = np.nonzero(np.sign(gv[1:]) != np.sign(gv[:-1]))[0]
+            x = None
+            for c in cross:
+                lo, hi = grid[c], grid[c + 1]
+                for _ in range(80):
+                    mid = 0.5 * (lo + hi)
+                    if np.sign(g(mid)) == np.sign(g(lo)):
+                        lo = mid
+                    else:
+                        hi = mid
+                xr = 0.5 * (lo + hi)
+                if (g(xr + 1e-12) - g(xr - 1e-12)) > 0:
+                    x = xr
+                    break
+            if x is None:
+                x = d
+        d = x
+        out[i] = float(np.asarray(P(d)).ravel()[0])
+    return out
+
+
+def make_force_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 0.1e-9, n: int = 400,
+                    declare_E: bool = False) -> tuple[Path, dict]:
+    """An approach-retract curve of a lever (k) with a tip of radius R on a sample, from the contact
+    registry with a hidden adhesion law (or a tip-radius error), a tilted force baseline and noise."""
+    from probedyn.schemes.contact import get_contact_model
+
+    rng = np.random.default_rng(seed)
+    k = float(10 ** rng.uniform(-0.5, 1.0))  # 0.3 - 10 N/m
+    R_nom = 20e-9
+    E_s = float(10 ** rng.uniform(8.5, 10.5))  # 0.3 - 30 GPa
+    E_t, nu = 169e9, 0.28
+    params: dict = {}
+    R = R_nom
+    if effect == "tip-radius-error":
+        params["r_ratio"] = float(10 ** (rng.choice([-1, 1]) * rng.uniform(0.15, 0.6)))
+        R = R_nom * params["r_ratio"]
+        declare_E = True
+    Es_star = 1 / ((1 - nu**2) / E_t + (1 - 0.3**2) / E_s)
+    if effect in ("adhesion-dmt", "adhesion-jkr", "adhesion-md"):
+        params["W"] = float(10 ** rng.uniform(-2.0, -0.7))
+        kw = dict(E_t=E_t, nu_t=nu, E_s=E_s, nu_s=0.3, R_t=R, R_s=0.0)
+        if effect == "adhesion-md":
+            params["lam"] = float(10 ** rng.uniform(-0.5, 0.5))
+            from probedyn.schemes.contact.base import MAUGIS_206
+
+            K = 4 / 3 * Es_star
+            z0 = MAUGIS_206 / params["lam"] * (params["W"] ** 2 * R / (math.pi * K * K)) ** (1 / 3)
+            model = get_contact_model("md", **kw, W=params["W"], z0=z0)
+        else:
+            model = get_contact_model(effect.split("-")[1], **kw, W=params["W"])
+        Pl = lambda d: model.force(d, "loading")  # noqa: E731
+        Pu = lambda d: model.force(d, "unloading")  # noqa: E731
+    else:
+        Pl = Pu = lambda d: 4 / 3 * Es_star * math.sqrt(R) * np.maximum(d, 0.0) ** 1.5  # noqa: E731
+    # ramp: from 40 nm away to a maximum load of ~ 20 - 60 nN
+    Fmax = float(rng.uniform(20e-9, 60e-9))
+    dmax = (Fmax / (4 / 3 * Es_star * math.sqrt(R))) ** (2 / 3)
+    z_c = float(rng.uniform(-5e-9, 5e-9))
+    z_top = z_c + dmax + Fmax / k
+    z_app = np.linspace(z_c - 40e-9, z_top, n)
+    z_ret = z_app[::-1]
+    F_app = _continuation_curve(z_app - z_c, Pl, k, -40e-9)
+    F_ret = _continuation_curve(z_ret - z_c, Pu, k, z_top - z_c - F_app[-1] / k)
+    z = np.concatenate([z_app, z_ret])
+    F = np.concatenate([F_app, F_ret])
+    b0, b1 = float(rng.normal(0, 5e-9)), float(rng.normal(0, 0.02) * k)
+    Fm = F + b0 + b1 * z + noise * rng.standard_normal(len(F))
+    seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"force_{seed}"
+    np.savetxt(outdir / f"{name}.csv", np.column_stack([z, Fm, seg]), delimiter=",", header="z_m,force_N,segment",
+               comments="", fmt=["%.10e", "%.10e", "%d"])
+    sample = f"\n[sample]\nE = {E_s!r}\nnu = 0.3\n" if declare_E else ""
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\nk = {k!r}\n\n[tip]\nradius = {R_nom!r}\n'
+        f"E = {E_t!r}\nnu = {nu!r}\n{sample}\n[noise]\nforce = {noise!r}\n")
+    truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1}
+    return outdir / f"{name}.toml", truth
+
+
+if __name__ == "__main__":  # precompute the FEM truths of the rate study (slow: about one FEM solve each)
+    import sys
+
+    from diagnose_cases import modal_cases  # noqa: E402  (tests/diagnose_cases.py)
+
+    n_eff = int(sys.argv[1]) if len(sys.argv) > 1 else 56
+    n_null = int(sys.argv[2]) if len(sys.argv) > 2 else 56
+    for case in modal_cases(n_eff, n_null):
+        if case["truth_kind"] == "fem":
+            rng = np.random.default_rng(case["seed"])
+            eff = case["effect"]
+            params = draw_modal_effect(eff, case["lever"], rng) if eff else {}
+            fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
+            out = cached_fem_truth(case["lever"], eff if eff != "fluid-loading" else None, fem_params)
+            print(case["seed"], eff, case["lever"], out["freqs"][:2], flush=True)

@@ -1,81 +1,143 @@
-"""Measurement formats: the examples parse, malformed files name file, line and column."""
+"""Measurement files: every malformed or implausible input is a one-line error naming where it is."""
 
-import re
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from probedyn.diagnose.formats import read_measurement
-from probedyn.diagnose.spectrum import fit_peaks, sho_psd
 from probedyn.core.errors import DataFormatError
+from probedyn.diagnose.formats import read_measurement
+from probedyn.diagnose.problems import make_problem
 
 EX = Path(__file__).resolve().parents[1] / "examples" / "measurements"
-SIDE = """[measurement]
-kind = "modal"
-data = "m.csv"
-[probe]
-length = 200e-6
-width = 30e-6
-thickness = 2e-6
-E = 169e9
-rho = 2330.0
-"""
+PROBE = '[probe]\nname = "cantilever"\nlength = 150e-6\nwidth = 20e-6\nthickness = 10e-6\nelements_through_thickness = 1\n'
+SIDE = '[measurement]\nkind = "modal"\ndata = "m.csv"\n' + PROBE + '[noise]\nfrequency_rel = 1e-3\n'
+# a lever of this size has f1 = 0.62 MHz (FEM)
+CSV = "family,order,frequency_Hz\nflapwise,1,6.2e5\nflapwise,2,3.8e6\nlateral,1,1.2e6\n"
 
 
-@pytest.mark.parametrize("name", sorted(p.name for p in EX.glob("*.toml")))
-def test_examples_parse(name):
-    m = read_measurement(EX / name)
-    assert m.kind in ("modal", "friction", "spectrum", "timeseries")
-
-
-def _write(tmp_path, csv, side=SIDE):
+def _write(tmp_path, csv=CSV, side=SIDE):
     (tmp_path / "m.csv").write_text(csv)
     (tmp_path / "m.toml").write_text(side)
     return tmp_path / "m.toml"
 
 
-@pytest.mark.parametrize("csv, line, col, what", [
-    ("family,order,frequency_Hz\nflap,1,abc\n", 2, 3, "cannot read 'abc'"),
-    ("family,order,frequency_Hz\nflap,1,100\nflop,2,600\n", 3, 1, "not one of"),
-    ("family,order,frequency_Hz\nflap,1.5,100\n", 2, 2, "integer"),
-    ("family,order,frequency_Hz\nflap,1,100,5\n", 2, 4, "expected 3 fields"),
-    ("family,order,freq\nflap,1,100\n", 1, 3, "unknown column"),
-    ("# comment\nfamily,order,frequency_Hz\nflap,1,-5\n", 3, 3, "positive"),
+@pytest.mark.parametrize("name", sorted(p.name for p in EX.glob("*.toml")))
+def test_examples_parse(name):
+    m = read_measurement(EX / name)
+    assert m.kind in ("modal", "friction", "spectrum", "timeseries", "force")
+
+
+@pytest.mark.parametrize("csv, where, what", [
+    ("family,order,frequency_Hz\nflapwise,1,abc\n", "line 2, column 3", "cannot read 'abc'"),
+    ("family,order,frequency_Hz\nflapwise,1,100\nflapwse,2,600\n", "line 3, column 1", "did you mean 'flapwise'"),
+    ("family,order,frequency_Hz\nflapwise,1,-5\n", "line 2, column 3", "frequency must be positive"),
+    ("family,order,frequency_Hz\nflapwise,1.5,100\n", "line 2, column 2", "integer"),
+    ("family,order,frequency_Hz\nflapwise,1,100\nflap,1,101\n", "line 3, column 2", "appears twice"),
+    ("family,order,frequency_Hz,Q,Q_sigma\nflapwise,1,100,50,0\n", "line 2, column 5", "Q_sigma must be positive"),
+    ("family,order,frequency_Hz,Q\nflapwise,1,100,0.1\n", "line 2, column 4", "not a quality factor"),
+    ("family,order,frequency_Hz,lenght_m\nflapwise,1,100,1\n", "line 1, column 4", "did you mean 'length_m'"),
+    ("family,order,frequency_Hz\nflapwise,1,100,7\n", "line 2, column 4", "expected 3 fields"),
 ])
-def test_malformed_modal_csv_names_file_line_column(tmp_path, csv, line, col, what):
+def test_csv_errors_name_line_and_column(tmp_path, csv, where, what):
     with pytest.raises(DataFormatError) as e:
         read_measurement(_write(tmp_path, csv))
     msg = str(e.value)
-    assert "m.csv" in msg and f"line {line}" in msg and f"column {col}" in msg and what in msg
+    assert where in msg and what in msg and "\n" not in msg
 
 
-def test_malformed_toml_names_line_and_column(tmp_path):
+@pytest.mark.parametrize("side, what", [
+    (SIDE.replace("thickness = 10e-6", "thickness = 2"), "outside the plausible range"),  # 2 m thick
+    (SIDE.replace("thickness = 10e-6", "thicknes = 10e-6"), "did you mean 'thickness'"),
+    (SIDE.replace("[noise]", "[nosie]"), "did you mean 'noise'"),
+    (SIDE.replace("frequency_rel = 1e-3", "frequency_rell = 1e-3"), "did you mean 'frequency_rel'"),
+    (SIDE.replace("frequency_rel = 1e-3", "frequency_rel = 0"), "must be positive"),
+    (SIDE + "[medium]\nname = \"watter\"\n", "did you mean 'water'"),
+    (SIDE.replace('kind = "modal"', 'kind = "modall"'), "did you mean 'modal'"),
+    (SIDE.replace("[probe]\n", "[probe]\ntip_mass = 1e-12\ntip_position = 1.5\n"), "tip_position"),
+    (SIDE + "[baseline]\nfree = [\"thicknes\"]\n", "did you mean 'thickness'"),
+    (SIDE.replace('name = "cantilever"', 'name = "cantileverr"'), "did you mean 'cantilever'"),
+])
+def test_sidecar_errors_are_one_line(tmp_path, side, what):
     with pytest.raises(DataFormatError) as e:
-        read_measurement(_write(tmp_path, "family,order,frequency_Hz\nflap,1,100\n", SIDE + "rho = = 3\n"))
-    assert re.search(r"m\.toml.*line \d+, column \d+", str(e.value))
+        read_measurement(_write(tmp_path, side=side))
+    assert what in str(e.value) and "\n" not in str(e.value)
 
 
-def test_unit_slip_rejected(tmp_path):
-    with pytest.raises(DataFormatError, match="micrometres"):
-        read_measurement(_write(tmp_path, "family,order,frequency_Hz\nflap,1,100\n", SIDE.replace("200e-6", "200")))
+def test_khz_typed_as_hz(tmp_path):
+    csv = "family,order,frequency_Hz\nflapwise,1,620\nflapwise,2,3800\n"
+    with pytest.raises(DataFormatError, match=r"kHz typed as Hz"):
+        make_problem(_write(tmp_path, csv))
 
 
-def test_friction_scan_without_metadata(tmp_path):
-    (tmp_path / "f.csv").write_text("scan,position_m,lateral_force_N\n" + "".join(f"3,{i}e-10,1e-10\n" for i in range(10)))
-    (tmp_path / "f.toml").write_text('[measurement]\nkind = "friction"\ndata = "f.csv"\n[probe]\nk_x = 1.0\n[[scans]]\nid = 0\nspeed = 1e-6\n')
-    with pytest.raises(DataFormatError, match=r"f\.csv, line 2, column 1 \(scan\): scan id 3 has no"):
+def test_fit_the_data_cannot_inform(tmp_path):
+    """E and rho enter frequencies only as E/rho: calibrating both is refused, naming them."""
+    from probedyn.diagnose.engine import diagnose
+
+    side = SIDE + '[baseline]\nfree = ["modulus", "density"]\n'
+    with pytest.raises(DataFormatError, match=r"cannot inform the baseline parameters cal_modulus, cal_density"):
+        diagnose(make_problem(_write(tmp_path, side=side)))
+
+
+# ---- issue 16, class 6: nonsense refused with one line, never a verdict ---------------------
+
+FR_SIDE = ('[measurement]\nkind = "friction"\ndata = "f.csv"\n[lever]\nk_x = 1.0\n[noise]\nforce = 5e-12\n'
+           '[[scans]]\nid = 0\nspeed = 1e-8\nload = 2e-9\n')
+
+
+def _friction_csv(force):
+    rows = ["scan,position_m,lateral_force_N"]
+    x = [i * 5e-11 for i in range(40)]
+    rows += [f"0,{xx:.6e},{force(i):.6e}" for i, xx in enumerate(x)]
+    return "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize("csv, side, what", [
+    # micrometres typed as metres: refused with the SI hint (the 2 um lever typed as "2")
+    (CSV, SIDE.replace("thickness = 10e-6", "thickness = 2"), "values are SI metres: 2 um is 2e-06 m"),
+    (CSV.replace("6.2e5", "1e308"), SIDE, "above 1e+11 Hz"),
+    (CSV.replace("6.2e5", "-6.2e5"), SIDE, "frequency must be positive"),
+    (CSV.replace("flapwise,2,", "flapwise,100000,"), SIDE, "order 100000 is beyond"),
+    (CSV, SIDE + '[baseline]\nfree = ["thickness", "thickness"]\n', "lists a quantity twice"),
+    (CSV, SIDE.replace("[probe]\n", "[probe]\ntip_mass = 1e-12\ntip_position = -0.2\n"), "in [0, 1]"),
+    (CSV, SIDE + "[medium]\nnmae = \"water\"\n", "did you mean 'name'"),
+    (CSV, SIDE.replace('data = "m.csv"', 'data = "../../../../../../etc/passwd"'), "outside"),
+])
+def test_class6_modal_inputs_refused(tmp_path, csv, side, what):
+    with pytest.raises(DataFormatError) as e:
+        read_measurement(_write(tmp_path, csv, side))
+    msg = str(e.value)
+    assert what in msg and "\n" not in msg and "root:" not in msg
+
+
+def test_class6_spectrum_frequencies(tmp_path):
+    side = ('[measurement]\nkind = "spectrum"\ndata = "m.csv"\n' + PROBE)
+    for csv, what in [("frequency_Hz,value\n-1,1\n2,1\n", "frequencies must be positive"),
+                      ("frequency_Hz,value\n1,1\n1e308,1\n", r"above 1e\+11 Hz"),
+                      ("frequency_Hz,value\n" + "".join(f"{1e3 * (i + 1)},0\n" for i in range(40)), "cannot inform")]:
+        with pytest.raises(DataFormatError, match=what):
+            read_measurement(_write(tmp_path, csv, side))
+
+
+@pytest.mark.parametrize("force, what", [(lambda i: 0.0, r"constant \(all zero\)"), (lambda i: 1e-10, "constant")])
+def test_class6_flat_friction_cannot_inform(tmp_path, force, what):
+    (tmp_path / "f.csv").write_text(_friction_csv(force))
+    (tmp_path / "f.toml").write_text(FR_SIDE)
+    with pytest.raises(DataFormatError, match=f"cannot inform the fit: .*{what}"):
         read_measurement(tmp_path / "f.toml")
 
 
-def test_sho_peak_fit_recovers_f0_and_Q():
-    # synthetic averaged thermal PSD: SHO + floor with chi^2(2n)/2n scatter (n = 32 averages)
-    rng = np.random.default_rng(1)
-    f = np.arange(60000.0, 80000.0, 0.25)
-    true = sho_psd(f, 70561.3, 2.9e4, 6e-14, 2e-9)
-    psd = true * rng.chisquare(64, f.size) / 64
-    (p,) = fit_peaks(f, psd)
-    # standard errors from the fit; 5 sigma (plus 1e-6 relative) covers the estimate
-    assert abs(p["f0_Hz"] - 70561.3) < 5 * p["f0_sigma_Hz"] + 1e-6 * 70561.3
-    assert abs(p["Q"] / 2.9e4 - 1) < 5 * p["Q_sigma"] / p["Q"]
-    assert p["Q_sigma"] / p["Q"] < 0.1
+def test_class6_flat_force_curve_cannot_inform(tmp_path):
+    (tmp_path / "c.csv").write_text("z_m,force_N\n" + "".join(f"{i * 1e-10:.3e},0\n" for i in range(50)))
+    (tmp_path / "c.toml").write_text('[measurement]\nkind = "force"\ndata = "c.csv"\n[lever]\nk = 1.0\n')
+    with pytest.raises(DataFormatError, match="cannot inform the fit: the force is constant"):
+        read_measurement(tmp_path / "c.toml")
+
+
+def test_class6_cli_one_line_exit_2(tmp_path, capsys):
+    from probedyn.cli import main
+
+    assert main(["diagnose", str(_write(tmp_path, CSV.replace("6.2e5", "1e308")))]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("probedyn: error: ") and err.count("\n") == 1
+    assert main(["diagnose", "/dev/zero"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1

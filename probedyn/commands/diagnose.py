@@ -15,7 +15,7 @@ from probedyn.core.io import make_dirs
 
 def _human_list(rows: list[dict[str, Any]]) -> str:
     out = []
-    for kind in ("modal", "friction"):
+    for kind in ("modal", "friction", "force"):
         out.append(f"{kind} causes:")
         for c in rows:
             if c["kind"] != kind:
@@ -43,7 +43,8 @@ def diagnose_cmd(
         return
     if measurement is None:
         raise ParameterError("diagnose needs a MEASUREMENT file (or --list-causes)")
-    from probedyn.diagnose.engine import diagnose, make_problem
+    from probedyn.diagnose.engine import diagnose
+    from probedyn.diagnose.problems import make_problem
 
     problem = make_problem(measurement)
     res = diagnose(problem)
@@ -53,7 +54,7 @@ def diagnose_cmd(
 
         out = Path(out)
         make_dirs(out)
-        fr = plot_residuals(res, out / "residuals.png", getattr(problem, "group_labels", None) if res["kind"] == "modal" else None)
+        fr = plot_residuals(res, out / "residuals.png", getattr(problem, "group_labels", None) if res["kind"] != "friction" else None)
         fe = plot_evidence(res, out / "evidence.png")
         write_json(out / "diagnose.json", res)
         write_text(out / "diagnose.md", markdown(res, fr.name, fe.name) + "\n")

@@ -1,1 +1,2 @@
-"""Measured data: formats, baseline calibration, residual analysis and a catalog of named model extensions."""
+"""``probedyn diagnose``: what probedyn's own simulation gets wrong on a measurement, why, and
+what extending the model gains (see docs/diagnose.md)."""

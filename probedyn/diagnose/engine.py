@@ -1,29 +1,60 @@
-"""The diagnosis engine: the five steps of ``probedyn diagnose``.
+"""The statistics of ``probedyn diagnose``: calibrate, test, rank, extend, measure the gain.
 
-1. **Calibrate** the baseline's free parameters (weighted least squares on whitened residuals).
-2. **Residual structure**: chi-square test of the baseline against the stated noise
-   (p-value of chi^2 with n - k degrees of freedom), trend against mode order / family or
-   speed / load, periodicity and autocorrelation (the problem's ``structure``).
-3. **Rank causes by out-of-sample evidence.** Every applicable cause of the catalog is fitted
-   together with the baseline's free parameters, then *leave-one-group-out cross-validation*
-   (groups = modes, or blocks of scans) refits it without each group and predicts the
-   held-out group. The evidence is half the reduction of the held-out chi^2 against the
-   baseline's own cross-validation, ``evidence = (CV_base - CV_cause) / 2`` (nats, Gaussian
-   predictive log-likelihood). A parameter that only fits noise cannot predict data it has
-   not seen, so it *raises* CV: extra parameters are not rewarded for free. With fewer than
-   three groups cross-validation is impossible and the Akaike criterion is used instead,
-   ``evidence = (chi^2_base - chi^2_cause) / 2 - k`` (each parameter costs one nat).
-   A cause is only *claimed* when (a) the baseline fails the chi-square test at level alpha,
-   (b) its in-sample improvement passes the likelihood-ratio test chi^2_k(1 - alpha / N_causes)
-   (Bonferroni over the catalog) and (c) its evidence is positive.
-4. **Extend** the baseline with the winner and refit; if the extended model still fails the
-   chi-square test, the remaining causes are tried on top of it (greedy, up to ``max_causes``).
-5. **Gain**: residual and held-out RMS before and after (in units of the stated noise, and
-   physical), the parameters with 1-sigma uncertainties from the Jacobian (scaled by
-   sqrt(chi^2/dof) when that exceeds 1). **Confounding**: causes whose evidence is within
-   2 nats of the winner (a Bayes factor below e^2 ~ 7) and whose fitted predictions of the measured data
-   differ by less than the noise (RMS < 1 sigma) are reported as confounded, with the extra
-   measurement that separates them (largest predicted difference in units of the noise).
+A *problem* (:mod:`.modal`, :mod:`.friction`, :mod:`.forcecurve`) turns a measurement into
+whitened residuals ``r(theta) = (data - model(theta)) / sigma`` of probedyn's own simulation,
+where sigma is the stated noise (plus the model's own numerical error, e.g. the FEM
+discretisation estimate): a correct model with correctly stated noise gives ``r ~ N(0, I)``.
+
+1. **Baseline.** The problem's calibration parameters (``base_params``; e.g. the intrinsic Q)
+   are fitted by bounded least squares (trust-region reflective) from their starts. If the data
+   cannot inform them (the Jacobian is rank-deficient) the diagnosis stops with a message that
+   names the degenerate combination.
+2. **Is anything wrong?** ``chi2_base ~ chi2(n - k)`` under the baseline. Only if its p-value is
+   below ``alpha`` (1 %) is anything claimed: with correctly stated noise the false-discovery
+   rate of the whole procedure is then at most ``alpha`` per measurement, whatever the catalog.
+3. **Candidate causes (nested fits).** Every applicable cause is fitted *together with* the
+   baseline parameters, **starting from the baseline optimum with its own parameters at their
+   null values** (where the extended model *is* the baseline), plus its declared extra starts.
+   The trust-region method only accepts steps that lower chi^2, and the best start is kept, so
+   ``chi2_cause <= chi2_base`` by construction (checked: if round-off ever gives more, the
+   null solution is returned). The likelihood-ratio test ``Delta chi2 > chi2_k(1 - alpha / N)``
+   (Bonferroni over the N causes tried) must pass.
+4. **Evidence out of sample.** Leave-one-group-out cross-validation (groups: modes, scan
+   halves, curve segments; K-fold with K = 8 above 10 groups): every fold refits the baseline
+   and the nested cause *from their null starts* on the training groups (no information of the
+   held-out group enters) and predicts the held-out group. ``evidence = (CV_base - CV_cause)/2``
+   nats, **capped at** ``Delta chi2 / 2``: the in-sample log likelihood ratio at the maximum is an
+   upper bound of any Bayes factor for the cause (for every prior, the marginal likelihood is
+   below the maximum likelihood), so held-out evidence can never exceed what the data carry.
+   With fewer than three groups: ``evidence = Delta chi2 / 2 - k`` (Akaike).
+   Claimed: significant baseline, LR test passed, evidence > 0.
+5. **Confounding.** Every claimed cause within ``EVIDENCE_MARGIN`` = ln 10 = 2.30 nats (a Bayes
+   factor of 10, Jeffreys' "strong") of the winner is *confounded* with it; the problem
+   predicts extra observables for each fitted model and the separating measurements are named.
+6. **Extend** greedily while the extended model still fails the chi^2 test (at most
+   ``max_causes``, each nested in the current model and passing the same tests).
+7. **Gain.** The final model is re-solved with the full model where the fits used a reduced
+   one (modal: the FEM; defect-corrected refit if the reduction's error exceeds 0.3 sigma), and
+   the residual, held-out residual and chi^2 after are computed from that.
+
+**Uncertainties.** From the Jacobian at the optimum (SVD with column scaling, scaled by
+``sqrt(chi2/dof)`` when that exceeds 1) when it is well conditioned; for a parameter at a bound,
+a parameter whose 1-sigma interval crosses a bound, or a poorly conditioned direction
+(reciprocal condition below 1e-6), from the **profile likelihood** (the interval where
+``Delta chi2 <= 1`` with all other parameters refitted). If the profile does not rise by 1 within
+the bounds on either side the parameter is reported **not identifiable** (no number).
+
+**Verdicts** (numbers, no judgement):
+
+* ``no-significant-discrepancy``: baseline p >= alpha; nothing is claimed;
+* ``unexplained``: baseline p < alpha, no cause claimed;
+* ``confounded``: the winner has a claimed rival within the margin (never also "explained");
+* ``explained``: winner unique, final model p >= alpha in sample **and** its held-out residuals
+  consistent with the noise (leverage-corrected held-out statistic ``sum_g e_g^T (I - H_gg) e_g``,
+  of expectation n under a correct model, below the chi2_n quantile 1 - alpha), no fitted
+  parameter at a bound and every parameter identifiable;
+* ``partly-explained``: a cause is claimed but one of those conditions fails (each failure is
+  listed in ``verdict_reasons``; a parameter at a bound is flagged on the finding).
 """
 
 from __future__ import annotations
@@ -31,469 +62,777 @@ from __future__ import annotations
 import itertools
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import OptimizeWarning, least_squares
 from scipy.stats import chi2 as chi2_dist
 
-from probedyn.diagnose.causes import Cause, CauseParam
 from probedyn.core.errors import DataFormatError
+from probedyn.diagnose.causes import Cause, CauseParam
 
-__all__ = ["diagnose", "make_problem", "FitResult"]
+__all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
 
 ALPHA = 0.01
+EVIDENCE_MARGIN = math.log(10.0)
+MAX_STARTS = 6
 
 
-def make_problem(meas):
-    """Measurement object -> problem (modal, friction; spectra go through peak extraction)."""
-    from probedyn.diagnose.formats import read_measurement
+# ------------------------------------------------------------------------------------------
+# Parameter coordinates
+# ------------------------------------------------------------------------------------------
 
-    if isinstance(meas, (str, Path)):
-        meas = read_measurement(meas)
-    if meas.kind == "modal":
-        from probedyn.diagnose.modal import ModalProblem
 
-        return ModalProblem(meas)
-    if meas.kind == "friction":
-        from probedyn.diagnose.friction import FrictionProblem
+def _span(p: CauseParam) -> float:
+    return (p.hi - p.lo) if p.scale == "lin" else 1.0
 
-        return FrictionProblem(meas)
-    from probedyn.diagnose.spectrum import spectrum_to_modal
-    from probedyn.diagnose.modal import ModalProblem
 
-    modal, peaks = spectrum_to_modal(meas)
-    prob = ModalProblem(modal)
-    prob.extracted_peaks = peaks
-    return prob
+def _to_u(p: CauseParam, v: float) -> float:
+    """Internal coordinate: lin -> value / span (order one), log -> log10(value)."""
+    return math.log10(v) if p.scale == "log" else v / _span(p)
+
+
+def _from_u(p: CauseParam, u: float) -> float:
+    return 10.0**u if p.scale == "log" else u * _span(p)
+
+
+def _u_bounds(p: CauseParam) -> tuple[float, float]:
+    return _to_u(p, p.lo), _to_u(p, p.hi)
 
 
 @dataclass
-class FitResult:
+class Fit:
+    """A least-squares fit of the baseline extended by ``causes``."""
+
     causes: tuple
-    names: list[str]
-    values: dict[str, float]
-    sigma: dict[str, float]
-    held: dict[str, float]
-    chi2: float
-    n: int
-    k: int
-    r: np.ndarray
+    plist: list[CauseParam]
     u: np.ndarray
-    corr: np.ndarray | None = None
+    values: dict[str, float]
+    r: np.ndarray  # whitened residuals on all data
+    chi2: float  # on the fitted mask
+    n: int
+    J: np.ndarray | None = None  # d r[mask] / d u at the optimum
+    nfev: int = 0
+    mask: np.ndarray | None = None
     cv: float | None = None
     cv_r: np.ndarray | None = None
-    nfev: int = 0
+    start: str = ""
+    nuisance: Any = None
+
+    @property
+    def k(self) -> int:
+        return len(self.plist)
 
     @property
     def dof(self) -> int:
         return max(self.n - self.k, 1)
 
-
-def _to_u(p: CauseParam, v: float) -> float:
-    return math.log10(v) if p.scale == "log" else v
-
-
-def _from_u(p: CauseParam, u: float) -> float:
-    return 10.0**u if p.scale == "log" else u
+    @property
+    def p_value(self) -> float:
+        return float(chi2_dist.sf(self.chi2, self.dof))
 
 
-def _bounds(p: CauseParam) -> tuple[float, float]:
-    return (_to_u(p, p.lo), _to_u(p, p.hi)) if p.scale == "log" else (p.lo, p.hi)
+class Fitter:
+    """Least-squares fits of a problem's baseline and its nested extensions."""
 
-
-class _Fitter:
-    def __init__(self, problem):
+    def __init__(self, problem) -> None:
         self.problem = problem
         self.nfev = 0
 
-    def params_for(self, causes, n_points: int) -> tuple[list[CauseParam], dict[str, float]]:
-        plist = list(self.problem.base_params)
-        held: dict[str, float] = {}
-        for c in causes:
-            for p in c.params:
-                plist.append(p)
-        if len(plist) >= n_points:  # not enough data: hold secondary parameters
-            keep = []
-            for p in plist:
-                if p.secondary and p.hold is not None:
-                    held[p.name] = p.hold
-                else:
-                    keep.append(p)
-            plist = keep
-        return plist, held
+    def residuals(self, values: dict[str, float], causes) -> np.ndarray:
+        self.nfev += 1
+        r = np.asarray(self.problem.residuals(values, tuple(causes)), float)
+        return np.where(np.isfinite(r), r, 1e6)
 
-    def fit(self, causes=(), mask=None, u0=None, multistart=True) -> FitResult:
+    def fit(self, causes, starts: list[dict[str, float]], mask=None, fixed: dict[str, float] | None = None,
+            max_nfev: int | None = None) -> Fit:
+        """Best of the least-squares fits from ``starts`` (each a full value dict)."""
+        causes = tuple(causes)
+        plist = list(self.problem.base_params) + [p for c in causes for p in c.params]
+        fixed = dict(fixed or {})
+        free = [p for p in plist if p.name not in fixed]
+        best: Fit | None = None
+        if hasattr(self.problem, "train_mask"):
+            self.problem.train_mask = mask  # nuisance profiling (e.g. lattice registry) sees training data only
+        try:
+            return self._fit(causes, starts, mask, fixed, max_nfev, plist, free)
+        finally:
+            if hasattr(self.problem, "train_mask"):
+                self.problem.train_mask = None
+
+    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free) -> Fit:
+        """Least squares from every start. A problem with a nuisance that is profiled rather than
+        fitted (``problem.nuisance(values, causes)``, e.g. the lattice registry of friction scans)
+        holds it fixed during each least-squares run and re-profiles it between runs (at most three
+        rounds; a re-profiled nuisance is kept only if it lowers chi^2)."""
         prob = self.problem
-        r_all = prob.residuals({**self._defaults(causes)}, causes)
-        mask = np.ones(len(r_all), bool) if mask is None else mask
-        n = int(mask.sum())
-        plist, held = self.params_for(causes, n)
-        lo = np.array([_bounds(p)[0] for p in plist]); hi = np.array([_bounds(p)[1] for p in plist])
+        has_nu = hasattr(prob, "nuisance")
+        diff_step = getattr(prob, "diff_step", 1e-5)
+        cap = max_nfev or getattr(prob, "nfev_per_param", 100) * (len(free) + 1)
+        best: Fit | None = None
+        lo = np.array([_u_bounds(p)[0] for p in free])
+        hi = np.array([_u_bounds(p)[1] for p in free])
+        m_all = None
+        for si, st in enumerate(starts):
+            vals0 = {**st, **fixed}
+            nu0 = st.get("__nuisance__") if isinstance(st, dict) else None
+            vals0.pop("__nuisance__", None)
+            if has_nu:
+                prob.fixed_nuisance = nu0 if nu0 is not None else prob.nuisance(vals0, causes)
+            if not free:
+                r = self.residuals(vals0, causes)
+                m = np.ones(len(r), bool) if mask is None else mask
+                f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)), int(m.sum()),
+                        np.zeros((int(m.sum()), 0)), 1, m)
+                f.nuisance = prob.fixed_nuisance if has_nu else None
+                if has_nu:
+                    prob.fixed_nuisance = None
+                return f
+            u0 = np.clip(np.array([_to_u(p, vals0[p.name]) for p in free]), lo, hi)
 
-        def vals(u):
-            v = {p.name: _from_u(p, x) for p, x in zip(plist, u)}
-            v.update(held)
-            return v
+            def fun(u, _free=free, _fixed=fixed, _m=mask):
+                v = {p.name: _from_u(p, x) for p, x in zip(_free, u)}
+                v.update(_fixed)
+                r = self.residuals(v, causes)
+                return r if _m is None else r[_m]
 
-        def fun(u):
-            self.nfev += 1
-            return prob.residuals(vals(u), causes)[mask]
-
-        if not plist:
-            r = prob.residuals(vals([]), causes)
-            return FitResult(tuple(causes), [], vals([]), {}, held, float(np.sum(r[mask] ** 2)), n, 0, r, np.array([]))
-        if u0 is not None:
-            starts = [np.clip(u0, lo, hi)]
-        else:
-            combos = list(itertools.product(*[[_to_u(p, s) for s in p.starts] for p in plist]))[:8]
-            starts = [np.clip(np.array(c, float), lo, hi) for c in combos]
-            if not multistart:
-                starts = starts[:1]
-        best = None
-        span = hi - lo
-        for s in starts:
-            s = np.minimum(np.maximum(s, lo + 1e-9 * span), hi - 1e-9 * span)
-            try:
-                res = least_squares(fun, s, bounds=(lo, hi), x_scale=span / 10.0, method="trf",
-                                    max_nfev=60 * (len(plist) + 1), diff_step=1e-6)
-            except ValueError:
+            res = None
+            for _round in range(3 if has_nu else 1):
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore", OptimizeWarning)
+                        res = least_squares(fun, u0, bounds=(lo, hi), method="trf", x_scale="jac", diff_step=diff_step,
+                                            max_nfev=cap, xtol=1e-10, ftol=1e-10)
+                except ValueError:
+                    res = None
+                    break
+                if not has_nu:
+                    break
+                c_old = float(np.sum(res.fun**2))
+                old = prob.fixed_nuisance
+                v = {p.name: _from_u(p, x) for p, x in zip(free, res.x)}
+                v.update(fixed)
+                prob.fixed_nuisance = prob.nuisance(v, causes)
+                c_new = float(np.sum(fun(res.x) ** 2))
+                if not c_new < c_old * (1 - 1e-6):
+                    prob.fixed_nuisance = old
+                    break
+                u0 = res.x
+            if res is None:
                 continue
             c2 = float(np.sum(res.fun**2))
-            if best is None or c2 < best[0]:
-                best = (c2, res)
-        c2, res = best
-        u = res.x
-        v = vals(u)
-        r = prob.residuals(v, causes)
-        J = res.jac
-        k = len(plist)
-        dof = max(n - k, 1)
-        scale = max(1.0, c2 / dof)
-        sig_u, corr = _cov(J, scale)
-        sigma = {}
-        for p, x, su in zip(plist, u, sig_u):
-            sigma[p.name] = (10.0**x) * math.log(10) * su if p.scale == "log" else su
-        return FitResult(tuple(causes), [p.name for p in plist], v, sigma, held, c2, n, k, r, u, corr, nfev=res.nfev)
+            if best is None or c2 < best.chi2 - 1e-12 * max(1.0, abs(c2)):
+                v = {p.name: _from_u(p, x) for p, x in zip(free, res.x)}
+                v.update(fixed)
+                n = len(res.fun)
+                best = Fit(causes, free, res.x.copy(), v, None, c2, n, res.jac.copy(), res.nfev, mask,
+                           start=str(si))
+                best.nuisance = prob.fixed_nuisance if has_nu else None
+        if best is None:
+            raise DataFormatError("the fit failed from every start (the model cannot be evaluated at the starting values)")
+        if has_nu:
+            prob.fixed_nuisance = best.nuisance
+        try:
+            best.r = self.residuals(best.values, causes)
+        finally:
+            if has_nu:
+                prob.fixed_nuisance = None
+        m = np.ones(len(best.r), bool) if mask is None else mask
+        best.mask = m
+        best.chi2 = float(np.sum(best.r[m] ** 2))
+        return best
 
-    def _defaults(self, causes) -> dict[str, float]:
-        v = {p.name: p.starts[0] for p in self.problem.base_params}
-        for c in causes:
-            for p in c.params:
-                v[p.name] = p.starts[0]
-        return v
+    # -- nested fits ------------------------------------------------------------------------
+    def base_starts(self) -> list[dict[str, float]]:
+        ps = list(self.problem.base_params)
+        if not ps:
+            return [{}]
+        combos = itertools.product(*[[p.null, *p.starts] for p in ps])
+        return [dict(zip([p.name for p in ps], c)) for c in itertools.islice(combos, MAX_STARTS)]
 
-    def crossval(self, fit: FitResult, folds: list[np.ndarray]) -> tuple[float, np.ndarray]:
-        """Held-out chi^2: refit without each fold (warm start), predict the fold."""
-        prob = self.problem
-        out = np.full(len(fit.r), np.nan)
-        for fold in folds:
-            mask = np.ones(len(fit.r), bool); mask[fold] = False
-            plist, _ = self.params_for(fit.causes, int(mask.sum()))
-            u0 = np.array([_to_u(p, fit.values[p.name]) for p in plist]) if plist else None
-            ff = self.fit(fit.causes, mask=mask, u0=u0)
-            out[fold] = ff.r[fold]
-        return float(np.nansum(out**2)), out
+    def baseline(self, mask=None) -> Fit:
+        return self.fit((), self.base_starts(), mask)
 
-
-def _cov(J: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """Parameter standard deviations and correlations from the whitened Jacobian.
-
-    Columns are normalised first (the covariance is invariant to parameter scaling, the
-    rank decision is not); directions with singular values below 1e-10 of the largest are
-    unidentifiable and get an infinite standard deviation.
-    """
-    cn = np.linalg.norm(J, axis=0)
-    cn = np.where(cn > 0, cn, 1.0)
-    s_, V_ = _cov_scaled(J / cn, scale)
-    sd = s_ / cn
-    return np.where(np.isfinite(s_), sd, np.inf), V_
-
-
-def _cov_scaled(J: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    U, s, Vt = np.linalg.svd(J, full_matrices=False)
-    tol = s.max() * 1e-10 if s.size else 0
-    inv = np.where(s > tol, 1.0 / np.maximum(s, tol if tol > 0 else 1e-300) ** 2, 1e30)  # 1e30: unidentifiable
-    with np.errstate(invalid="ignore", over="ignore"):
-        cov = (Vt.T * inv) @ Vt * scale
-    sd = np.sqrt(np.maximum(np.diag(cov), 0))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(sd, sd)
-    sd = np.where(sd > 1e14, np.inf, sd)
-    return sd, corr
+    def nested(self, ref: Fit, new: tuple, mask=None, only_starts: list[int] | None = None) -> Fit:
+        """Fit ``ref.causes + new`` starting from ``ref`` with the new parameters at their null
+        values, plus the new causes' declared starts (``only_starts``: indices of the declared
+        start combinations to use); never worse than ``ref``."""
+        new = tuple(c for c in new if c not in ref.causes)
+        causes = tuple(ref.causes) + new
+        newp = [p for c in new for p in c.params]
+        start0 = {**ref.values, **{p.name: p.null for p in newp}}
+        starts = [dict(start0, __nuisance__=ref.nuisance) if ref.nuisance is not None else start0]
+        for i, combo in enumerate(_start_sets(new)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
+            if only_starts is None or i in only_starts:
+                starts.append({**ref.values, **combo})
+        f = self.fit(causes, starts, mask)
+        if only_starts is not None and f.start != "0":
+            f.start = str(only_starts[int(f.start) - 1])
+        if f.chi2 > ref.chi2 * (1 + 1e-9) + 1e-9:  # never worse than the model it contains
+            if hasattr(self.problem, "nuisance"):
+                self.problem.fixed_nuisance = ref.nuisance
+            try:
+                r = self.residuals(start0, causes)
+            finally:
+                if hasattr(self.problem, "nuisance"):
+                    self.problem.fixed_nuisance = None
+            m = np.ones(len(r), bool) if mask is None else mask
+            J = np.zeros((int(m.sum()), len(f.plist)))
+            f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
+                    float(np.sum(r[m] ** 2)), int(m.sum()), J, f.nfev, m, start="null")
+            f.nuisance = ref.nuisance
+        return f
 
 
-def _folds(problem) -> list[np.ndarray]:
-    """Leave-one-group-out for up to 10 groups, else K-fold (K = problem.n_folds or 8) over groups."""
-    g = np.asarray(problem.groups)
+def _start_sets(causes) -> list[dict[str, float]]:
+    """Declared (data-independent) starting points of the new causes' parameters besides the null
+    start: a cause's own ``start_sets`` if it declares them, else the combinations of its
+    parameters' starts (and nulls), those with the fewest parameters at their null first."""
+    out: list[dict[str, float]] = []
+    for c in causes:
+        sets = c.start_sets() if hasattr(c, "start_sets") else None
+        if sets is None:
+            ps = list(c.params)
+            alts = [[p.null, *p.starts] for p in ps]
+            combos = [dict(zip([p.name for p in ps], v)) for v in itertools.product(*alts)]
+            combos = [cb for cb in combos if any(cb[p.name] != p.null for p in ps)]
+            combos.sort(key=lambda cb: sum(cb[p.name] == p.null for p in ps))
+            sets = combos
+        out = sets if not out else [{**a, **b} for a in out for b in sets]
+    return out
+
+
+# ------------------------------------------------------------------------------------------
+# Cross-validation, uncertainties
+# ------------------------------------------------------------------------------------------
+
+
+def folds_of(groups: np.ndarray, k_max: int = 10, k: int = 8) -> list[np.ndarray]:
+    """Leave-one-group-out for up to ``k_max`` groups, else K-fold over interleaved groups."""
+    g = np.asarray(groups)
     ug = list(dict.fromkeys(g.tolist()))
-    if len(ug) <= 10:
+    if len(ug) <= k_max:
         return [np.nonzero(g == x)[0] for x in ug]
-    k = getattr(problem, "n_folds", 8)
     return [np.nonzero(np.isin(g, ug[i::k]))[0] for i in range(k)]
 
 
-def _rms(x) -> float:
+class CrossValidation:
+    """Held-out residuals of nested models; the fold baselines are fitted once and shared."""
+
+    def __init__(self, F: Fitter, folds: list[np.ndarray], n: int) -> None:
+        self.F = F
+        self.folds = folds
+        self.n = n
+        self._ref: dict[tuple, list[Fit]] = {}
+        # the declared start (an index, data independent) that won the full-data fit of a cause:
+        # the folds try the null start and that one
+        self.winning_start: dict[tuple, int] = {}
+        # full-data fits by cause tuple (warm starts of the folds when the groups are interleaved)
+        self.full_fits: dict[tuple, Fit] = {}
+
+    def fold_fits(self, causes: tuple) -> list[Fit]:
+        key = tuple(c.key for c in causes)
+        hit = self._ref.get(key)
+        if hit is None:
+            hit = []
+            warm = getattr(self.F.problem, "cv_warm", False) and key in self.full_fits
+            for fold in self.folds:
+                mask = np.ones(self.n, bool)
+                mask[fold] = False
+                if not causes:
+                    if warm:
+                        hit.append(self.F.fit((), [dict(self.full_fits[key].values)], mask))
+                    else:
+                        hit.append(self.F.baseline(mask))
+                else:
+                    ref = self.fold_fits(causes[:-1])[len(hit)]
+                    if warm:  # interleaved groups: start at the null and at the full-data optimum only
+                        full = self.full_fits[key].values
+                        newp = [p.name for p in causes[-1].params]
+                        f0 = self.F.nested(ref, causes[-1:], mask, only_starts=[])
+                        f1 = self.F.fit(causes, [{**ref.values, **{q: full[q] for q in newp}}], mask)
+                        hit.append(f1 if f1.chi2 < f0.chi2 else f0)
+                    else:
+                        hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
+            self._ref[key] = hit
+        return hit
+
+    def heldout(self, causes: tuple) -> tuple[float, np.ndarray]:
+        out = np.full(self.n, np.nan)
+        for fold, f in zip(self.folds, self.fold_fits(causes)):
+            out[fold] = f.r[fold]
+        return float(np.nansum(out**2)), out
+
+
+def heldout_statistic(fit: Fit, cv_r: np.ndarray, folds: list[np.ndarray]) -> tuple[float, float, int]:
+    """Leverage-corrected held-out statistic ``T = sum_g e_g^T (I - H_gg) e_g`` and its p-value
+    against chi2_n (``E[T] = n`` for a correct linearised model)."""
+    J = fit.J if fit.J is not None and fit.J.size else None
+    n = int(np.sum(np.isfinite(cv_r)))
+    if J is None or J.shape[0] != len(cv_r):
+        T = float(np.nansum(cv_r**2))
+        return T, float(chi2_dist.sf(T, max(n, 1))), n
+    JtJ_pinv = np.linalg.pinv(J.T @ J, rcond=1e-12)
+    T = 0.0
+    for fold in folds:
+        e = cv_r[fold]
+        ok = np.isfinite(e)
+        Jg = J[fold][ok]
+        Hgg = Jg @ JtJ_pinv @ Jg.T
+        eg = e[ok]
+        T += float(eg @ eg - eg @ Hgg @ eg)
+    return T, float(chi2_dist.sf(T, max(n, 1))), n
+
+
+def _rms(x) -> float | None:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
-    return float(np.sqrt(np.mean(x**2))) if x.size else float("nan")
+    return float(np.sqrt(np.mean(x**2))) if x.size else None
 
 
-def diagnose(meas, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None) -> dict[str, Any]:
-    """Run the five steps on a measurement (path or object); return the JSON-able result."""
+def parameter_report(F: Fitter, fit: Fit, names: list[str] | None = None, profile: bool = True) -> dict[str, dict]:
+    """Value, 1-sigma uncertainty (Jacobian or profile likelihood), bound and identifiability
+    flags of the fitted parameters (``names``: the ones to report; default all)."""
+    out: dict[str, dict] = {}
+    plist = fit.plist
+    if not plist:
+        return out
+    J = fit.J if fit.J is not None else np.zeros((fit.n, len(plist)))
+    scale = max(1.0, fit.chi2 / fit.dof)
+    cn = np.linalg.norm(J, axis=0)
+    ok_cols = cn > 0
+    Jn = J / np.where(ok_cols, cn, 1.0)
+    U_, s, Vt = np.linalg.svd(Jn, full_matrices=False)
+    rcond = float(s.min() / s.max()) if s.size and s.max() > 0 else 0.0
+    weak = s < 1e-6 * (s.max() if s.size else 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(weak, 0.0, 1.0 / np.maximum(s, 1e-300) ** 2)
+        cov_n = (Vt.T * inv) @ Vt * scale
+        sd_u = np.sqrt(np.maximum(np.diag(cov_n), 0.0)) / np.where(ok_cols, cn, np.inf)
+    loads_weak = (np.abs(Vt[weak]) > 0.1).any(axis=0) if weak.any() else np.zeros(len(plist), bool)
+    for j, p in enumerate(plist):
+        if names is not None and p.name not in names:
+            continue
+        lo_u, hi_u = _u_bounds(p)
+        rng = hi_u - lo_u
+        u = fit.u[j]
+        at_lo = u <= lo_u + 1e-6 * rng
+        at_hi = u >= hi_u - 1e-6 * rng
+        unidentified = (not ok_cols[j]) or bool(loads_weak[j])
+        crosses = (u - sd_u[j] < lo_u) or (u + sd_u[j] > hi_u)
+        item = {"value": fit.values[p.name], "unit": p.unit, "at_bound": bool(at_lo or at_hi),
+                "bound": ("lower" if at_lo else "upper") if (at_lo or at_hi) else None}
+        need_profile = at_lo or at_hi or unidentified or crosses
+        if need_profile and profile:
+            lo_i, hi_i, ident = _profile(F, fit, j, sd_u[j] if np.isfinite(sd_u[j]) and sd_u[j] > 0 else 0.05 * rng,
+                                         target=scale)
+            item.update(method="profile likelihood", identifiable=ident)
+            if ident:
+                vlo, vhi = _from_u(p, lo_i), _from_u(p, hi_i)
+                item.update(interval=[vlo, vhi], sigma=0.5 * abs(vhi - vlo),
+                            one_sided=bool(lo_i <= lo_u + 1e-9 * rng or hi_i >= hi_u - 1e-9 * rng))
+            else:
+                item.update(interval=None, sigma=None)
+        elif need_profile:
+            item.update(method="jacobian (ill-conditioned)", identifiable=not unidentified, interval=None,
+                        sigma=None if unidentified else _sigma_value(p, u, sd_u[j]))
+        else:
+            sv = _sigma_value(p, u, sd_u[j])
+            item.update(method="jacobian", identifiable=True, sigma=sv,
+                        interval=[fit.values[p.name] - sv, fit.values[p.name] + sv])
+        out[p.name] = item
+    out["_conditioning"] = {"reciprocal_condition": rcond, "chi2_scale": scale}
+    return out
+
+
+def _sigma_value(p: CauseParam, u: float, su: float) -> float:
+    if p.scale == "log":
+        return float(10.0**u * math.log(10.0) * su)
+    return float(su * _span(p))
+
+
+def _profile(F: Fitter, fit: Fit, j: int, h0: float, target: float = 1.0) -> tuple[float, float, bool]:
+    """68 % profile-likelihood interval of parameter j in internal coordinates: the points where
+    chi2 (others refitted) rises by ``target`` (1, or chi2/dof when the fit is poor)."""
+    p = fit.plist[j]
+    lo_u, hi_u = _u_bounds(p)
+    u0 = fit.u[j]
+    names = [q.name for q in fit.plist]
+
+    def chi2_at(u):
+        fixed = {p.name: _from_u(p, u)}
+        start = dict(fit.values)
+        if fit.nuisance is not None:
+            start["__nuisance__"] = fit.nuisance
+        g = F.fit(fit.causes, [start], fit.mask, fixed=fixed, max_nfev=40 * len(names))
+        return g.chi2
+
+    ends = []
+    hit_bound = []
+    for sgn in (-1.0, 1.0):
+        h = max(h0, 1e-4 * (hi_u - lo_u))
+        u_in, c_in = u0, fit.chi2
+        found = False
+        for _ in range(12):
+            u1 = float(np.clip(u0 + sgn * h, lo_u, hi_u))
+            c1 = chi2_at(u1)
+            if c1 - fit.chi2 >= target:
+                # bisect between u_in and u1
+                a, b = u_in, u1
+                for _ in range(8):
+                    mid = 0.5 * (a + b)
+                    if chi2_at(mid) - fit.chi2 >= target:
+                        b = mid
+                    else:
+                        a = mid
+                ends.append(0.5 * (a + b))
+                hit_bound.append(False)
+                found = True
+                break
+            u_in, c_in = u1, c1
+            if u1 in (lo_u, hi_u):
+                break
+            h *= 2.5
+        if not found:
+            ends.append(lo_u if sgn < 0 else hi_u)
+            hit_bound.append(True)
+    identifiable = not all(hit_bound)
+    return ends[0], ends[1], identifiable
+
+
+# ------------------------------------------------------------------------------------------
+# The diagnosis
+# ------------------------------------------------------------------------------------------
+
+
+def _check_baseline_identifiable(base: Fit) -> None:
+    if base.k == 0 or base.J is None:
+        return
+    J = base.J
+    cn = np.linalg.norm(J, axis=0)
+    dead = [p.name for p, c in zip(base.plist, cn) if c == 0]
+    if dead:
+        raise DataFormatError(f"the data cannot inform the baseline parameter(s) {', '.join(dead)} "
+                              "(the model does not depend on them for the measured quantities); remove them from "
+                              "[baseline] free or add data they affect")
+    _, s, Vt = np.linalg.svd(J / cn, full_matrices=False)
+    # finite-difference Jacobians are accurate to ~1e-5: a combination a thousand times weaker
+    # than the typical column is not informed by the data
+    if s.min() < 1e-3 * s.max():
+        v = Vt[-1]
+        combo = [p.name for p, x in zip(base.plist, v) if abs(x) > 0.2]
+        raise DataFormatError(f"the data cannot inform the baseline parameters {', '.join(combo)} separately "
+                              "(only a combination of them changes the measured quantities); calibrate fewer of them "
+                              "([baseline] free) or add data that separates them")
+
+
+def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None,
+             margin: float = EVIDENCE_MARGIN) -> dict[str, Any]:
+    """Run the diagnosis on a problem object; return the JSON-able result (see module docstring)."""
     t0 = time.perf_counter()
-    problem = meas if hasattr(meas, "residuals") else make_problem(meas)
-    F = _Fitter(problem)
-    folds = _folds(problem)
+    F = Fitter(problem)
+    n = len(problem.groups)
+    folds = folds_of(problem.groups)
     use_cv = len(folds) >= 3
-    causes = [c for c in problem.causes if only is None or c.id in only]
-    # 1. baseline
-    base = F.fit(())
-    p_base = float(chi2_dist.sf(base.chi2, base.dof))
+    causes = [c for c in problem.causes if only is None or c.key in only]
+    n_causes = max(len(causes), 1)
+    # 1-2. baseline and its chi-square test
+    base = F.baseline()
+    _check_baseline_identifiable(base)
+    p_base = base.p_value
     significant = p_base < alpha
-    structure = problem.structure(base.r)
-    # 3. candidates: full fits and the likelihood-ratio test for all; cross-validation only
-    # where a claim is possible (significant baseline, LR test passed) -- the others cannot be
-    # claimed whatever their held-out error, and CV is the expensive part.
+    cv = CrossValidation(F, folds, n) if use_cv else None
+    # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
     for c in causes:
-        fit = F.fit((c,))
-        if fit.k == base.k:  # all cause parameters held: nothing identifiable
-            continue
-        kc = fit.k - base.k
-        dchi2 = base.chi2 - fit.chi2
-        thr = float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc))
-        cands.append({"cause": c, "fit": fit, "evidence": 0.5 * dchi2 - kc, "dchi2": dchi2, "k": kc,
-                      "lr_pass": bool(dchi2 > thr), "lr_threshold": thr, "cv": False})
-    if use_cv and significant and any(d["lr_pass"] for d in cands):
-        base.cv, base.cv_r = F.crossval(base, folds)
-        for d in cands:
-            if d["lr_pass"]:
-                fit = d["fit"]
-                fit.cv, fit.cv_r = F.crossval(fit, folds)
-                d["evidence"] = 0.5 * (base.cv - fit.cv)
-                d["cv"] = True
+        fit = F.nested(base, (c,))
+        k = len(c.params)
+        dchi2 = max(base.chi2 - fit.chi2, 0.0)
+        thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
+        cands.append({"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr,
+                      "lr_pass": bool(dchi2 > thr), "evidence": None, "evidence_cv": None,
+                      "evidence_se": None, "method": None})
+    # 4. evidence out of sample where a claim is possible
+    if significant and any(d["lr_pass"] for d in cands):
+        if use_cv:
+            cv.full_fits[()] = base
+            base.cv, base.cv_r = cv.heldout(())
+        # in order of the in-sample improvement; the evidence is capped at Delta chi2 / 2, so a
+        # cause whose cap is below the best evidence so far minus the margin can neither win nor
+        # be confounded with the winner: it is not cross-validated (exact pruning)
+        best_ev = -math.inf
+        for d in sorted(cands, key=lambda d: -d["dchi2"]):
+            if not d["lr_pass"]:
+                continue
+            if 0.5 * d["dchi2"] < best_ev - margin:
+                d["method"] = "not cross-validated: its cap Delta chi2 / 2 is below the winner's evidence minus the margin"
+                d["evidence"] = None
+                d["pruned"] = True
+                continue
+            _evidence(d, base, cv, use_cv)
+            best_ev = max(best_ev, d["evidence"])
     for d in cands:
-        if use_cv and not d["cv"]:
-            d["evidence"] = None
-    cands.sort(key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))
-    eligible = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
-    findings = []
-    confounded = []
-    current = base
+        if d["evidence"] is None and not use_cv and not d.get("pruned"):
+            d["evidence"] = 0.5 * d["dchi2"] - d["k"]
+            d["method"] = "akaike (fewer than 3 groups)"
+    claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
+    claimed.sort(key=lambda d: -d["evidence"])
+    findings: list[dict] = []
+    confounded: list[dict] = []
     chosen: list[Cause] = []
-    if eligible:
-        best = eligible[0]
-        # confounding with the winner
-        group = []
-        for d in eligible[1:]:
-            close = d["evidence"] >= best["evidence"] - 2.0
-            sep = _rms(best["fit"].r - d["fit"].r)
-            if close and sep < 1.0:
-                group.append((d, sep))
-        if group:
-            seps = []
-            sa = problem.state(best["fit"].values, best["fit"].causes)
-            for d, sep in group:
-                sb = problem.state(d["fit"].values, d["fit"].causes)
-                cm = problem.candidate_measurements(sa, sb)
-                seps.append({"cause": d["cause"].id, "evidence": d["evidence"], "prediction_difference_rms_sigma": sep,
-                             "separating_measurement": cm[0] if cm else None})
-            confounded.append({"causes": [best["cause"].id] + [d["cause"].id for d, _ in group], "pairs": seps,
-                               "group_measurement": _group_measurement(problem, best, [d for d, _ in group])})
-        chosen.append(best["cause"])
+    current = base
+    reasons: list[str] = []
+    if claimed:
+        best = claimed[0]
+        rivals = [d for d in claimed[1:] if d["evidence"] >= best["evidence"] - margin]
+        if rivals:
+            confounded.append(_confounding(problem, best, rivals, margin))
         current = best["fit"]
-        findings.append(_finding(problem, F, base, best, folds, use_cv, confounded[0] if confounded else None))
-        # 4. greedy extension while the chi-square test still fails
-        while len(chosen) < max_causes and chi2_dist.sf(current.chi2, current.dof) < alpha:
+        chosen.append(best["cause"])
+        findings.append(_finding(problem, F, base, best, confounded[0] if confounded else None))
+        # 6. greedy extension while the chi-square test still fails
+        while len(chosen) < max_causes and current.p_value < alpha:
             ext = []
-            for d in eligible[1:4]:
-                if d["cause"] in chosen:
+            for d in claimed[1:]:
+                c = d["cause"]
+                if c in chosen or (confounded and c.key in confounded[0]["causes"]):
                     continue
-                if confounded and d["cause"].id in confounded[0]["causes"]:
-                    continue
-                fit = F.fit(tuple(chosen) + (d["cause"],))
-                kc = fit.k - current.k
-                if kc <= 0:
-                    continue
-                dchi2 = current.chi2 - fit.chi2
-                thr = float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc))
+                fit = F.nested(current, (c,))
+                k = len(c.params)
+                dchi2 = max(current.chi2 - fit.chi2, 0.0)
+                thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
                 if dchi2 <= thr:
                     continue
-                if use_cv:
-                    fit.cv, fit.cv_r = F.crossval(fit, folds)
-                    ev = 0.5 * (current.cv - fit.cv)
-                else:
-                    ev = 0.5 * dchi2 - kc
-                thr = float(chi2_dist.ppf(1 - alpha / max(len(causes), 1), kc))
-                if dchi2 > thr and ev > 0:
-                    ext.append({"cause": d["cause"], "fit": fit, "evidence": ev, "dchi2": dchi2, "k": kc, "lr_pass": True, "lr_threshold": thr})
+                e = {"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr, "lr_pass": True}
+                _evidence(e, current, cv, use_cv)
+                if e["evidence"] is not None and e["evidence"] > 0:
+                    ext.append(e)
             if not ext:
                 break
             ext.sort(key=lambda d: -d["evidence"])
             nxt = ext[0]
-            findings.append(_finding(problem, F, current, nxt, folds, use_cv, None))
+            findings.append(_finding(problem, F, current, nxt, None))
             chosen.append(nxt["cause"])
             current = nxt["fit"]
-    p_after = float(chi2_dist.sf(current.chi2, current.dof))
-    if not significant:
-        verdict = "no-significant-discrepancy"
-    elif not findings:
-        verdict = "unexplained"
-    else:
-        verdict = "explained" if p_after >= alpha else "partly-explained"
+    # 7. the final model re-solved with the full model (where the fits used a reduced one)
+    final = _final(problem, F, current, base, cv, folds, use_cv)
+    verdict, reasons = _verdict(significant, findings, confounded, final, alpha)
     result = {
-        "measurement": str(getattr(problem.data, "path", "")),
+        "measurement": str(getattr(problem, "path", "")),
         "kind": problem.kind,
-        "data": problem.describe_data(),
+        "data": problem.describe(),
         "method": {
-            "evidence": "leave-one-group-out cross-validation (held-out chi^2)" if use_cv else "Akaike information criterion (fewer than 3 groups)",
-            "groups": len(folds), "alpha": alpha,
-            "claim_rule": "baseline chi-square p < alpha AND likelihood-ratio test at alpha/N_causes AND evidence > 0",
+            "evidence": ("leave-one-group-out cross-validation (held-out chi^2), capped at the in-sample "
+                         "log likelihood ratio" if use_cv else "Akaike information criterion (fewer than 3 groups)"),
+            "groups": len(list(dict.fromkeys(np.asarray(problem.groups).tolist()))), "folds": len(folds),
+            "alpha": alpha, "evidence_margin_nats": margin, "max_causes": max_causes,
+            "claim_rule": "baseline chi-square p < alpha AND likelihood-ratio test at alpha / N_causes AND evidence > 0",
+            "model": problem.model_description(),
         },
         "baseline": {
-            "parameters": _params(base, problem.base_params),
-            "chi2": base.chi2, "dof": base.dof, "p_value": p_base,
-            "residual_rms": _rms(base.r), "residual_rms_physical": problem.physical_residual_rms(base.r),
-            "residual_unit": f"noise sigma (physical: {problem.unit})",
+            "parameters": parameter_report(F, base) if base.k else {},
+            "chi2": base.chi2, "dof": base.dof, "p_value": p_base, "n": base.n,
+            "residual_rms": _rms(base.r), "residual_rms_physical": problem.physical_rms(base.r),
+            "residual_unit": problem.unit,
             "heldout_rms": _rms(base.cv_r) if base.cv_r is not None else None,
-            "residuals": base.r, "structure": structure,
+            "residuals": base.r, "structure": problem.structure(base.r),
         },
-        "candidates": [
-            {"cause": d["cause"].id, "evidence": d["evidence"], "delta_chi2": d["dchi2"], "k": d["k"],
-             "lr_threshold": d["lr_threshold"], "lr_pass": bool(d["lr_pass"]), "chi2": d["fit"].chi2,
-             "heldout_rms": _rms(d["fit"].cv_r) if d["fit"].cv_r is not None else None,
-             "evidence_method": ("cross-validation" if d.get("cv") else ("not cross-validated (fails the LR test or no significant discrepancy)" if use_cv else "AIC")),
-             "parameters": _params(d["fit"], d["cause"].params)}
-            for d in cands
-        ],
+        "candidates": [_candidate_row(d) for d in sorted(cands, key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))],
         "findings": findings,
         "confounded": confounded,
         "verdict": verdict,
-        "final": {"causes": [c.id for c in chosen], "chi2": current.chi2, "dof": current.dof, "p_value": p_after,
-                  "residual_rms": _rms(current.r), "residuals": current.r},
+        "verdict_reasons": reasons,
+        "final": final["report"],
         "runtime_s": time.perf_counter() - t0,
         "model_evaluations": F.nfev,
     }
-    if hasattr(problem, "extracted_peaks"):
-        result["extracted_peaks"] = problem.extracted_peaks
-    result["summary"] = _summary(result)
+    extra = getattr(problem, "extra_report", None)
+    if extra:
+        result.update(extra())
     return result
 
 
-def _group_measurement(problem, best, others) -> dict[str, Any] | None:
-    """The extra measurements that separate *all* confounded causes.
+def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> None:
+    fit = d["fit"]
+    if use_cv and cv is not None:
+        causes = fit.causes
+        cv.winning_start[tuple(c.key for c in causes)] = int(fit.start) if fit.start.isdigit() else 0
+        cv.full_fits[tuple(c.key for c in causes)] = fit
+        cv.full_fits.setdefault(tuple(c.key for c in ref.causes), ref)
+        if ref.cv is None:
+            ref.cv, ref.cv_r = cv.heldout(ref.causes)
+        fit.cv, fit.cv_r = cv.heldout(causes)
+        per_group = []
+        for fold in cv.folds:
+            per_group.append(np.nansum(ref.cv_r[fold] ** 2) - np.nansum(fit.cv_r[fold] ** 2))
+        per_group = np.array(per_group)
+        e_cv = 0.5 * (ref.cv - fit.cv)
+        d["evidence_cv"] = e_cv
+        d["evidence_se"] = 0.5 * float(np.sqrt(len(per_group) * np.var(per_group))) if len(per_group) > 1 else None
+        d["evidence"] = min(e_cv, 0.5 * d["dchi2"])
+        d["method"] = "cross-validation" + (" (capped at the likelihood ratio)" if e_cv > 0.5 * d["dchi2"] else "")
+    else:
+        d["evidence"] = 0.5 * d["dchi2"] - d["k"]
+        d["method"] = "akaike (fewer than 3 groups)"
 
-    Each fitted model predicts every candidate observable (other modes, Q; for friction, scans at
-    other speeds and loads); a pair of causes is separated by an observable when the two
-    predictions differ by more than 3 noise sigma. Observables are chosen greedily (set cover)
-    until every pair is separated (at most four).
-    """
-    sa = problem.state(best["fit"].values, best["fit"].causes)
+
+def _candidate_row(d: dict) -> dict[str, Any]:
+    f = d["fit"]
+    return {"cause": d["cause"].key, "evidence": d["evidence"], "evidence_cv": d.get("evidence_cv"),
+            "evidence_se": d.get("evidence_se"), "evidence_method": d.get("method") or "not evaluated (LR test failed "
+            "or no significant discrepancy)", "delta_chi2": d["dchi2"], "k": d["k"], "lr_threshold": d["lr_threshold"],
+            "lr_pass": d["lr_pass"], "chi2": f.chi2, "heldout_rms": _rms(f.cv_r) if f.cv_r is not None else None,
+            "parameters": {p.name: f.values[p.name] for p in d["cause"].params}, "start": f.start}
+
+
+def _finding(problem, F: Fitter, before: Fit, cand: dict, conf: dict | None) -> dict[str, Any]:
+    fit = cand["fit"]
+    c = cand["cause"]
+    names = [p.name for p in c.params]
+    params = parameter_report(F, fit, names)
+    params.pop("_conditioning", None)
+    flags = []
+    for nm, it in params.items():
+        if it["at_bound"]:
+            flags.append(f"{nm} at its {it['bound']} bound")
+        if not it.get("identifiable", True):
+            flags.append(f"{nm} not identifiable")
+    corr = []
+    if fit.J is not None and fit.k > 1:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            C = np.linalg.pinv(fit.J.T @ fit.J)
+            sd = np.sqrt(np.abs(np.diag(C)))
+            R = C / np.outer(sd, sd)
+        for i, j in itertools.combinations(range(fit.k), 2):
+            if np.isfinite(R[i, j]) and abs(R[i, j]) > 0.95 and (fit.plist[i].name in names or fit.plist[j].name in names):
+                corr.append({"a": fit.plist[i].name, "b": fit.plist[j].name, "correlation": float(R[i, j])})
+    return {
+        "cause": c.key, "title": c.title, "evidence": cand["evidence"], "evidence_cv": cand.get("evidence_cv"),
+        "evidence_se": cand.get("evidence_se"), "delta_chi2": cand["dchi2"],
+        "parameters": params, "derived": c.derived(fit.values, problem),
+        "status": "confounded" if conf else "identified", "confounded_with": conf["causes"][1:] if conf else [],
+        "flags": flags, "correlated_parameters": corr, "note": getattr(c, "note", ""),
+        "gain": {
+            "residual_rms_before": _rms(before.r), "residual_rms_after": _rms(fit.r),
+            "heldout_rms_before": _rms(before.cv_r) if before.cv_r is not None else None,
+            "heldout_rms_after": _rms(fit.cv_r) if fit.cv_r is not None else None,
+            "chi2_before": before.chi2, "chi2_after": fit.chi2, "p_value_after": fit.p_value,
+            "residual_rms_physical_before": problem.physical_rms(before.r),
+            "residual_rms_physical_after": problem.physical_rms(fit.r),
+            "evaluated_on": "reduced model" if getattr(problem, "reduced", False) else "full model",
+        },
+    }
+
+
+def _confounding(problem, best: dict, rivals: list[dict], margin: float) -> dict[str, Any]:
+    """The group of causes within ``margin`` nats of the winner and the measurements that separate them."""
+    names = [best["cause"].key] + [d["cause"].key for d in rivals]
+    fits = [best["fit"]] + [d["fit"] for d in rivals]
     preds: dict[str, dict[str, float]] = {}
     sig: dict[str, float] = {}
     unit: dict[str, str] = {}
-    for d in others:
-        sb = problem.state(d["fit"].values, d["fit"].causes)
-        for m in problem.candidate_measurements(sa, sb):
-            key = m["measure"]
-            preds.setdefault(key, {})[best["cause"].id] = m["a"]
-            preds[key][d["cause"].id] = m["b"]
-            unit[key] = m["unit"]
-            if m["separation_sigma"] > 0 and abs(m["a"] - m["b"]) > 0:
-                sig[key] = abs(m["a"] - m["b"]) / m["separation_sigma"]
-    # greedy set cover: pick measurements until every pair is > 3 sigma apart in at least one
-    names = [best["cause"].id] + [d["cause"].id for d in others]
+    for name, fit in zip(names, fits):
+        for m in problem.predict_observables(fit.values, fit.causes):
+            preds.setdefault(m["measure"], {})[name] = m["value"]
+            sig[m["measure"]] = m["sigma"]
+            unit[m["measure"]] = m["unit"]
     pairs = {(i, j) for i in range(len(names)) for j in range(i + 1, len(names))}
-    sep_pairs: dict[str, set] = {}
+    sep_pairs = {}
     for key, pr in preds.items():
-        if key not in sig or any(n not in pr or not np.isfinite(pr[n]) for n in names):
+        if len(pr) < len(names) or not all(np.isfinite(v) for v in pr.values()) or not sig.get(key):
             continue
         sep_pairs[key] = {(i, j) for i, j in pairs if abs(pr[names[i]] - pr[names[j]]) / sig[key] > 3.0}
     chosen, left = [], set(pairs)
     while left and sep_pairs:
-        key = max(sep_pairs, key=lambda k: len(sep_pairs[k] & left))
+        key = max(sep_pairs, key=lambda k: (len(sep_pairs[k] & left), max(abs(a - b) for a in preds[k].values() for b in preds[k].values()) / sig[k]))
         gain = sep_pairs[key] & left
         if not gain:
             break
-        chosen.append({"measure": key, "unit": unit[key], "predictions": preds[key], "separates_pairs": len(gain)})
+        chosen.append({"measure": key, "unit": unit[key], "sigma": sig[key], "predictions": preds[key],
+                       "separates_pairs": len(gain)})
         left -= gain
         if len(chosen) == 4:
             break
-    if not chosen:
-        return None
-    return {"measurements": chosen, "pairs_total": len(pairs),
+    return {"causes": names, "evidence": [best["evidence"]] + [d["evidence"] for d in rivals], "margin_nats": margin,
+            "separating_measurements": chosen,
             "pairs_left_unseparated": [[names[i], names[j]] for i, j in sorted(left)]}
 
 
-def _params(fit: FitResult, plist) -> dict[str, Any]:
-    out = {}
-    for p in plist:
-        if p.name in fit.values:
-            out[p.name] = {"value": fit.values[p.name], "sigma": fit.sigma.get(p.name, 0.0 if p.name in fit.held else None),
-                           "unit": p.unit, "held": p.name in fit.held}
-    return out
+def _final(problem, F: Fitter, current: Fit, base: Fit, cv, folds, use_cv) -> dict[str, Any]:
+    """Re-solve the final model with the full model; defect-corrected refit if the reduced model
+    was off by more than 0.3 sigma somewhere; the statistics after."""
+    rep: dict[str, Any] = {"causes": [c.key for c in current.causes]}
+    fit = current
+    full = getattr(problem, "full_residuals", None)
+    r_full = None
+    iterations = 0
+    if full is not None and current.causes:
+        r_full = full(fit.values, fit.causes)
+        while iterations < 2 and np.nanmax(np.abs(r_full - fit.r)) > 0.3:
+            defect = r_full - fit.r
+            problem.defect = defect
+            try:
+                fit2 = F.fit(fit.causes, [fit.values])
+            finally:
+                problem.defect = None
+            iterations += 1
+            fit2.r = fit2.r - 0.0  # residuals with the defect are on the full model's scale
+            r_full2 = full(fit2.values, fit2.causes)
+            if np.sum(r_full2**2) < np.sum(r_full**2):
+                fit = Fit(fit2.causes, fit2.plist, fit2.u, fit2.values, fit2.r - 0.0, fit2.chi2, fit2.n, fit2.J,
+                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start)
+                r_full = r_full2
+            else:
+                break
+        rep["full_model"] = {"reduced_vs_full_max_sigma": float(np.nanmax(np.abs(r_full - current.r))),
+                             "defect_corrected_refits": iterations}
+    r_after = r_full if r_full is not None else fit.r
+    chi2_after = float(np.sum(r_after**2))
+    dof = max(len(r_after) - fit.k, 1)
+    rep.update(chi2=chi2_after, dof=dof, p_value=float(chi2_dist.sf(chi2_after, dof)), residual_rms=_rms(r_after),
+               residual_rms_physical=problem.physical_rms(r_after), residuals=r_after,
+               parameters={k: v for k, v in fit.values.items()})
+    ho = None
+    if use_cv and cv is not None and current.causes:
+        if fit.cv_r is None:
+            fit.cv, fit.cv_r = cv.heldout(fit.causes)
+        cv_r = fit.cv_r + (r_after - fit.r)  # the reduced model's defect, carried to the held-out predictions
+        T, p_ho, nho = heldout_statistic(fit, cv_r, folds)
+        ho = {"heldout_rms": _rms(cv_r), "heldout_statistic": T, "heldout_n": nho, "heldout_p_value": p_ho}
+        rep.update(ho)
+    if current.causes and base.cv_r is not None:
+        rep["heldout_rms_before"] = _rms(base.cv_r)
+    rep["residual_rms_before"] = _rms(base.r)
+    return {"report": rep, "fit": fit, "heldout": ho}
 
 
-def _finding(problem, F, before: FitResult, cand: dict, folds, use_cv: bool, conf) -> dict[str, Any]:
-    fit = cand["fit"]
-    c = cand["cause"]
-    derived = c.derived(fit.values, problem) if hasattr(c, "derived") else {}
-    corr_warn = []
-    if fit.corr is not None and len(fit.names) > 1:
-        for i, j in itertools.combinations(range(len(fit.names)), 2):
-            cij = fit.corr[i, j]
-            if np.isfinite(cij) and abs(cij) > 0.95:
-                corr_warn.append({"a": fit.names[i], "b": fit.names[j], "correlation": float(cij)})
-    return {
-        "cause": c.id, "title": c.title, "evidence": cand["evidence"], "delta_chi2": cand["dchi2"],
-        "parameters": _params(fit, c.params), "derived": derived,
-        "status": "confounded" if conf else "identified",
-        "confounded_with": conf["causes"][1:] if conf else [],
-        "degenerate_parameters": corr_warn,
-        "gain": {
-            "residual_rms_before": _rms(before.r), "residual_rms_after": _rms(fit.r),
-            "heldout_rms_before": _rms(before.cv_r) if use_cv else None,
-            "heldout_rms_after": _rms(fit.cv_r) if use_cv else None,
-            "residual_rms_physical_before": problem.physical_residual_rms(before.r),
-            "residual_rms_physical_after": problem.physical_residual_rms(fit.r),
-            "p_value_after": float(chi2_dist.sf(fit.chi2, fit.dof)),
-        },
-    }
+def _verdict(significant: bool, findings: list[dict], confounded: list[dict], final: dict, alpha: float
+             ) -> tuple[str, list[str]]:
+    if not significant:
+        return "no-significant-discrepancy", [f"baseline chi-square p >= {alpha}"]
+    if not findings:
+        return "unexplained", ["no catalog cause passes the likelihood-ratio test with positive held-out evidence"]
+    if confounded:
+        return "confounded", [f"{', '.join(confounded[0]['causes'][1:])} within {confounded[0]['margin_nats']:.2f} nats "
+                              f"of {confounded[0]['causes'][0]}"]
+    reasons = []
+    rep = final["report"]
+    if rep["p_value"] < alpha:
+        reasons.append(f"the extended model still fails the chi-square test (p = {rep['p_value']:.2g})")
+    ho = final.get("heldout")
+    if ho is not None and ho["heldout_p_value"] < alpha:
+        reasons.append(f"held-out residuals inconsistent with the noise (held-out RMS {ho['heldout_rms']:.2f} sigma, "
+                       f"p = {ho['heldout_p_value']:.2g})")
+    for f in findings:
+        reasons += [f"{f['cause']}: {fl}" for fl in f["flags"]]
+    return ("partly-explained", reasons) if reasons else ("explained", ["all verdict conditions met"])
 
 
-def _summary(res: dict[str, Any]) -> str:
-    v = res["verdict"]
-    b = res["baseline"]
-    lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p = {b['p_value']:.2g}), residual RMS {b['residual_rms']:.2f} sigma"]
-    if v == "no-significant-discrepancy":
-        lines.append("no significant discrepancy: the residual is consistent with the stated noise; nothing is claimed")
-    elif v == "unexplained":
-        lines.append("significant discrepancy, but no catalog cause explains it out of sample")
-    for f in res["findings"]:
-        ps = ", ".join(f"{k} = {p['value']:.4g} ± {p['sigma']:.2g}" if p["sigma"] is not None else f"{k} = {p['value']:.4g}"
-                       for k, p in f["parameters"].items())
-        g = f["gain"]
-        ho = (f", held-out {g['heldout_rms_before']:.2f} -> {g['heldout_rms_after']:.2f}" if g["heldout_rms_before"] is not None else "")
-        lines.append(f"{f['status']}: {f['cause']} ({ps}); evidence {f['evidence']:.1f} nats; residual RMS "
-                     f"{g['residual_rms_before']:.2f} -> {g['residual_rms_after']:.2f} sigma{ho}")
-    for c in res["confounded"]:
-        lines.append("CONFOUNDED: " + ", ".join(c["causes"]) + " explain the data equally well")
-        gm = c.get("group_measurement")
-        if gm:
-            lines.append("  to separate them (every pair > 3 sigma apart), measure: "
-                         + "; ".join(m["measure"] for m in gm["measurements"]))
-            for m in gm["measurements"]:
-                pv = ", ".join(f"{k} {v:.5g}" for k, v in m["predictions"].items())
-                lines.append(f"    {m['measure']} predicted [{m['unit']}]: {pv}")
-            if gm["pairs_left_unseparated"]:
-                lines.append("  still indistinguishable: " + "; ".join(" vs ".join(p) for p in gm["pairs_left_unseparated"]))
-        for p in c["pairs"]:
-            m = p["separating_measurement"]
-            if m:
-                lines.append(f"  {c['causes'][0]} vs {p['cause']}: measure {m['measure']} "
-                             f"({m['a']:.5g} vs {m['b']:.5g} {m['unit']}, {m['separation_sigma']:.1f} sigma apart)")
-    lines.append(f"verdict: {v}")
-    return "\n".join(lines)
+def run(meas, **kw) -> dict[str, Any]:
+    """Read a measurement (path) or take a problem, and diagnose it."""
+    from probedyn.diagnose.problems import make_problem
+
+    problem = meas if hasattr(meas, "residuals") else make_problem(meas)
+    return diagnose(problem, **kw)

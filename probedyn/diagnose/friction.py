@@ -1,339 +1,629 @@
-"""FFM friction traces: a quasi-static Prandtl-Tomlinson trace model and the friction problem.
+"""The friction diagnosis problem: FFM scans (trace and retrace) against probedyn's FFM model.
 
-Baseline trace model (documented in docs/diagnose.md). The tip at x is held by the lateral
-spring k_x to the support (base) position X and sits in the periodic surface potential
-U(x) = -U0 cos(2 pi (x - phi) / a). Quasi-statically the tip is in equilibrium
-k_x (X - x) = F0 sin(2 pi (x - phi) / a), F0 = 2 pi U0 / a, and the measured lateral force is
-F = k_x (X - x). On the stable branch of well n, X(x) = x + (F0/k_x) sin(2 pi (x - phi)/a) is
-monotonic, so x(X) is found by bisection for all points at once (no time stepping). The tip
-stays in its well until the branch ends at x_c = (a / 2 pi) arccos(-1/eta),
-eta = 2 pi F0 / (k_x a) = 4 pi^2 U0 / (k_x a^2) (where k_x + U''(x) = 0: the athermal instability), and then slips into the next well (single
-slips: valid for 1 < eta < ~4.6 with damping near critical; eta <= 1 gives smooth sliding).
-This is the 1D limit the source uses to interpret stick-slip (section 2.1.4, and
-SOURCE-NOTES item 12 on the period of the sawtooth), here written as a closed-form branch
-inversion so that a whole trace costs a few vectorised operations.
+Baseline: the FFM line-scan model of :mod:`probedyn.schemes.ffm` -- the lever (k_x, effective
+mass m_x, damping c_x) dragged by its support over the Prandtl-Tomlinson substrate of the
+friction registry (``pt``: ``U = -U0 cos(2 pi x / a)``), integrated by the same Rosenbrock
+integrator ``simulate ffm`` uses, along the measured support path with its reversals
+(:func:`probedyn.schemes.ffm.line_scan_path`: trace and retrace, tip inertia at the stated
+speeds). The corrugation scales with the normal load, ``U0 = u0 N`` (single-asperity Amontons,
+the registry's ``load_params``). Each sample is the model's lateral spring force
+``k_x (X - x)`` at the sample's support position (``sampling = "point"``) or its mean over the
+sample's interval (``"interval-mean"``, an integrating detector), as the sidecar declares.
 
-Baseline free parameters: the corrugation per load mu_c = F0 / N (Amontons: F0 proportional to
-the normal load) and the lattice period a, shared by all scans; the lattice registry phi of
-each scan is a nuisance parameter estimated in closed form from the data's Fourier component
-at the lattice frequency (a pure shift of a periodic trace multiplies that component by
-exp(-2 pi i phi / a)). Forces are whitened by the stated noise sigma_F (or, when not stated,
-by a robust estimate from neighbour differences).
+Calibrated: ``u0`` [J/N] and the lattice period ``a`` (within 25 % of the periodogram's
+estimate); per scan the lattice registry (where the lattice sits relative to the support
+coordinate) is a nuisance profiled out by aligning the fundamental of model and data (their
+cross spectrum at 1/a over the steady parts of trace and retrace), then re-integrating at
+that registry. Cross-validation groups are the trace and the retrace of each scan (the
+registry of a held-out half is estimated from the other half only).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 
+from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
-from probedyn.diagnose.formats import FrictionData
+from probedyn.diagnose.formats import FrictionData, FrictionScan, _noise, _num, col_error, read_csv
+from probedyn.schemes.ffm import FFM, line_scan_path
 
-__all__ = ["pt_trace", "FrictionProblem"]
+__all__ = ["FrictionProblem", "FrictionState", "read_friction", "simulate_scan"]
 
-N_BLOCKS = 2  # cross-validation blocks per scan (contiguous in time: forward and backward)
-
-
-_TABLES: dict = {}
-
-
-def _branch_table(F0k, a, xlo, xhi, m=1500):
-    """Tabulated inverse of the stable branch X(x) = x + F0k sin(2 pi x / a), x in [xlo, xhi].
-
-    Chebyshev-clustered nodes resolve the square-root behaviour of the inverse near the
-    branch ends; linear interpolation error is below 1e-6 a for m = 1500 (checked against the
-    bisection of the test-suite's sequential tracker).
-    """
-    key = (F0k, a, xlo, xhi, m)
-    hit = _TABLES.get(key)
-    if hit is None:
-        t = 0.5 * (1 - np.cos(np.linspace(0.0, np.pi, m)))
-        x = xlo + (xhi - xlo) * t
-        hit = (x + F0k * np.sin(2 * np.pi * x / a), x)
-        if len(_TABLES) > 512:
-            _TABLES.clear()
-        _TABLES[key] = hit
-    return hit
+K_B = 1.380649e-23
+PREROLL = 2.0  # lattice periods of support travel before the data start (in the opposite direction)
+START_PERIODS = 1.5  # lattice periods at the start of a scan left out (unknown history before the scan)
+#: integrator tolerance (relative, and absolute in units of the force scale / k and the speed): the
+#: lateral force of stick-slip traces (interval means) agrees with rtol = 1e-7 to 0.15 sigma at the slips and
+#: ~1e-15 N elsewhere (tests/test_diagnose_friction.py); 1e-3 misplaces slips by up to 10 sigma
+RTOL = 1e-5
 
 
-def _G(u, F0k, a):
-    """Antiderivative for the branch integral: int u dU = [u U(u) - u^2/2 + F0k a/(2 pi) cos(2 pi u/a)]."""
-    U = u + F0k * np.sin(2 * np.pi * u / a)
-    return u * U - 0.5 * u * u + F0k * a / (2 * np.pi) * np.cos(2 * np.pi * u / a)
+# ------------------------------------------------------------------------------------------
+# Reading
+# ------------------------------------------------------------------------------------------
 
 
-def pt_trace(X, direction, *, F0, k, a, phi=0.0, slip_frac=1.0, boxcar=True):
-    """Quasi-static PT lateral force along a scan (vectorised per direction segment).
+def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionData:
+    d = read_csv(csv, ["scan", "position_m", "lateral_force_N"], ["time_s"])
+    lev = meta.get("lever", {})
+    k_x = _num(meta, "lever", "k_x", side, positive=True, lo=1e-4, hi=1e4, unit="N/m")
+    m_x = _num(meta, "lever", "m_x", side, default=0.0, lo=0.0, hi=1e-3, unit="kg") or None
+    c_x = _num(meta, "lever", "c_x", side, default=-1.0) if "c_x" in lev else None
+    if c_x is not None and c_x < 0:
+        raise DataFormatError(f"{side}: [lever] c_x must be >= 0")
+    Q_x = _num(meta, "lever", "Q_x", side, default=0.0, lo=0.01, hi=1e7) if "Q_x" in lev else None
+    if c_x is not None and Q_x is not None:
+        raise DataFormatError(f"{side}: [lever] give c_x or Q_x, not both")
+    lattice = _num(meta, "sample", "lattice", side, default=0.5e-9, positive=True, lo=5e-11, hi=1e-6, unit="m")
+    sig, stated = _noise(meta, side, "force", 0.0, 1e-15, 1e-3, "N")
+    sampling = str(meta["measurement"].get("sampling", "interval-mean"))
+    if sampling not in ("point", "interval-mean"):
+        raise DataFormatError(f"{side}: [measurement] sampling must be 'point' or 'interval-mean', got {sampling!r}")
+    scans_meta = meta.get("scans", [])
+    if not isinstance(scans_meta, list) or not scans_meta:
+        raise DataFormatError(f"{side}: missing [[scans]] tables (id, speed, load)")
+    by_id: dict[int, tuple[float, float]] = {}
+    for i, s in enumerate(scans_meta):
+        if not isinstance(s, dict):
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1} must be a table")
+        for k in s:
+            if k not in ("id", "speed", "load"):
+                from probedyn.diagnose.formats import _did_you_mean
 
-    ``X`` support positions, ``direction`` +1/-1 per point (segments of constant direction are
-    scanned in order), ``slip_frac`` in (0, 1]: the tip slips when it reaches
-    ``slip_frac * x_c`` past the well centre (1 = athermal instability; < 1 = thermally
-    activated early slip).
-
-    With ``boxcar`` (default) each sample is the *mean* force over its sampling interval (from
-    the midpoint to the previous sample to the midpoint to the next one, within the segment):
-    an integrating detector. The mean is exact: on a branch, int x dX follows by parts from
-    X(x) = x + (F0/k) sin(2 pi x / a), and an interval containing a slip is split at it. This
-    makes the model continuous in its parameters (a point-sampled sawtooth moves its slips
-    from sample to sample in steps, which defeats least squares). Without ``boxcar`` the force
-    at the sample positions is returned.
-    """
-    X = np.asarray(X, float)
-    direction = np.asarray(direction)
-    eta = 2 * math.pi * F0 / (k * a)  # = 4 pi^2 U0 / (k a^2): stability k + U'' > 0
-    F0k = F0 / k
-    if eta > 1.0:
-        xc = a / (2 * math.pi) * math.acos(-1.0 / eta)
-    else:
-        xc = a / 2.0
-    xj = max(min(slip_frac, 1.0), 1e-3) * xc if eta > 1.0 else xc
-    Xj0 = xj + F0k * math.sin(2 * math.pi * xj / a)
-    tabX, tabx = _branch_table(F0k, a, -xc, xj)
-    F = np.empty_like(X)
-    cuts = np.nonzero(np.diff(direction) != 0)[0] + 1
-    starts = np.concatenate([[0], cuts]); ends = np.concatenate([cuts, [len(X)]])
-    n_prev = None
-    for s, e in zip(starts, ends):
-        d = 1.0 if direction[s] >= 0 else -1.0
-        Xp = d * (X[s:e] - phi)  # mirrored, phase-free coordinates (increasing)
-        n_start = np.round(Xp[0] / a) if n_prev is None else d * n_prev
-
-        def well(Xq):
-            return np.maximum(n_start, np.ceil((Xq - Xj0) / a))
-
-        def xloc(Xq, n):  # tip position relative to the centre of well n
-            return np.interp(Xq - n * a, tabX, tabx)
-
-        n = well(Xp)
-        if not boxcar or len(Xp) < 2:
-            F[s:e] = d * k * (Xp - n * a - xloc(Xp, n))
+                raise DataFormatError(f"{side}: unknown key '{k}' in [[scans]] entry {i + 1}"
+                                      + _did_you_mean(k, ("id", "speed", "load")))
+        if "id" not in s or "speed" not in s or "load" not in s:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1} needs id, speed [m/s] and load [N]")
+        sp, ld = s["speed"], s["load"]
+        if isinstance(sp, bool) or not isinstance(sp, (int, float)) or not 1e-12 < sp < 1.0:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1}: speed {sp!r} m/s is outside (1e-12, 1) m/s (SI)")
+        if isinstance(ld, bool) or not isinstance(ld, (int, float)) or not 0 < ld < 1e-3:
+            raise DataFormatError(f"{side}: [[scans]] entry {i + 1}: load {ld!r} N is outside (0, 1e-3) N (SI)")
+        if int(s["id"]) in by_id:
+            raise DataFormatError(f"{side}: [[scans]] id {int(s['id'])} appears twice")
+        by_id[int(s["id"])] = (float(sp), float(ld))
+    ids = d["scan"]
+    scans = []
+    for sid in dict.fromkeys(ids.astype(int).tolist()):
+        idx = np.nonzero(ids == sid)[0]
+        if sid not in by_id:
+            raise col_error(d, "scan", idx[0], f"scan id {sid} has no [[scans]] entry in {side.name}")
+        if len(idx) < 16:
+            raise col_error(d, "scan", idx[0], f"scan {sid} has only {len(idx)} samples (need >= 16)")
+        if np.any(np.diff(idx) != 1):
+            k = idx[np.nonzero(np.diff(idx) != 1)[0][0] + 1]
+            raise col_error(d, "scan", k, f"rows of scan {sid} are not contiguous")
+        x = d["position_m"][idx]
+        if np.max(np.abs(x)) > 1e-3:
+            raise col_error(d, "position_m", idx[int(np.argmax(np.abs(x)))], "position beyond 1 mm: values are SI metres")
+        dx = np.diff(x)
+        z = np.nonzero(dx == 0)[0]
+        bad = [j for j in z if j == 0 or j == len(dx) - 1 or np.sign(dx[j - 1]) == np.sign(dx[j + 1])]
+        if bad:  # a repeated position is only allowed at a reversal (the turning point sampled twice)
+            raise col_error(d, "position_m", idx[1 + int(bad[0])], "repeated position (speed zero) away from a reversal")
+        sgn = np.sign(dx)
+        sgn[z] = np.sign(dx[z + 1])  # the repeated turning point belongs to the new direction
+        direction = np.concatenate([sgn[:1], sgn])
+        sp, ld = by_id[sid]
+        if "time_s" in d and not np.any(np.isnan(d["time_s"][idx])):
+            t = d["time_s"][idx]
+            if np.any(np.diff(t) <= 0):
+                raise col_error(d, "time_s", idx[1 + int(np.nonzero(np.diff(t) <= 0)[0][0])], "times must increase")
         else:
-            mid = 0.5 * (Xp[1:] + Xp[:-1])
-            lo = np.concatenate([[Xp[0]], mid]); hi = np.concatenate([mid, [Xp[-1]]])
-            nl, nh = well(lo), well(hi)
-            # split point: end of well nl's branch (if the interval contains a slip)
-            B = np.where(nh > nl, nl * a + Xj0, hi)
-            ul, uB = xloc(lo, nl), xloc(np.minimum(B, hi), nl)
-            I1 = _G(uB, F0k, a) - _G(ul, F0k, a) + 0.0  # int u dU on well nl (local coordinates)
-            Ix1 = I1 + nl * a * (B - lo)
-            uB2, uh = xloc(B, nh), xloc(hi, nh)
-            Ix2 = np.where(nh > nl, _G(uh, F0k, a) - _G(uB2, F0k, a) + nh * a * (hi - B), 0.0)
+            t = np.concatenate([[0.0], np.cumsum(np.abs(dx))]) / sp
+        f = d["lateral_force_N"][idx]
+        if np.max(np.abs(f)) > 1e-3:
+            raise col_error(d, "lateral_force_N", idx[int(np.argmax(np.abs(f)))], "force beyond 1 mN: values are SI newtons")
+        scans.append(FrictionScan(sid, sp, ld, x, f, t, direction))
+    flat = [s.id for s in scans if not np.ptp(s.force) > 0]
+    if flat:
+        raise DataFormatError(f"{csv}: the data cannot inform the fit: the lateral force of scan {flat[0]} is constant"
+                              + (" (all zero)" if not np.any(scans[[s.id for s in scans].index(flat[0])].force) else ""))
+    if not stated:  # from the point-to-point scatter (robust; the signal's own increments are removed twice)
+        r = np.concatenate([np.diff(s.force, 2) for s in scans])
+        sig = float(1.4826 * np.median(np.abs(r - np.median(r))) / math.sqrt(6))
+    return FrictionData(**common, scans=scans, k_x=k_x, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice, sigma_force=sig,
+                        sampling=sampling, noise_stated=stated)
+
+
+# ------------------------------------------------------------------------------------------
+# Model
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class FrictionState:
+    u0: float  # corrugation per unit load [J/N]
+    a: float  # lattice period [m]
+    gamma: float = 0.0  # viscous coefficient of the registry PT model [N s/m]
+    n_adh: float = 0.0  # adhesion load [N]
+    offset: float = 0.0  # [N]
+    drift: float = 0.0  # [N over one scan]
+    bow: float = 0.0  # scanner nonlinearity
+    theta: float = 0.0  # scan angle to the lattice rows [rad]
+    gain: float = 1.0  # lateral-force calibration factor
+    thermal: tuple[float, float] | None = None  # (T [K], attempt frequency [Hz])
+    transforms: list = field(default_factory=list)  # f(problem, scan, F) -> F, applied last
+
+
+def _ffm(data: FrictionData, U0: float, a: float, gamma: float) -> FFM:
+    k = data.k_x
+    m = data.m_x if data.m_x else k / (2 * math.pi * 1e5) ** 2
+    if data.c_x is not None:
+        c = data.c_x
+    elif data.Q_x is not None:
+        c = math.sqrt(m * k) / data.Q_x
+    else:
+        c = math.sqrt(m * k)  # Q = 1 (a strongly damped slip), stated in the docs
+    return FFM.from_preset("mica", "pt", {"U0": max(U0, 1e-30), "a": a, "gamma": max(gamma, 0.0), "k_x": k, "m_x": m,
+                                          "c_x": c})
+
+
+def _barrier_table(U0: float, a: float, k: float, n: int = 400):
+    """Quasi-static PT: for support positions X on the branch of the well at 0 up to its
+    instability X_c, the barrier to the next well. Returns (X, dE, X_c, x_s(X))."""
+    q = 2 * math.pi / a
+    F0 = q * U0
+    eta = q * F0 / k
+    if eta <= 1.0:
+        return None
+    xc = math.acos(-1.0 / eta) / q
+    xm = np.linspace(-0.25 * a, xc * (1 - 1e-6), n)
+    X = xm + (F0 / k) * np.sin(q * xm)
+    # saddle: the unstable equilibrium x_s in (x_c, a/2 + x_c): k (X - x) = F0 sin(q x), by
+    # bisection on every support position at once
+    lo = np.full_like(X, xc)
+    hi = np.full_like(X, 0.5 * a + xc)
+    glo = k * (X - lo) - F0 * np.sin(q * lo)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        gm = k * (X - mid) - F0 * np.sin(q * mid)
+        same = (gm > 0) == (glo > 0)
+        lo = np.where(same, mid, lo)
+        glo = np.where(same, gm, glo)
+        hi = np.where(same, hi, mid)
+    xs = 0.5 * (lo + hi)
+    E = lambda x, Xi: -U0 * np.cos(q * x) + 0.5 * k * (Xi - x) ** 2  # noqa: E731
+    dE = E(xs, X) - E(xm, X)
+    Xc = xc + (F0 / k) * math.sin(q * xc)
+    return X, np.maximum(dE, 0.0), Xc, xs
+
+
+def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: float) -> tuple[float, Any]:
+    """Median support position of a thermally activated slip before the athermal instability:
+    the hazard ``int f0 exp(-dE(X) / k_B T) dX / V`` reaches ln 2 (Kramers rate with attempt frequency
+    f0; Gnecco et al. 2000, Sang et al. 2001). Returns ``(X_c - X*, table)`` (0 if the slip stays athermal)."""
+    tab = _barrier_table(U0, a, k)
+    if tab is None or T <= 0 or f0 <= 0:
+        return 0.0, tab
+    X, dE, Xc, xs = tab
+    rate = f0 * np.exp(-dE / (K_B * T)) / V
+    H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+    if H[-1] < math.log(2.0):
+        return 0.0, tab
+    Xs = float(np.interp(math.log(2.0), H, X))
+    return max(Xc - Xs, 0.0), tab
+
+
+def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
+                  train: int = 0) -> np.ndarray:
+    """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
+    the scan's samples, for lattice registry ``phis[train]``."""
+    X = scan.position
+    if st.bow:
+        x0, x1 = X.min(), X.max()
+        X = X + st.bow * (X - x0) * (x1 - X) / max(x1 - x0, 1e-30)
+    w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
+    Xl = X * w - phis[train]
+    V = scan.speed * w
+    N = max(scan.load + st.n_adh, 0.0)
+    U0 = st.u0 * N
+    ffm = _ffm(data, U0, st.a, st.gamma)
+    d0 = scan.direction[0]
+    cuts = np.nonzero(np.diff(scan.direction) != 0)[0] + 1
+    starts = np.concatenate([[0], cuts])
+    ends = np.concatenate([cuts, [len(X)]])
+    turns = [Xl[0] + d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
+    # resolve the stick branches between samples: the step at most half a sample interval
+    dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
+    hmax = hmax_frac * dX / max(V, 1e-30)
+    if st.thermal is not None and U0 > 0:
+        res = _thermal_path(ffm, turns, V, st, hmax)
+    else:
+        res = line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+    F = np.empty(len(X))
+    # split the model output into its segments (the pre-roll is the first)
+    seg_model = _segments(res, len(turns) - 1)
+    for j, (s0, e0) in enumerate(zip(starts, ends)):
+        mb, mf, mt = seg_model[j + 1]
+        xs = Xl[s0:e0]
+        order = np.argsort(mb)
+        b, fz = mb[order], mf[order]
+        if data.sampling == "point" or len(xs) < 2:
+            F[s0:e0] = np.interp(xs, b, fz)
+        else:
+            cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
+            mid = 0.5 * (xs[1:] + xs[:-1])
+            lo = np.concatenate([[xs[0]], mid])
+            hi = np.concatenate([mid, [xs[-1]]])
             width = hi - lo
-            xmean = np.where(width > 0, (Ix1 + Ix2) / np.where(width > 0, width, 1.0), n * a + xloc(Xp, n))
-            Xmean = np.where(width > 0, 0.5 * (lo + hi), Xp)
-            F[s:e] = d * k * (Xmean - xmean)
-        n_prev = d * n[-1]
+            Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                F[s0:e0] = np.where(np.abs(width) > 0, (Ihi - Ilo) / np.where(width == 0, 1.0, width), np.interp(xs, b, fz))
     return F
 
 
-def _registry(trace, X, direction, target, w, a) -> float:
-    """Lattice registry phi of one scan (a nuisance parameter), in closed form plus one parabola.
+def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Split a path result into its monotone support segments (at the reversals)."""
+    b = res.base
+    db = np.diff(b)
+    # steps below 1e-9 of the path's span are round-off where integrated pieces meet (the end
+    # of one piece, X_a + V T, may overshoot the start of the next by an ulp): no direction
+    d = np.sign(np.where(np.abs(db) > 1e-9 * max(float(np.ptp(b)), 1e-300), db, 0.0))
+    nz = np.nonzero(d)[0]  # repeated points keep the direction of travel
+    d = d[nz[np.maximum(np.searchsorted(nz, np.arange(len(d)), side="right") - 1, 0)]]
+    cuts = np.nonzero(d[1:] * d[:-1] < 0)[0] + 1
+    edges = np.concatenate([[0], cuts, [len(b) - 1]])
+    out = []
+    for i0, i1 in zip(edges[:-1], edges[1:]):
+        sl = slice(i0, i1 + 1)
+        out.append((b[sl], res.lateral_force[sl], res.t[sl]))
+    if len(out) != n_seg:
+        raise ProbedynError(f"FFM path: expected {n_seg} monotone segments, found {len(out)}")
+    return out
 
-    A lattice shift phi shifts the steady part of the trace, so the Fourier components at 1/a
-    of model (phi = 0) and data obey c_d = c_m exp(-2 pi i phi / a); summing the cross
-    spectra c_m conj(c_d) of the forward and backward segments (Hann window, the first 1.5 a
-    of travel after each start/reversal left out as transient) gives phi without the
-    cancellation of the two directions' fundamentals. The sum of squares is then minimised by
-    two parabolas through phi, phi +- h (h = 0.004 a, then 0.001 a): the start transients bias
-    the Fourier estimate by ~0.3 % of a, and the least-squares minimum is that sharp.
-    """
-    f0 = trace(0.0)
-    cuts = np.nonzero(np.diff(direction) != 0)[0] + 1
-    starts = np.concatenate([[0], cuts]); ends = np.concatenate([cuts, [len(X)]])
-    acc = 0.0 + 0.0j
-    for s_, e_ in zip(starts, ends):
-        idx = np.arange(s_, e_)[np.abs(X[s_:e_] - X[s_]) > 1.5 * a]
-        if len(idx) < 8:
-            continue
-        e = np.exp(-2j * np.pi * X[idx] / a) * np.hanning(len(idx))
-        acc += np.sum(f0[idx] * e) * np.conj(np.sum(target[idx] * e))
-    span = float(np.ptp(X))
-    if acc == 0 or span < 4 * a:  # noqa: SIM114
-        # too few periods for the Fourier estimate (e.g. the second train of a small scan
-        # angle): best of a 16-point grid over one period
-        grid = np.arange(16) * a / 16
-        sse = [float(np.sum((target - w * trace(g)) ** 2)) for g in grid]
-        phi = float(grid[int(np.argmin(sse))])
-        h0 = a / 32
-    else:
-        phi = (a / (2 * np.pi)) * float(np.angle(acc))
-        h0 = 4e-3 * a
-    for h in dict.fromkeys((h0, h0 / 4, 1e-3 * a)):
-        sse = [float(np.sum((target - w * trace(phi + d)) ** 2)) for d in (-h, 0.0, h)]
-        den = sse[0] - 2 * sse[1] + sse[2]
-        if den > 0:
-            phi += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
-    return phi
+
+def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
+    """Trace/retrace with thermally activated slips: between slips the FFM integration runs as
+    usual; when the support reaches the median activated slip point of the current well, the tip
+    is placed just over the saddle (at rest) and the FFM dynamics carries out the slip."""
+    from probedyn.schemes.ffm import ScanResult
+
+    T, f0 = st.thermal
+    fv = ffm.friction.values
+    U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
+    adv, tab = thermal_slip_advance(U0, a, k, V, T, f0)
+    if adv <= 0 or tab is None:
+        return line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+    Xtab, _, Xc, xs_tab = tab
+    X_slip = Xc - adv  # relative to the well centre, for motion in +x
+    xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
+    y = np.array([turns[0], 0.0, 0.0])
+    parts = []
+    for Xa, Xb in zip(turns[:-1], turns[1:]):
+        d = 1.0 if Xb > Xa else -1.0
+        Xcur = Xa
+        seg = []
+        n = round(y[0] / a)  # the well the tip sits in (kept explicitly: a tip just placed over a
+        # saddle belongs to the next well although it is nearer the old one)
+        while (Xb - Xcur) * d > 0:
+            Xs = n * a + d * X_slip
+            if (Xs - Xcur) * d <= 1e-9 * a:  # already past this well's slip point: slip now
+                Xs = Xcur
+            Xend = Xs if (Xb - Xs) * d > 0 else Xb
+            if (Xend - Xcur) * d > 1e-12 * a:
+                r = line_scan_path(ffm, [Xcur, Xend], speed=V, y0=y, hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+                seg.append(r)
+                y = np.array([r.x[-1], r.v[-1], r.z[-1]])
+                Xcur = Xend
+                n = round(y[0] / a)
+            if Xend == Xs and (Xb - Xcur) * d > 0:
+                y = np.array([n * a + d * (xs_slip + 0.02 * a), 0.0, 0.0])  # over the saddle, at rest
+                n += int(d)
+        parts.append(seg)
+    # flatten into one result; segment boundaries are recovered from the turns by _segments
+    t, base, x, v, z, F = [], [], [], [], [], []
+    toff = 0.0
+    for seg in parts:
+        for r in seg:
+            t.append(r.t + toff)
+            base.append(r.base)
+            x.append(r.x)
+            v.append(r.v)
+            z.append(r.z)
+            F.append(r.friction)
+            toff += r.t[-1]
+    base = np.concatenate(base)
+    x = np.concatenate(x)
+    return ScanResult(t=np.concatenate(t), base=base, x=x, v=np.concatenate(v), z=np.concatenate(z),
+                      lateral_force=k * (base - x), friction=np.concatenate(F), n_steps=0, n_rejected=0, setup={})
+
+
+# ------------------------------------------------------------------------------------------
+# The problem
+# ------------------------------------------------------------------------------------------
+
+
+def _period_estimate(data: FrictionData) -> float:
+    """Lattice period from the periodogram of the traces (0.6 - 1.6 x the nominal lattice)."""
+    cand = data.lattice * np.linspace(0.6, 1.6, 501)
+    power = np.zeros_like(cand)
+    for s in data.scans:
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        for seg in np.split(np.arange(len(s.position)), cuts):
+            if len(seg) < 8:
+                continue
+            x = s.position[seg]
+            f = s.force[seg] - s.force[seg].mean()
+            E = np.exp(-2j * np.pi * np.outer(1.0 / cand, x))
+            power += np.abs(E @ (f * np.hanning(len(f)))) ** 2
+    return float(cand[int(np.argmax(power))])
+
+
+def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
+    """The lattice period from the positions of the slips (jumps of the lateral force larger than
+    10 noise levels against the direction of motion): within each segment the spacing of
+    successive slips is an integer number of periods (multiple slips), ``a = sum dX / sum n`` with
+    ``n = round(dX / a_est)``. Falls back to ``a_est`` with fewer than three slips."""
+    num = den = 0.0
+    for s in data.scans:
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            if len(seg) < 4:
+                continue
+            d = s.direction[seg[0]]
+            jump = -d * np.diff(s.force[seg])
+            idx = np.nonzero(jump > 10 * sigma)[0]
+            if len(idx) < 2:
+                continue
+            # one slip may span two samples (interval means): keep the larger of adjacent jumps
+            keep = [idx[0]]
+            for j in idx[1:]:
+                if j - keep[-1] <= 1:
+                    if jump[j] > jump[keep[-1]]:
+                        keep[-1] = j
+                else:
+                    keep.append(j)
+            x = s.position[seg]
+            xs = np.array([0.5 * (x[j] + x[j + 1]) for j in keep])
+            dx = np.abs(np.diff(xs))
+            n = np.round(dx / a_est)
+            ok = n >= 1
+            num += float(dx[ok].sum())
+            den += float(n[ok].sum())
+    return num / den if den >= 3 else a_est
 
 
 class FrictionProblem:
     kind = "friction"
     unit = "N"
-    n_folds = 4  # K-fold cross-validation over the scan blocks
+    reduced = False
 
-    def __init__(self, data: FrictionData):
+    def __init__(self, data: FrictionData) -> None:
         self.data = data
+        self.path = data.path
+        self.known = set(data.known) | set(data.free)
+        self.declared_medium = data.medium
+        self.medium_name = data.medium_name
         sc = data.scans
-        self.n_scans = len(sc)
         self.speeds = np.array([s.speed for s in sc])
         self.loads = np.array([s.load for s in sc])
-        self.v_max = float(self.speeds.max())
-        self.N_mean = float(self.loads.mean()) if self.loads.mean() > 0 else 1e-9
-        self.force = np.concatenate([s.force for s in sc])
         self.sigma = data.sigma_force if data.sigma_force > 0 else 1e-12
-        self.F_ref = data.k_x * data.lattice  # natural force scale k_x a
-        gid = []
+        self.force = np.concatenate([s.force for s in sc])
+        self.n = len(self.force)
+        gid, labels, pos = [], [], 0
+        self.slices = []
         for i, s in enumerate(sc):
-            m = len(s.force)
-            gid.append(i * N_BLOCKS + np.minimum((np.arange(m) * N_BLOCKS) // m, N_BLOCKS - 1))
-        self.groups = np.concatenate(gid)
-        self.group_labels = [f"scan {s.id}" for s in sc]
-        a0 = self._period_estimate()
-        self.a_start = a0
-        f_amp = float(np.sqrt(2) * np.std(self.force))
-        mu0 = max(min(f_amp / self.N_mean, 1e3), 1e-5)
+            self.slices.append(slice(pos, pos + len(s.force)))
+            pos += len(s.force)
+            cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+            seg_id = np.zeros(len(s.force), int)
+            for j, c in enumerate(cuts):
+                seg_id[c:] = j + 1
+            gid.append(1000 * i + seg_id)
+            for j in range(len(cuts) + 1):
+                labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
+        self.a_est = _period_estimate(data)
+        # the samples within START_PERIODS lattice periods of a scan's start depend on the unrecorded
+        # history before it (where the tip sat when the scan began): they are not used
+        use = []
+        for s in sc:
+            u = np.ones(len(s.force), bool)
+            cuts = np.nonzero(np.diff(s.direction) != 0)[0]
+            end0 = (cuts[0] + 1) if len(cuts) else len(s.force)
+            u[:end0] = np.abs(s.position[:end0] - s.position[0]) >= START_PERIODS * self.a_est
+            use.append(u)
+        self.use = np.concatenate(use)
+        self.groups = np.concatenate(gid)[self.use]
+        self.group_labels = labels
+        N = float(np.mean(self.loads))
+        self.a_slip = _slip_period(data, self.a_est, self.sigma)
+        # corrugation start from the stick-slip loop: the largest lateral force of a PT stick branch is
+        # F_max = F0 sqrt(1 - 1/eta^2) with eta = 2 pi F0 / (k a), so F0 = sqrt(F_max^2 + (k a / 2 pi)^2)
+        q = 2 * math.pi / self.a_est
+        u0s = []
+        for s_ in sc:
+            fmax = 0.5 * float(np.percentile(s_.force, 99.5) - np.percentile(s_.force, 0.5))
+            F0 = math.sqrt(fmax**2 + (data.k_x / q) ** 2)
+            u0s.append(F0 / q / s_.load)
+        u0_start = float(np.median(u0s))
         self.base_params = [
-            CauseParam("mu_c", "1 (F0 / N)", 1e-6, 1e4, (mu0,), "corrugation force per normal load", scale="log"),
-            CauseParam("a", "m", 0.7 * a0, 1.4 * a0, (a0,), "lattice period"),
+            CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
+                       scale="log", starts=(0.85 * u0_start, 1.2 * u0_start)),
+            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period"),
         ]
-        self.causes = [c() for c in catalog("friction")]
+        self.temperature = data.temperature
+        self.N_mean = N
+        self.v_max = float(self.speeds.max())
         self.t_mid = [0.5 * (s.time[0] + s.time[-1]) for s in sc]
         self.t_span = [max(s.time[-1] - s.time[0], 1e-12) for s in sc]
+        self.train_mask = None
+        self.fixed_nuisance = None
+        # the integrated model is accurate to ~1e-5 of the force scale (RTOL): finite differences
+        # need steps of 1e-3 of the parameter scale; fewer evaluations and starts per fit
+        self.diff_step = 1e-3
+        self.nfev_per_param = 20
+        self.max_starts = 2
+        self.causes = []
+        for cls in catalog("friction"):
+            c = cls().constrain(self)
+            if c is not None:
+                self.causes.append(c)
 
-    def _period_estimate(self) -> float:
-        """Lattice period from the periodogram of the traces (search 0.5 - 2 x nominal)."""
-        a_nom = self.data.lattice
-        cand = a_nom * np.linspace(0.5, 2.0, 601)
-        power = np.zeros_like(cand)
-        for s in self.data.scans:
-            fwd = s.direction > 0
-            for sel in (fwd, ~fwd):
-                if sel.sum() < 8:
-                    continue
-                x = s.position[sel]; f = s.force[sel] - s.force[sel].mean()
-                E = np.exp(-2j * np.pi * np.outer(1.0 / cand, x))
-                power += np.abs(E @ f) ** 2
-        return float(cand[int(np.argmax(power))])
+    def supports(self, what: str) -> bool:
+        return True
 
-    # ------------------------------------------------------------------ model
-    def state(self, values: dict[str, float], causes=()) -> dict[str, Any]:
-        s = dict(mu_c=values.get("mu_c", self.base_params[0].starts[0]), a=values.get("a", self.a_start),
-                 n_adh=0.0, slip_b=0.0, bow=0.0, offset=0.0, drift=0.0, visc=0.0, theta=0.0)
+    # -- model --------------------------------------------------------------------------------
+    def state(self, values, causes=()) -> FrictionState:
+        st = FrictionState(u0=values["u0"], a=values["a"])
         for c in causes:
-            c.apply(values, s)
-        return s
+            c.effect(values, st)
+        return st
 
-    def predict_scan(self, s: dict[str, Any], scan, data_force=None, phases=None, record=None):
-        """Model force of one scan; the lattice phase(s) come from the data when given."""
-        d = self.data
-        k, a = d.k_x, s["a"]
-        F0 = s["mu_c"] * max(scan.load + s["n_adh"] * self.N_mean, 0.0)
-        slip = 1.0 + s["slip_b"] * math.log(scan.speed / self.v_max)
-        X = scan.position
-        if s["bow"]:
-            x0, x1 = X.min(), X.max()
-            X = X + s["bow"] * (X - x0) * (x1 - X) / max(x1 - x0, 1e-30)
-        th = math.radians(s["theta"])
-        trains = [(math.cos(th), X * math.cos(th))]
-        if th > 0:
-            trains.append((math.sin(th), X * math.sin(th)))
-        i = self.data.scans.index(scan)
-        F = self.F_ref * (s["visc"] * (scan.speed / self.v_max) * scan.direction
-                          + s["offset"] + s["drift"] * (scan.time - self.t_mid[i]) / self.t_span[i])
-        for j, (w, Xt) in enumerate(trains):
-            if F0 <= 0 or w <= 0:
+    def _align(self, i: int, st: FrictionState, train: int, m0: np.ndarray, target: np.ndarray) -> float:
+        """Registry of one lattice train of scan i: phase of the fundamental of model vs data over
+        the steady parts of each segment (the training samples only during cross-validation)."""
+        s = self.data.scans[i]
+        w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
+        if w <= 1e-9:
+            return 0.0
+        kx = 2 * math.pi * w / st.a  # along the support coordinate
+        mask = self._fit_mask(i)
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        acc = 0.0 + 0.0j
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            x = s.position[seg]
+            steady = np.abs(x - x[0]) > 1.5 * st.a / w
+            sel = seg[steady & mask[seg]]
+            if len(sel) < 8:
                 continue
-            trace = lambda ph: pt_trace(Xt, scan.direction, F0=F0, k=k, a=a, phi=ph, slip_frac=slip)  # noqa: E731
-            if phases is not None:
-                phi = phases[j]
-            elif data_force is not None:
-                phi = _registry(trace, Xt, scan.direction, data_force - F, w, a)
-            else:
-                phi = 0.0
-            if record is not None:
-                record.append(phi)
-            fj = trace(phi)
-            F = F + w * fj
-        return F
+            e = np.exp(-1j * kx * s.position[sel]) * np.hanning(len(sel))
+            acc += np.sum(m0[sel] * e) * np.conj(np.sum(target[sel] * e))
+        if acc == 0:
+            return 0.0
+        return float(np.angle(acc)) / (2 * math.pi / st.a)
 
-    def residuals(self, values: dict[str, float], causes=(), nuisance=None, record=None) -> np.ndarray:
-        """Whitened residuals; ``record`` (a list) receives the per-scan lattice registries,
-        ``nuisance`` (such a list) imposes them instead of profiling them out."""
-        s = self.state(values, causes)
+    def nuisance(self, values, causes=()) -> list[list[float]]:
+        """The lattice registry of every scan (and train) at these parameters: the model at
+        registry 0 aligned with the data (training samples only) by the phase of the fundamental."""
+        st = self.state(values, causes)
+        trains = [0] + ([1] if st.theta > 1e-6 else [])
         out = []
-        for i, sc in enumerate(self.data.scans):
-            rec = [] if record is not None else None
-            ph = nuisance[i] if nuisance is not None else None
-            out.append((sc.force - self.predict_scan(s, sc, sc.force, phases=ph, record=rec)) / self.sigma)
-            if record is not None:
-                record.append(rec)
-        return np.concatenate(out)
-
-    def physical_residual_rms(self, r: np.ndarray) -> float:
-        return float(np.sqrt(np.mean(r**2)) * self.sigma)
-
-    # ------------------------------------------------------------ structure
-    def structure(self, r: np.ndarray) -> dict[str, Any]:
-        out: dict[str, Any] = {"scans": []}
-        pos = 0
-        means = []
-        for sc in self.data.scans:
-            m = len(sc.force)
-            rr = r[pos:pos + m]; pos += m
-            rc = rr - rr.mean()
-            den = float(np.sum(rc**2)) or 1.0
-            ac = [float(np.sum(rc[:-L] * rc[L:]) / den) for L in range(1, 11)]
-            # Ljung-Box Q on 10 lags: white residuals give chi^2(10)
-            from scipy.stats import chi2
-
-            Q = m * (m + 2) * sum(c * c / (m - L) for L, c in enumerate(ac, start=1))
-            fwd = sc.direction > 0
-            half = 0.5 * (sc.force[fwd].mean() - sc.force[~fwd].mean()) if fwd.any() and (~fwd).any() else float(np.mean(sc.force * sc.direction))
-            # dominant period of the residual along the scan
-            x = sc.position
-            per = np.linspace(0.2, 3.0, 281) * self.a_start
-            E = np.exp(-2j * np.pi * np.outer(1.0 / per, x))
-            pw = np.abs(E @ rc) ** 2
-            means.append(float(rr.mean()))
-            out["scans"].append({"scan": sc.id, "speed": sc.speed, "load": sc.load, "mean_residual_sigma": float(rr.mean()),
-                                 "rms_sigma": float(np.sqrt(np.mean(rr**2))), "lag1_autocorr": ac[0],
-                                 "ljung_box_p": float(chi2.sf(Q, 10)), "mean_friction_N": float(half),
-                                 "residual_period_m": float(per[int(np.argmax(pw))])})
-        fr = np.array([s_["mean_friction_N"] for s_ in out["scans"]])
-        for key, xv in (("ln_speed", np.log(self.speeds)), ("load", self.loads)):
-            if np.ptp(xv) > 0 and len(xv) >= 3:
-                A = np.vstack([np.ones_like(xv), xv - xv.mean()]).T
-                coef, res, *_ = np.linalg.lstsq(A, fr, rcond=None)
-                out[f"friction_vs_{key}_slope"] = float(coef[1])
+        for i, s in enumerate(self.data.scans):
+            phis = [0.0, 0.0]
+            for tr in trains:
+                m0 = simulate_scan(self.data, st, s, [0.0, 0.0], train=tr)
+                phis[tr] = self._align(i, st, tr, m0, s.force)
+            # least-squares polish (parabolas through three registries, twice): the phase of the
+            # fundamental is biased by the reversal transients at the level of a few 1e-3 a
+            if len(trains) == 1:
+                mask = self._fit_mask(i)
+                for h in (4e-3 * st.a, 1e-3 * st.a):
+                    sse = []
+                    for dph in (-h, 0.0, h):
+                        ph = [phis[0] + dph, 0.0]
+                        F = st.gain * simulate_scan(self.data, st, s, ph) + st.offset + st.drift * (
+                            s.time - self.t_mid[i]) / self.t_span[i]
+                        sse.append(float(np.sum((s.force - F)[mask] ** 2)))
+                    den = sse[0] - 2 * sse[1] + sse[2]
+                    if den > 0:
+                        phis[0] += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
+            out.append(phis)
         return out
 
-    # ------------------------------------------------- separating measurement
-    def candidate_measurements(self, sa: dict, sb: dict) -> list[dict[str, Any]]:
-        """Hypothetical extra scans (speed x10, /10, load x2, a second scan later) and their separation."""
+    def _fit_mask(self, i: int) -> np.ndarray:
+        """Samples of scan i that the fit uses (start transient out; training samples during CV)."""
+        mask = self.use[self.slices[i]].copy()
+        if self.train_mask is not None:
+            full = np.zeros(self.n, bool)
+            full[np.nonzero(self.use)[0][self.train_mask]] = True
+            mask &= full[self.slices[i]]
+        return mask
+
+    def predict(self, values, causes=()) -> np.ndarray:
+        st = self.state(values, causes)
+        out = np.empty(self.n)
+        trains = [0] + ([1] if st.theta > 1e-6 else [])
+        nu = self.fixed_nuisance if self.fixed_nuisance is not None else self.nuisance(values, causes)
+        for i, s in enumerate(self.data.scans):
+            parts = []
+            for tr in trains:
+                parts.append(simulate_scan(self.data, st, s, nu[i], train=tr))
+            w = [math.cos(st.theta), math.sin(st.theta)]
+            F = st.gain * sum(w[tr] * p for tr, p in zip(trains, parts))
+            F = F + st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
+            for tf in st.transforms:
+                F = tf(self, s, F)
+            out[self.slices[i]] = F
+        return out
+
+    def residuals(self, values, causes=()) -> np.ndarray:
+        try:
+            m = self.predict(values, causes)
+        except ProbedynError:
+            return np.full(int(self.use.sum()), 1e6)
+        return ((self.force - m) / self.sigma)[self.use]
+
+    def physical_rms(self, r) -> float:
+        return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
+
+    # -- structure ----------------------------------------------------------------------------
+    def structure(self, r: np.ndarray) -> dict[str, Any]:
+        from scipy.stats import chi2
+
+        out: dict[str, Any] = {"scans": [], "left_out_start_samples": int((~self.use).sum())}
+        fr = []
+        full = np.full(self.n, np.nan)
+        full[self.use] = np.asarray(r)
+        for i, s in enumerate(self.data.scans):
+            rr = full[self.slices[i]]
+            rr = rr[np.isfinite(rr)]
+            rc = rr - rr.mean()
+            den = float(np.sum(rc**2)) or 1.0
+            m = len(rr)
+            ac = [float(np.sum(rc[:-L] * rc[L:]) / den) for L in range(1, 11)]
+            Qlb = m * (m + 2) * sum(c * c / (m - L) for L, c in enumerate(ac, start=1))
+            fwd = s.direction > 0
+            half = 0.5 * (s.force[fwd].mean() - s.force[~fwd].mean()) if fwd.any() and (~fwd).any() else float("nan")
+            fr.append(half)
+            out["scans"].append({"scan": s.id, "speed": s.speed, "load": s.load, "mean_residual_sigma": float(rr.mean()),
+                                 "rms_sigma": float(np.sqrt(np.mean(rr**2))), "lag1_autocorr": ac[0],
+                                 "ljung_box_p": float(chi2.sf(Qlb, 10)), "friction_half_loop_N": float(half)})
+        fr = np.array(fr)
+        for key, xv in (("ln_speed", np.log(self.speeds)), ("load", self.loads)):
+            ok = np.isfinite(fr)
+            if np.ptp(xv[ok]) > 0 and ok.sum() >= 2:
+                A = np.vstack([np.ones(ok.sum()), xv[ok] - xv[ok].mean()]).T
+                out[f"friction_vs_{key}_slope"] = float(np.linalg.lstsq(A, fr[ok], rcond=None)[0][1])
+        return out
+
+    def predict_observables(self, values, causes) -> list[dict[str, Any]]:
+        """Mean friction (half the trace-retrace loop) of hypothetical scans of the fastest scan's
+        path at 10x and 0.1x its speed and at 2x and 0.5x its load."""
+        st = self.state(values, causes)
         ref = self.data.scans[int(np.argmax(self.speeds))]
         out = []
-        variants = [("a scan at 10x the highest speed", 10.0, 1.0), ("a scan at 1/10 of the lowest speed", 0.1 * self.speeds.min() / ref.speed, 1.0),
-                    ("a scan at twice the highest load", 1.0, 2.0 * self.loads.max() / max(ref.load, 1e-30)),
-                    ("a scan at half the lowest load", 1.0, 0.5 * self.loads.min() / max(ref.load, 1e-30))]
-        from probedyn.diagnose.formats import FrictionScan
-
-        for label, fs, fl in variants:
-            sc = FrictionScan(-1, ref.speed * fs, ref.load * fl, ref.position, ref.force, ref.time / fs, ref.direction)
-            self.data.scans.append(sc); self.t_mid.append(self.t_mid[0]); self.t_span.append(self.t_span[0] / fs)
+        for label, fs, fl in (("a scan at 10x the highest speed", 10.0, 1.0),
+                              ("a scan at 1/10 of the lowest speed", 0.1 * self.speeds.min() / ref.speed, 1.0),
+                              ("a scan at twice the highest load", 1.0, 2.0 * self.loads.max() / ref.load),
+                              ("a scan at half the lowest load", 1.0, 0.5 * self.loads.min() / ref.load)):
+            sc = replace(ref, speed=ref.speed * fs, load=ref.load * fl, time=ref.time / fs)
             try:
-                fa = self.predict_scan(sa, sc, ref.force)
-                fb = self.predict_scan(sb, sc, ref.force)
-            finally:
-                self.data.scans.pop(); self.t_mid.pop(); self.t_span.pop()
-            ma = float(np.mean(fa * sc.direction)); mb = float(np.mean(fb * sc.direction))
-            sep = float(np.sqrt(np.mean((fa - fb) ** 2)) / self.sigma * math.sqrt(len(fa)))
-            out.append({"measure": label, "a": ma, "b": mb, "unit": "N (mean friction)", "separation_sigma": sep})
-        return sorted(out, key=lambda r: -r["separation_sigma"])
+                F = st.gain * simulate_scan(self.data, st, sc, [0.0, 0.0]) + st.offset
+            except ProbedynError:
+                continue
+            fwd = sc.direction > 0
+            half = 0.5 * (F[fwd].mean() - F[~fwd].mean()) if fwd.any() and (~fwd).any() else float(np.mean(F))
+            out.append({"measure": f"{label} (mean friction, half the trace-retrace loop)", "value": float(half),
+                        "sigma": self.sigma / math.sqrt(len(F)), "unit": "N"})
+        return out
 
-    def describe_data(self) -> dict[str, Any]:
-        return {"kind": "friction", "scans": self.n_scans, "points": int(len(self.force)),
-                "speeds": sorted(set(self.speeds.tolist())), "loads": sorted(set(self.loads.tolist())),
-                "k_x": self.data.k_x, "sigma_force": self.sigma, "noise_stated": self.data.noise_stated,
-                "lattice_estimate": self.a_start}
+    def describe(self) -> dict[str, Any]:
+        d = self.data
+        return {"kind": "friction", "scans": len(d.scans), "samples": self.n, "speeds_m_s": sorted(set(self.speeds.tolist())),
+                "loads_N": sorted(set(self.loads.tolist())), "k_x_N_per_m": d.k_x, "sigma_force_N": self.sigma,
+                "noise_stated": d.noise_stated, "sampling": d.sampling, "lattice_estimate_m": self.a_est,
+                "temperature_K": d.temperature, "medium": d.medium_name or "not declared"}
+
+    def model_description(self) -> dict[str, Any]:
+        ffm = _ffm(self.data, 1e-21, self.a_est, 0.0)
+        cp = ffm.cantilever
+        return {"baseline": "FFM line-scan model (schemes/ffm.py, eqs 2.13-2.15) with the registry friction model 'pt', "
+                            "trace and retrace along the measured support path (line_scan_path)",
+                "lever": {"k_x": cp["k_x"], "m_x": cp["m_x"], "c_x": cp["c_x"]},
+                "sampling": self.data.sampling, "registry": "profiled per scan (fundamental alignment, then re-integration)"}

@@ -1,189 +1,285 @@
-"""The modal diagnosis problem: measured modes against the reduced beam model.
+"""The modal diagnosis problem: measured modes against the probe's own FEM.
 
-Residuals are whitened: ``(f_meas - f_model) / sigma_f`` for every mode and
-``(ln Q_meas - ln Q_model) / (sigma_Q / Q)`` for every measured Q, so that a correct model
-with correctly stated noise gives residuals ~ N(0, 1) and chi^2 ~ chi^2(dof). The
-cross-validation groups are the modes (a mode's frequency and Q are held out together).
+Residuals are whitened: ``(f_meas - f_model) / sigma_f`` for every mode, with
+``sigma_f^2 = sigma_meas^2 + e_FEM^2`` (the stated noise and the FEM's discretisation estimate,
+:class:`~probedyn.diagnose.modal_model.FEMBaseline`), and ``(ln Q_meas - ln Q_model) / (sigma_Q / Q)``
+for every measured Q. Cross-validation groups are the modes (a mode's f and Q together).
 
-Baseline (step 1): the nominal beam of the probe spec, with the declared medium and known tip
-mass, clamped at the root. Its free parameters are the intrinsic quality factor Q_int
-(1/Q = 1/Q_int + 1/Q_fluid, the same loss factor for every mode) when Q values are given, and
-any probe quantities listed in ``[baseline] free`` (as ratios to the nominal value).
+Baseline: the probe's FEM with its declared parameters, the declared medium (Sader loading of
+the flapwise modes) and a declared known mass; calibrated parameters: the intrinsic quality
+factor (one loss factor for every mode) when Q values are given, and the quantities listed in
+``[baseline] free``. Causes that change a quantity the sidecar declares known or calibrates
+are not tried. The fits run on the Ritz reduction of each FEM; the final model is re-solved
+with the FEM.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from probedyn.diagnose.beam import BeamFE, BeamProps, solve_family
+from probedyn.core.errors import DataFormatError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
+from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve
 
-_BASE_RATIO = {"E": "E_scale", "rho": "rho_scale", "thickness": "t", "width": "w", "length": "L"}
-_CAUSE_OF_FREE = {"thickness": "thickness-error", "width": "width-error", "length": "length-error", "E": "anisotropy"}
+__all__ = ["ModalProblem"]
+
+_FREE = {  # [baseline] free quantity -> calibration parameter
+    "thickness": CauseParam("cal_thickness", "1", 0.5, 2.0, 1.0, "thickness / nominal (calibrated)"),
+    "width": CauseParam("cal_width", "1", 0.5, 2.0, 1.0, "width / nominal (calibrated)"),
+    "length": CauseParam("cal_length", "1", 0.5, 2.0, 1.0, "length / nominal (calibrated)"),
+    "modulus": CauseParam("cal_modulus", "1", 0.25, 4.0, 1.0, "elastic constants / nominal (calibrated)"),
+    "density": CauseParam("cal_density", "1", 0.25, 4.0, 1.0, "density / nominal (calibrated)"),
+}
 
 
 class ModalProblem:
     kind = "modal"
     unit = "relative frequency"
+    reduced = True
 
-    def __init__(self, data: ModalData):
+    def __init__(self, data: ModalData, *, bases: dict | None = None) -> None:
         self.data = data
-        self.props: BeamProps = data.props
-        self.nominal_EI_flap = data.props.EI("flap")
-        n_max = {fam: int(data.order[data.family == fam].max()) for fam in set(data.family)}
-        self.n_max = n_max
-        beta_max = (max(n_max.values()) - 0.5) * math.pi + 2.0
-        # Hermite cubic eigenvalue error ~ (beta h)^4 / 720 -> beta h < 0.45: f error < ~3e-5
-        self.fe = BeamFE(max(16, int(math.ceil(beta_max / 0.45))))
-        self._cache: dict = {}  # family solutions keyed by their inputs (a parameter change
-        # re-solves only the families it affects: torsion is reused by every bending cause)
-        self.n = len(data.freq)
-        hasQ = ~np.isnan(data.Q)
-        self.q_idx = np.nonzero(hasQ)[0]
+        self.path = data.path
+        d = data
+        unsupported = [q for q in d.free if q not in _FREE]
+        if unsupported:
+            raise DataFormatError(f"{d.path}: [baseline] free: {', '.join(unsupported)} cannot be calibrated in a modal "
+                                  f"measurement (possible: {', '.join(_FREE)})")
+        self.known = set(d.known) | set(d.free)
+        self.declared_medium = d.medium
+        self.medium_name = d.medium_name
+        self.n = len(d.freq)
+        # one FEM (and reduction) per free length
+        self.lengths = sorted(set(np.round(d.length, 15).tolist())) if np.all(np.isfinite(d.length)) else [None]
+        self.rows_of: dict[Any, np.ndarray] = {}
+        self.need_of: dict[Any, list[tuple[str, int]]] = {}
+        self.bases: dict[Any, FEMBaseline] = {}
+        self.reds: dict[Any, ReducedModal] = {}
+        for L in self.lengths:
+            rows = np.nonzero(np.round(d.length, 15) == L)[0] if L is not None else np.arange(self.n)
+            self.rows_of[L] = rows
+            self.need_of[L] = [(d.family[i], int(d.order[i])) for i in rows]
+        for L in self.lengths:
+            if bases is not None and L in bases:
+                b = bases[L]
+            else:
+                vals = dict(d.probe_values)
+                if L is not None:
+                    vals["length"] = L
+                needed: dict[str, int] = {}
+                for fa, o in self.need_of[L]:
+                    needed[fa] = max(needed.get(fa, 0), o)
+                b = FEMBaseline(d.probe, d.probe.resolve(_probe_overrides(d.probe, vals)), needed)
+            self.bases[L] = b
+        self.reference_baseline = self.bases[self.lengths[-1]]
+        self._check_units()
+        # the stated noise plus the FEM's discretisation estimate, in quadrature
+        self.disc = np.zeros(self.n)
+        for L in self.lengths:
+            b = self.bases[L]
+            for i, (fa, o) in zip(self.rows_of[L], self.need_of[L]):
+                self.disc[i] = b.disc_err[b.index(fa, o)]
+        self.sigma_f = np.sqrt(d.freq_sigma**2 + self.disc**2)
+        self.q_idx = np.nonzero(np.isfinite(d.Q))[0]
         self.groups = np.concatenate([np.arange(self.n), self.q_idx])
-        self.group_labels = [f"{fa} {o}" + (f" @L={L:.3g} m" if len(set(data.length)) > 1 else "")
-                             for fa, o, L in zip(data.family, data.order, data.length)]
+        self.group_labels = [f"{fa} {o}" + (f" @ L = {L:.4g} m" if len(self.lengths) > 1 else "")
+                             for fa, o, L in zip(d.family, d.order, d.length)]
         base: list[CauseParam] = []
         if len(self.q_idx):
-            q0 = float(np.median(data.Q[hasQ]))
-            base.append(CauseParam("Q_int", "1", 1.0, 1e9, (q0,), "intrinsic quality factor (same loss factor for all modes)", scale="log"))
-        for name in data.free:
-            base.append(CauseParam(_BASE_RATIO[name], "1", 0.5, 1.5, (1.0,), f"{name} / nominal (calibrated)"))
+            q0 = float(np.median(d.Q[self.q_idx]))
+            base.append(CauseParam("Q_int", "1", 1.0, 1e9, q0, "intrinsic quality factor (one loss factor for all modes)",
+                                   scale="log", starts=(10 * q0,)))
+        for q in d.free:
+            base.append(_FREE[q])
         self.base_params = base
-        excluded = {_CAUSE_OF_FREE[n] for n in data.free if n in _CAUSE_OF_FREE}
-        self.causes = [c() for c in catalog("modal") if c.id not in excluded]
+        m0 = self.reference_baseline.model
+        self.probe_mass = float(m0.total_mass())
+        self.shortest_length = min(b.L for b in self.bases.values())
+        self.causes = []
+        for cls in catalog("modal"):
+            c = cls().constrain(self)
+            if c is not None:
+                self.causes.append(c)
+        self.defect = None
+        self._reds_built = False
 
-    # ------------------------------------------------------------------ model
-    def state(self, values: dict[str, float], causes=()) -> dict[str, Any]:
+    # -- set-up -------------------------------------------------------------------------------
+    def supports(self, what: str) -> bool:
+        b = self.reference_baseline
+        if what == "fluid":
+            return b.has_top
+        if what == "mass":
+            return True
+        return True
+
+    def _red(self, L) -> ReducedModal:
+        r = self.reds.get(L)
+        if r is None:
+            r = ReducedModal(self.bases[L])
+            self.reds[L] = r
+        return r
+
+    def _check_units(self) -> None:
+        """kHz typed as Hz (or the reverse), or a wrong probe: the measured frequencies are orders
+        of magnitude from the FEM's."""
         d = self.data
-        mu0 = d.tip_mass / (self.props.rho * self.props.area * self.props.length)
-        s: dict[str, Any] = dict(t=1.0, w=1.0, L=1.0, e_bend=1.0, E_scale=1.0, rho_scale=1.0,
-                                 k_rot=math.inf, k_trans=math.inf,
-                                 masses=[(mu0, d.tip_position)] if mu0 else [], p=0.0,
-                                 rho_f=d.rho_f, eta_f=d.eta_f, Q_int=math.inf)
-        for k in ("E_scale", "rho_scale", "t", "w", "L", "Q_int"):
-            if k in values:
-                s[k] = values[k]
+        ratios = []
+        for L in self.lengths:
+            b = self.bases[L]
+            for i, (fa, o) in zip(self.rows_of[L], self.need_of[L]):
+                ratios.append(d.freq[i] / b.freqs[b.index(fa, o)])
+        r = float(np.median(ratios))
+        if r < 1 / 30 or r > 30:
+            hint = ""
+            if 3e-4 < r < 3e-3:
+                hint = " (kHz typed as Hz?)"
+            elif 300 < r < 3000:
+                hint = " (Hz typed as kHz?)"
+            elif 3e-7 < r < 3e-6:
+                hint = " (MHz typed as Hz?)"
+            raise DataFormatError(f"{d.path}: the measured frequencies are {r:.3g} times the probe model's "
+                                  f"(f1 model {self.reference_baseline.freqs[0]:.4g} Hz){hint}; check the units and "
+                                  "the probe parameters")
+
+    # -- model --------------------------------------------------------------------------------
+    def state(self, values: dict[str, float], causes=(), L=None) -> ModalState:
+        d = self.data
+        b = self.bases[L]
+        s = ModalState(medium=d.medium if d.medium is not None else (0.0, 1.8e-5),
+                       axes={"length": b.length_axis, "width": b.width_axis, "thickness": b.thickness_axis},
+                       length=b.L)
+        if d.known_mass is not None:
+            s.masses = [(d.known_mass[1], d.known_mass[0])]
+        s.Q_int = values.get("Q_int", math.inf)
+        sc = np.ones(3)
+        for q, ax in (("thickness", b.thickness_axis), ("width", b.width_axis), ("length", b.length_axis)):
+            if f"cal_{q}" in values:
+                sc[ax] *= values[f"cal_{q}"]
+        s.scale = sc
+        s.E_factor = values.get("cal_modulus", 1.0)
+        s.rho_factor = values.get("cal_density", 1.0)
         for c in causes:
-            c.apply(values, s)
+            c.effect(values, s)
         return s
 
-    def predict(self, s: dict[str, Any], family=None, order=None, length=None) -> tuple[np.ndarray, np.ndarray]:
-        d, P = self.data, self.props
-        family = d.family if family is None else np.asarray(family)
-        order = d.order if order is None else np.asarray(order)
-        length = d.length if length is None else np.asarray(length)
-        f = np.empty(len(family)); Q = np.empty(len(family))
-        m_nom = P.rho * P.area * P.length
-        EIn, Ln = self.nominal_EI_flap, P.length
-        for Lc in np.unique(length):
-            props = BeamProps(Lc * s["L"], P.width * s["w"], P.thickness * s["t"], P.E * s["E_scale"],
-                              P.rho * s["rho_scale"], P.nu)
-            sel_c = length == Lc
-            for fam in np.unique(family[sel_c]):
-                sel = sel_c & (family == fam)
-                nm = int(order[sel].max())
-                masses = tuple((mu * m_nom, xi) for mu, xi in s["masses"])
-                if fam == "torsion":
-                    key = (fam, nm, props.length, props.width, props.thickness, props.E, props.rho)
-                else:
-                    key = (fam, nm, props.length, props.width, props.thickness, props.E, props.rho, s["k_rot"],
-                           s["k_trans"], masses, s["p"], s["rho_f"] if fam == "flap" else 0.0,
-                           s["eta_f"] if fam == "flap" else 0.0, s["e_bend"])
-                hit = self._cache.get(key)
-                if hit is None:
-                    hit = solve_family(
-                        self.fe, props, fam, nm,
-                        k_rot=s["k_rot"] * EIn / Ln, k_trans=s["k_trans"] * EIn / Ln**3,
-                        extra_masses=masses, axial_force=s["p"] * EIn / Ln**2,
-                        rho_f=s["rho_f"], eta_f=s["eta_f"], E_bend=props.E * s["e_bend"])
-                    if len(self._cache) > 20000:
-                        self._cache.clear()
-                    self._cache[key] = hit
-                ff, qq = hit
-                if len(ff) < nm:
-                    ff = np.concatenate([ff, np.full(nm - len(ff), np.nan)]); qq = np.concatenate([qq, np.full(nm - len(qq), np.nan)])
-                f[sel] = ff[order[sel] - 1]
-                with np.errstate(divide="ignore"):
-                    Q[sel] = 1.0 / (1.0 / s["Q_int"] + 1.0 / qq[order[sel] - 1])
+    def predict(self, values, causes=(), full: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        f = np.full(self.n, np.nan)
+        Q = np.full(self.n, np.nan)
+        for L in self.lengths:
+            s = self.state(values, causes, L)
+            if full:
+                ff, qq, _ = full_solve(self.bases[L], s, self.need_of[L])
+            else:
+                ff, qq = self._red(L).solve(s, self.need_of[L])
+            f[self.rows_of[L]] = ff
+            Q[self.rows_of[L]] = qq
         return f, Q
 
-    def residuals(self, values: dict[str, float], causes=()) -> np.ndarray:
+    def _residuals(self, f, Q) -> np.ndarray:
         d = self.data
-        f, Q = self.predict(self.state(values, causes))
-        r = (d.freq - f) / d.freq_sigma
+        r = (d.freq - f) / self.sigma_f
         if len(self.q_idx):
             i = self.q_idx
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / d.Q_sigma_rel[i]])
         return np.where(np.isfinite(r), r, 1e6)
 
-    def physical_residual_rms(self, r: np.ndarray) -> float:
+    def residuals(self, values, causes=()) -> np.ndarray:
+        r = self._residuals(*self.predict(values, causes))
+        if self.defect is not None:
+            r = r + self.defect
+        return r
+
+    def full_residuals(self, values, causes=()) -> np.ndarray:
+        return self._residuals(*self.predict(values, causes, full=True))
+
+    def physical_rms(self, r: np.ndarray) -> float:
         """RMS relative frequency error of the frequency part of a whitened residual."""
-        rel = r[: self.n] * self.data.freq_sigma / self.data.freq
+        rel = np.asarray(r[: self.n]) * self.sigma_f / self.data.freq
         return float(np.sqrt(np.mean(rel**2)))
 
-    # ------------------------------------------------------------ structure
+    # -- structure of the residuals -------------------------------------------------------------
     def structure(self, r: np.ndarray) -> dict[str, Any]:
-        """Trend of the frequency residuals against mode order per family; family means."""
         d = self.data
-        rf = r[: self.n]
-        out: dict[str, Any] = {"by_family": {}, "rows": []}
+        rf = np.asarray(r[: self.n])
+        out: dict[str, Any] = {"rows": [], "by_family": {}}
         for k in range(self.n):
-            out["rows"].append({"mode": self.group_labels[k], "f_meas_Hz": d.freq[k],
-                                "residual_sigma": rf[k], "residual_rel": rf[k] * d.freq_sigma[k] / d.freq[k]})
-        for fam in np.unique(d.family):
+            out["rows"].append({"mode": self.group_labels[k], "f_meas_Hz": float(d.freq[k]),
+                                "sigma_Hz": float(self.sigma_f[k]), "fem_discretisation_Hz": float(self.disc[k]),
+                                "residual_sigma": float(rf[k]), "residual_rel": float(rf[k] * self.sigma_f[k] / d.freq[k])})
+        for fam in FAMILIES:
             sel = d.family == fam
-            x = d.order[sel].astype(float); y = rf[sel]
-            item = {"n": int(sel.sum()), "mean_sigma": float(np.mean(y))}
+            if not sel.any():
+                continue
+            x = d.order[sel].astype(float)
+            y = rf[sel]
+            item: dict[str, Any] = {"n": int(sel.sum()), "mean_sigma": float(np.mean(y))}
             if sel.sum() >= 3 and np.ptp(x) > 0:
                 A = np.vstack([np.ones_like(x), x - x.mean()]).T
-                coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+                coef = np.linalg.lstsq(A, y, rcond=None)[0]
                 item["slope_per_order_sigma"] = float(coef[1])
-                # slope t-statistic with unit-variance residuals (whitened data)
                 item["slope_t"] = float(coef[1] * math.sqrt(np.sum((x - x.mean()) ** 2)))
-            out["by_family"][str(fam)] = item
+            out["by_family"][fam] = item
         if len(self.q_idx):
-            out["Q_residual_sigma"] = r[self.n:].tolist()
-        signs = np.sign(rf[rf != 0])
-        out["runs_of_sign"] = int(1 + np.sum(signs[1:] != signs[:-1])) if len(signs) else 0
+            out["Q_residual_sigma"] = [float(v) for v in r[self.n:]]
         return out
 
-    # ------------------------------------------------- separating measurement
-    def candidate_measurements(self, sa: dict, sb: dict) -> list[dict[str, Any]]:
-        """Observables not yet measured, with both models' predictions and the separation in sigma."""
+    # -- observables that would separate confounded causes --------------------------------------
+    def predict_observables(self, values, causes) -> list[dict[str, Any]]:
+        """Frequencies of the FEM modes not measured (at the reference length), and Q of the
+        flapwise modes if no Q was measured."""
         d = self.data
+        L = self.lengths[-1]
+        b = self.bases[L]
+        have = {(fa, int(o)) for fa, o, LL in zip(d.family, d.order, d.length)
+                if (L is None or round(LL, 15) == L)}
+        cnt: dict[str, int] = {}
+        cand = []
+        for fa in b.families:
+            if fa not in FAMILIES:
+                continue
+            cnt[fa] = cnt.get(fa, 0) + 1
+            if (fa, cnt[fa]) not in have:
+                cand.append((fa, cnt[fa]))
+        if not cand:
+            return []
+        s = self.state(values, causes, L)
+        f, Q = self._red(L).solve(s, cand)
         rel = float(np.median(d.freq_sigma / d.freq))
-        have = {(fa, int(o)) for fa, o, L in zip(d.family, d.order, d.length) if L == self.props.length}
-        cands = [(fa, o) for fa, nmax in (("flap", 6), ("lateral", 2), ("torsion", 2)) for o in range(1, nmax + 1)
-                 if (fa, o) not in have]
         out = []
-        if cands:
-            fam = np.array([c[0] for c in cands]); order = np.array([c[1] for c in cands])
-            L = np.full(len(cands), self.props.length)
-            fa_, qa = self.predict(sa, fam, order, L)
-            fb_, qb = self.predict(sb, fam, order, L)
-            for k, (fa, o) in enumerate(cands):
-                sep = abs(fa_[k] - fb_[k]) / (rel * 0.5 * (fa_[k] + fb_[k]))
-                out.append({"measure": f"{fa} mode {o} frequency", "a": fa_[k], "b": fb_[k], "unit": "Hz", "separation_sigma": sep})
-        # Q of the measured flap modes if Q was not measured
-        if not len(self.q_idx):
-            fl = d.family == "flap"
-            if fl.any():
-                _, qa = self.predict(sa); _, qb = self.predict(sb)
-                for k in np.nonzero(fl)[0][:3]:
-                    if np.isfinite(qa[k]) or np.isfinite(qb[k]):
-                        a, b = qa[k], qb[k]
-                        sep = abs(math.log(min(a, 1e12)) - math.log(min(b, 1e12))) / 0.05
-                        out.append({"measure": f"Q of {self.group_labels[k]}", "a": a, "b": b, "unit": "1", "separation_sigma": sep})
-        return sorted(out, key=lambda r: -r["separation_sigma"])
+        for (fa, o), ff, qq in zip(cand, f, Q):
+            out.append({"measure": f"{fa} mode {o} frequency", "value": float(ff), "sigma": rel * float(ff), "unit": "Hz"})
+            if not len(self.q_idx) and fa == "flapwise" and np.isfinite(qq):
+                out.append({"measure": f"Q of {fa} mode {o}", "value": float(math.log(qq)), "sigma": 0.05, "unit": "ln Q"})
+        return out
 
-    def describe_data(self) -> dict[str, Any]:
+    def describe(self) -> dict[str, Any]:
         d = self.data
+        b = self.reference_baseline
         return {"kind": "modal", "modes": self.n, "with_Q": int(len(self.q_idx)),
-                "families": sorted(set(d.family.tolist())), "lengths": sorted(set(d.length.tolist())),
-                "noise_stated": d.noise_stated}
+                "families": sorted(set(d.family.tolist())),
+                "lengths_m": [float(x) for x in self.lengths if x is not None],
+                "noise_stated": d.noise_stated, "medium": self.medium_name or "not declared",
+                "known": sorted(self.data.known), "calibrated": list(d.free),
+                "probe": b.probe.name, "probe_mass_kg": self.probe_mass, "group_labels": list(self.group_labels)}
+
+    def model_description(self) -> dict[str, Any]:
+        out = []
+        for L in self.lengths:
+            b = self.bases[L]
+            out.append({"length_m": L, "fem_dofs": b.model.dofs, "fem_modes": len(b.families),
+                        "fem_families": b.families, "fem_frequencies_hz": [float(x) for x in b.freqs],
+                        "fem_solve_s": b.solve_s, "discretisation": b.disc_note, "thickness_stretch": b.stretch,
+                        "reduced_basis": self.reds[L].r if L in self.reds else None})
+        elem = type(self.reference_baseline.model.basis.elem).__name__
+        return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' ({elem})",
+                "fits": "Ritz reduction of the FEM (modes, stretch sensitivities, clamp-support, mass and prestress "
+                        "shapes); final model re-solved with the FEM", "fems": out}
+
+
+def _probe_overrides(probe, values: dict) -> dict:
+    """Resolved values back to overrides (drop None and defaults that resolve re-derives)."""
+    return {k: v for k, v in values.items() if v is not None and k in probe.params}

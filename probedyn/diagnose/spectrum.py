@@ -1,14 +1,27 @@
-"""Spectra and time series -> measured modes (then the modal diagnosis).
+"""Spectra and time series: resonance peaks identified against the probe's model, then the modal diagnosis.
 
-Each resonance peak of a thermal-noise PSD (or of an amplitude spectrum, squared) is fitted
-with the simple-harmonic-oscillator PSD plus a white floor,
-
-    S(f) = A f0^4 / ((f0^2 - f^2)^2 + (f f0 / Q)^2) + B,
-
-in log space (an averaged periodogram has a relative, not absolute, scatter). The fitted f0
-and Q with their standard errors (Jacobian, scaled by the residual variance) become the rows
-of a modal measurement; families come from ``[measurement] families`` (default: flapwise
-modes in order). A time series is first reduced to a Welch PSD (formats.py).
+1. **Background and peaks.** The log of the PSD is searched for peaks standing above the local
+   background by more than 5 standard deviations of an averaged periodogram (``1/sqrt(n_avg)``
+   in log, from ``[measurement] averages`` or estimated from the point-to-point scatter).
+2. **Line shape.** Each peak is fitted, in log space with that scatter as the noise, by the
+   thermal SHO line ``A f0^4 / ((f0^2 - f^2)^2 + (f f0 / Q)^2)`` on a background ``B0 + B1 / f``
+   (white plus 1/f). Its full width ``f0 / Q`` is compared with the frequency resolution: a line
+   narrower than 2 bins is *unresolved* (a sinusoid -- an electronic spur -- or a resonance whose
+   Q the spectrum cannot measure).
+3. **Identification against the model.** The probe's FEM (the modal baseline) predicts every
+   mode's frequency and family, and in a declared medium the Sader quality factor of its
+   flapwise modes, ``Q <= Q_fluid`` (``1/Q = 1/Q_int + 1/Q_fluid``); with a declared temperature it
+   also predicts the thermal peak area ``k_B T / k_eff`` (equipartition, effective stiffness of the
+   mode at the tip). A common frequency scale ``s`` in [1/2, 2] (the geometry may be off by that
+   much) maps predicted onto measured frequencies (the scale that matches most peaks within 3 %);
+   a peak is accepted as mode (family, order) when it lies within 3 % of a scaled prediction, its Q
+   is below 3 Q_fluid (in a fluid), and (when T is declared) its area is within a factor 100 of
+   equipartition times the common factor of the accepted peaks (the median of their area ratios:
+   1 for a PSD calibrated in tip displacement; an uncalibrated sensitivity or an optical lever
+   scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
+   Q or amplitude implausible).
+4. The accepted peaks become modal rows (frequency with the fit's standard error and the
+   declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
 """
 
 from __future__ import annotations
@@ -20,93 +33,224 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import find_peaks
 
-from probedyn.diagnose.formats import ModalData, SpectrumData, _medium, _noise, _num, _props
 from probedyn.core.errors import DataFormatError
+from probedyn.diagnose.formats import ModalData, SpectrumData
+from probedyn.diagnose.modal import ModalProblem
+from probedyn.diagnose.modal_model import FEMBaseline, _fluid_mode
 
-__all__ = ["fit_peaks", "spectrum_to_modal", "sho_psd"]
+__all__ = ["spectrum_problem", "fit_line", "detect_peaks", "sho_psd"]
+
+K_B = 1.380649e-23
+MATCH_TOL = 0.03
+Q_FACTOR = 3.0
+AREA_FACTOR = 100.0
 
 
-def sho_psd(f, f0, Q, A, B):
-    return A * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / Q) ** 2) + B
+def sho_psd(f, f0, Q, A):
+    return A * f0**4 / ((f0**2 - f**2) ** 2 + (f * f0 / Q) ** 2)
 
 
-def fit_peaks(freq: np.ndarray, psd: np.ndarray, max_peaks: int = 8, min_prominence: float = 10.0) -> list[dict[str, Any]]:
-    """Find resonance peaks (at least ``min_prominence`` x the median floor) and fit each."""
-    floor = float(np.median(psd))
+def log_scatter(psd: np.ndarray, averages: int | None) -> float:
+    """Standard deviation of ln(PSD) of an averaged periodogram: about 1/sqrt(n_avg); without
+    the number of averages, from the point-to-point scatter (robust)."""
+    if averages:
+        return 1.0 / math.sqrt(averages)
+    d = np.diff(np.log(np.maximum(psd, 1e-300)))
+    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2))
+
+
+def detect_peaks(freq: np.ndarray, psd: np.ndarray, s_log: float, max_peaks: int = 12) -> list[int]:
+    """Peaks of ln(PSD): broad ones on a lightly smoothed spectrum (prominence above 5 standard
+    deviations of the smoothed scatter) and narrow lines (single bins standing 8 standard
+    deviations above their neighbourhood), the most prominent first."""
     logp = np.log(np.maximum(psd, 1e-300))
-    # smooth the log spectrum a little so single noisy bins do not count as peaks
-    k = max(1, len(psd) // 2000)
+    k = max(1, min(len(psd) // 4000, 8))
     sm = np.convolve(logp, np.ones(2 * k + 1) / (2 * k + 1), mode="same")
-    idx, props = find_peaks(sm, prominence=math.log(min_prominence))
-    idx = idx[np.argsort(-props["prominences"])][:max_peaks]
+    idx, props = find_peaks(sm, prominence=max(5.0 * s_log / math.sqrt(2 * k + 1), math.log(2.0)))
+    cand = {int(i): float(p) for i, p in zip(idx, props["prominences"])}
+    idx2, props2 = find_peaks(logp, prominence=max(8.0 * s_log, math.log(5.0)), width=(None, 3))
+    for i, p in zip(idx2, props2["prominences"]):
+        if not any(abs(int(i) - j) <= 2 * k + 1 for j in cand):
+            cand[int(i)] = float(p)
+    best = sorted(cand, key=lambda i: -cand[i])[:max_peaks]
+    return sorted(best)
+
+
+def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float) -> dict[str, Any]:
+    """SHO line on a white + 1/f background around peak index i (log-space least squares)."""
+    f0 = float(freq[i])
+    p0 = float(psd[i])
+    df = float(np.median(np.diff(freq)))
+    half = psd > 0.5 * p0
+    j0 = i
+    while j0 > 0 and half[j0 - 1]:
+        j0 -= 1
+    j1 = i
+    while j1 < len(psd) - 1 and half[j1 + 1]:
+        j1 += 1
+    fwhm = max(float(freq[min(j1 + 1, len(freq) - 1)] - freq[max(j0 - 1, 0)]), 2 * df)
+    Q0 = max(f0 / fwhm, 0.6)
+    sel = np.abs(freq - f0) < max(10 * fwhm, 30 * df)
+    fw, pw = freq[sel], psd[sel]
+    bg = np.concatenate([pw[:max(3, len(pw) // 10)], pw[-max(3, len(pw) // 10):]])
+    B0 = max(float(np.median(bg)), 1e-300)
+    A0 = max(p0 / Q0**2, 1e-300)
+
+    def model(u):
+        return sho_psd(fw, u[0], 10 ** u[1], 10 ** u[2]) + 10 ** u[3] + 10 ** u[4] * (fw[0] / fw)
+
+    def res(u):
+        return (np.log(model(u)) - np.log(np.maximum(pw, 1e-300))) / s_log
+
+    u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B0) - 3])
+    lo = [fw[0], math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[3] - 10]
+    hi = [fw[-1], math.log10(Q0) + 4, u0[2] + 8, u0[3] + 4, u0[3] + 4]
+    r = least_squares(res, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=[fwhm, 0.3, 0.3, 0.3, 0.3])
+    dof = max(len(fw) - 5, 1)
+    chi2 = float(np.sum(r.fun**2))
+    scale = max(1.0, chi2 / dof)
+    try:
+        cov = np.linalg.pinv(r.jac.T @ r.jac) * scale
+        sd = np.sqrt(np.maximum(np.diag(cov), 0))
+    except np.linalg.LinAlgError:
+        sd = np.full(5, np.inf)
+    Q = 10 ** r.x[1]
+    A = 10 ** r.x[2]
+    return {"f0_Hz": float(r.x[0]), "f0_sigma_Hz": float(sd[0]), "Q": float(Q), "Q_sigma": float(Q * math.log(10) * sd[1]),
+            "area_m2": float(A * math.pi * r.x[0] * Q / 2), "white_floor": float(10 ** r.x[3]),
+            "one_over_f_at_window_start": float(10 ** r.x[4]), "fwhm_bins": float(r.x[0] / Q / df),
+            "chi2_per_dof": chi2 / dof, "points": int(len(fw)), "window_Hz": [float(fw[0]), float(fw[-1])]}
+
+
+def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]:
     out = []
-    for i in sorted(idx):
-        f0 = float(freq[i]); p0 = float(psd[i])
-        half = psd > 0.5 * p0
-        j0 = i
-        while j0 > 0 and half[j0 - 1]:
-            j0 -= 1
-        j1 = i
-        while j1 < len(psd) - 1 and half[j1 + 1]:
-            j1 += 1
-        fwhm = max(freq[min(j1 + 1, len(freq) - 1)] - freq[max(j0 - 1, 0)], 2 * (freq[1] - freq[0]))
-        Q0 = max(f0 / fwhm, 0.6)
-        sel = np.abs(freq - f0) < max(8 * fwhm, 20 * (freq[1] - freq[0]))
-        fw, pw = freq[sel], psd[sel]
-        B0 = max(float(np.median(psd[~sel])) if (~sel).any() else floor, 1e-300)
-        A0 = max(p0 / Q0**2, 1e-300)
+    cnt: dict[str, int] = {}
+    rho_f, eta_f = medium if medium is not None else (0.0, 1.8e-5)
+    for md in base.result.modes:
+        fa = md.family
+        cnt[fa] = cnt.get(fa, 0) + 1
+        item = {"family": fa, "order": cnt[fa], "f_Hz": md.frequency_hz, "Q_fluid": math.inf,
+                "k_eff_z": md.effective_stiffness_tip.get("z", math.inf)}
+        if rho_f > 0 and fa == "flapwise" and base.has_top:
+            from probedyn.diagnose.fem_terms import directional, face_mass_scalar
 
-        def res(u):
-            return np.log(sho_psd(fw, u[0], 10 ** u[1], 10 ** u[2], 10 ** u[3])) - np.log(np.maximum(pw, 1e-300))
-
-        u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0)])
-        lo = [fw[0], math.log10(0.5), u0[2] - 6, u0[3] - 6]
-        hi = [fw[-1], math.log10(Q0) + 3, u0[2] + 6, u0[3] + 6]
-        try:
-            r = least_squares(res, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=[fwhm, 0.3, 0.3, 0.3])
-        except ValueError:
-            continue
-        dof = max(len(fw) - 4, 1)
-        s2 = float(np.sum(r.fun**2)) / dof
-        try:
-            cov = np.linalg.inv(r.jac.T @ r.jac) * s2
-            sd = np.sqrt(np.maximum(np.diag(cov), 0))
-        except np.linalg.LinAlgError:
-            sd = np.full(4, np.inf)
-        Q = 10 ** r.x[1]
-        out.append({"f0_Hz": float(r.x[0]), "f0_sigma_Hz": float(sd[0]), "Q": float(Q),
-                    "Q_sigma": float(Q * math.log(10) * sd[1]), "amplitude": float(10 ** r.x[2]),
-                    "floor": float(10 ** r.x[3]), "points": int(len(fw))})
+            K, M = base.model.assemble()
+            e = np.zeros(3)
+            e[base.thickness_axis] = 1.0
+            Stop = directional(face_mass_scalar(base.model, "top"), np.outer(e, e))
+            a = md.shape
+            f, Q = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
+                               rho_f, eta_f, 1.0, math.inf)
+            item.update(f_Hz=f, Q_fluid=Q)
+        if temperature:
+            k = item["k_eff_z"]
+            item["thermal_area_m2"] = K_B * temperature / k if np.isfinite(k) and k > 0 else 0.0
+        out.append(item)
     return out
 
 
-def spectrum_to_modal(meas: SpectrumData) -> tuple[ModalData, list[dict[str, Any]]]:
-    side = meas.path
-    psd = meas.value**2 if meas.quantity == "amplitude" else meas.value
-    peaks = fit_peaks(meas.freq, psd)
-    if not peaks:
-        raise DataFormatError(f"{side}: no resonance peak found in the spectrum (need >= 10x the median floor)")
-    fams = list(meas.families) or ["flap"] * len(peaks)
-    if len(fams) < len(peaks):
-        peaks = peaks[: len(fams)]
-    counters: dict[str, int] = {}
-    fam, order = [], []
-    for k in range(len(peaks)):
-        counters[fams[k]] = counters.get(fams[k], 0) + 1
-        fam.append(fams[k]); order.append(counters[fams[k]])
-    f = np.array([p["f0_Hz"] for p in peaks])
-    rel, stated = _noise(meas.meta, side, "frequency_rel", 0.0)
-    sig = np.maximum(np.array([p["f0_sigma_Hz"] for p in peaks]), rel * f)
-    Q = np.array([p["Q"] for p in peaks])
-    qrel, _ = _noise(meas.meta, side, "Q_rel", 0.0)
-    qs = np.maximum(np.array([p["Q_sigma"] for p in peaks]) / Q, qrel)
-    props = _props(meas.meta, side)
-    rho_f, eta_f = _medium(meas.meta, side)
-    free = tuple(meas.meta.get("baseline", {}).get("free", ()))
-    md = ModalData(path=side, kind="modal", meta=meas.meta, description=meas.description, props=props,
-                   family=np.array(fam), order=np.array(order), freq=f, freq_sigma=sig, Q=Q, Q_sigma_rel=qs,
-                   length=np.full(len(f), props.length), rho_f=rho_f, eta_f=eta_f,
-                   tip_mass=_num(meas.meta, "probe", "tip_mass", side, default=0.0),
-                   tip_position=_num(meas.meta, "probe", "tip_position", side, default=1.0), free=free,
-                   noise_stated=True)
-    return md, peaks
+def _best_scale(peaks: list[float], preds: list[float]) -> float:
+    """The frequency scale in [1/2, 2] that maps the most predictions onto peaks within MATCH_TOL
+    (ties: the scale nearest 1)."""
+    cands = [p / q for p in peaks for q in preds if 0.5 <= p / q <= 2.0] or [1.0]
+    best, best_key = 1.0, None
+    for s in cands:
+        n = sum(any(abs(p / (s * q) - 1) < MATCH_TOL for q in preds) for p in peaks)
+        key = (n, -abs(math.log(s)))
+        if best_key is None or key > best_key:
+            best, best_key = s, key
+    return best
+
+
+def spectrum_problem(meas: SpectrumData) -> ModalProblem:
+    """Identify the peaks of a spectrum against the probe's FEM and return the modal problem of
+    the accepted ones (with the peak table for the report)."""
+    freq, psd = meas.freq, meas.value
+    s_log = log_scatter(psd, meas.averages)
+    df = float(np.median(np.diff(freq)))
+    idx = detect_peaks(freq, psd, s_log)
+    if not idx:
+        raise DataFormatError(f"{meas.path}: no peak stands out of the spectrum's background by 5 standard deviations")
+    needed = {"flapwise": 2}
+    base = FEMBaseline(meas.probe, meas.probe_values, needed)
+    preds = _predictions(base, meas.medium, meas.temperature)
+    fits = []
+    for i in idx:
+        try:
+            fits.append(fit_line(freq, psd, i, s_log))
+        except ValueError:
+            continue
+    hint = list(meas.families)
+    seen = set()
+    pf = [p["f_Hz"] for p in preds if (p["family"] in hint if hint else p["family"] == "flapwise")]
+    s = _best_scale([f["f0_Hz"] for f in fits], pf) if pf else 1.0
+    table = []
+    for ft in fits:
+        reasons = []
+        near = min(preds, key=lambda p: abs(math.log(ft["f0_Hz"] / (s * p["f_Hz"]))))
+        dev = ft["f0_Hz"] / (s * near["f_Hz"]) - 1
+        if abs(dev) > MATCH_TOL:
+            reasons.append(f"no mode of the probe model within {100 * MATCH_TOL:.0f} % (nearest: {near['family']} "
+                           f"{near['order']} at {s * near['f_Hz']:.5g} Hz after the common scale {s:.3g})")
+        unresolved = ft["fwhm_bins"] < 2.0
+        if unresolved:
+            # a sinusoid (spur) or a resonance narrower than the resolution: only the second is
+            # possible where the model's damping would also leave the line unresolved
+            wide = np.isfinite(near["Q_fluid"]) and s * near["f_Hz"] / near["Q_fluid"] / df > 3.0
+            if wide or abs(dev) > MATCH_TOL:
+                reasons.append(f"unresolved line ({ft['fwhm_bins']:.2g} bins wide)"
+                               + (f" where the {meas.medium_name}-damped mode would be {s * near['f_Hz'] / near['Q_fluid'] / df:.2g} bins wide"
+                                  if wide else "") + ": an electronic spur")
+            else:
+                ft = {**ft, "Q": math.nan, "Q_sigma": math.nan, "note": "unresolved: frequency only"}
+        elif np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
+            reasons.append(f"Q = {ft['Q']:.3g} exceeds {Q_FACTOR:g} x the {meas.medium_name}-damped Q_fluid = "
+                           f"{near['Q_fluid']:.3g} of {near['family']} {near['order']}")
+        ratio = (ft["area_m2"] / near["thermal_area_m2"]) if meas.temperature and near.get("thermal_area_m2") else None
+        key = (near["family"], near["order"])
+        if not reasons and key in seen:
+            reasons.append(f"{key[0]} {key[1]} already taken by a stronger peak")
+        # a resolved line that matches a mode is accepted; an unresolved one only in vacuum-like
+        # damping where its Q is plausible is still not measurable: rejected
+        accepted = not reasons
+        if accepted:
+            seen.add(key)
+        table.append({**ft, "accepted": accepted, "thermal_ratio": ratio, "family": near["family"] if accepted else None,
+                      "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
+                      "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons})
+    # equipartition: the areas of the accepted peaks are k_B T / k_eff times one detector
+    # calibration factor c (their median ratio; 1 for a PSD calibrated in tip displacement, other
+    # values for an uncalibrated sensitivity or an optical lever); a peak whose area is more than
+    # AREA_FACTOR away from c times its thermal area is not thermal motion of that mode
+    ratios = [t["thermal_ratio"] for t in table if t["accepted"] and t["thermal_ratio"]]
+    c_cal = float(np.median(ratios)) if ratios else None
+    if c_cal is not None and len(ratios) > 1:
+        for t in table:
+            r = t["thermal_ratio"]
+            if t["accepted"] and r and not (1 / AREA_FACTOR < r / c_cal < AREA_FACTOR):
+                t["accepted"] = False
+                t["reasons"] = [f"peak area {t['area_m2']:.3g} m^2 is {r / c_cal:.3g} x the thermal k_B T / k_eff of "
+                                f"{t['family']} {t['order']} (times the spectrum's common factor {c_cal:.3g})"]
+                t["family"] = t["order"] = None
+    acc = [t for t in table if t["accepted"]]
+    if not acc:
+        raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
+                              f"({'; '.join(r for t in table for r in t['reasons'][:1])})")
+    fam = np.array([t["family"] for t in acc])
+    order = np.array([t["order"] for t in acc])
+    f = np.array([t["f0_Hz"] for t in acc])
+    sig = np.sqrt(np.array([t["f0_sigma_Hz"] for t in acc]) ** 2 + (meas.freq_rel * f) ** 2)
+    Q = np.array([t["Q"] for t in acc])
+    qrel = np.where(np.isfinite(Q), np.maximum(np.array([t["Q_sigma"] for t in acc]) / Q, 1e-3), np.nan)
+    md = ModalData(path=meas.path, kind="modal", meta=meas.meta, description=meas.description, medium=meas.medium,
+                   medium_name=meas.medium_name, temperature=meas.temperature, known=meas.known, free=meas.free,
+                   probe=meas.probe, probe_values=meas.probe_values, family=fam, order=order, freq=f, freq_sigma=sig,
+                   Q=Q, Q_sigma_rel=qrel, length=np.full(len(f), meas.probe_values.get("length", np.nan)),
+                   known_mass=meas.known_mass, noise_stated=True)
+    L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
+    prob = ModalProblem(md, bases={L: base})
+    prob.kind = meas.kind
+    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s, "peaks": table,
+                  "thermal_area_factor": c_cal}
+    prob.extra_report = lambda: {"peaks": prob.peaks}
+    return prob

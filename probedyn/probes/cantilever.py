@@ -24,9 +24,9 @@ from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geome
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
-    Param("length", 300e-6, "m", "beam length, clamp to free end (x)", lo=1e-6, hi=0.05, positive=True, source="2.3"),
-    Param("width", 30e-6, "m", "beam width (y)", lo=1e-7, hi=0.01, positive=True, source="2.3"),
-    Param("thickness", 10e-6, "m", "beam thickness (z)", lo=1e-8, hi=0.005, positive=True, source="2.3"),
+    Param("length", 300e-6, "m", "beam length, clamp to free end (x)", lo=1e-6, hi=0.8, positive=True, source="2.3"),
+    Param("width", 30e-6, "m", "beam width (y)", lo=1e-7, hi=0.1, positive=True, source="2.3"),
+    Param("thickness", 10e-6, "m", "beam thickness (z)", lo=1e-8, hi=0.02, positive=True, source="2.3"),
     Param("material", "silicon", "", "material name from the table (probedyn.fem.materials)", kind=str,
           choices=("silicon", "silicon-110", "silicon-nitride", "pzt-5h", "pzt-5h-iso")),
     Param("youngs_modulus", None, "Pa", "Young's modulus; None = the material's (silicon: 169e9)",

@@ -1,0 +1,71 @@
+"""Adhesion of the tip to the sample, after the contact registry (probedyn.schemes.contact).
+
+Three causes, one per contact law of the registry: DMT (Hertz offset by the adhesion, with the
+van der Waals tail of range z0 = 0.375 nm that pulls the tip into contact where its gradient
+exceeds the lever's stiffness), JKR (adhesion inside the contact only: a jump into contact and a
+hysteresis), and Maugis-Dugdale with its transition parameter lambda fitted (DMT for lambda -> 0,
+JKR for lambda -> infinity). Each replaces the baseline's Hertz contact by the registry model
+with the fitted work of adhesion W.
+"""
+
+from __future__ import annotations
+
+from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
+
+_W = CauseParam("W", "J/m^2", 0.0, 2.0, 0.0, "work of adhesion", starts=(0.003, 0.03, 0.3))
+
+
+class _Adhesion(Cause):
+    kind = "force"
+    changes = ("adhesion",)
+    contact = ""
+
+    def effect(self, v, s):
+        s.contact = self.contact
+        s.W = v["W"]
+
+    def derived(self, v, problem):
+        import math
+
+        R = problem.data.tip_radius
+        return {"dmt_pull_off_N": 2 * math.pi * v["W"] * R, "jkr_pull_off_N": 1.5 * math.pi * v["W"] * R}
+
+
+@CAUSES.register
+class AdhesionDMT(_Adhesion):
+    key = "adhesion-dmt"
+    title = "Adhesion, DMT (with the van der Waals tail: jump to contact where its gradient exceeds k)"
+    source = "contact registry 'dmt': eqs 2.20-2.21; pull-off 2 pi W R"
+    description = "Hertz contact offset by -2 pi W R plus the -H R / (6 D^2) tail outside contact: snap-in and pull-off without hysteresis of the contact law."
+    needs = "the retract below the baseline (pull-off), or a snap-in on the approach"
+    params = (_W,)
+    contact = "dmt"
+
+
+@CAUSES.register
+class AdhesionJKR(_Adhesion):
+    key = "adhesion-jkr"
+    title = "Adhesion, JKR (short-range, with contact hysteresis)"
+    source = "contact registry 'jkr': Johnson, Kendall & Roberts (1971); pull-off 3/2 pi W R (load control)"
+    description = "Adhesion acting inside the contact only: the contact forms with a jump and breaks late (neck), so approach and retract differ."
+    needs = "approach and retract (the hysteresis)"
+    params = (_W,)
+    contact = "jkr"
+
+
+@CAUSES.register
+class AdhesionMD(_Adhesion):
+    key = "adhesion-md"
+    title = "Adhesion, Maugis-Dugdale (transition parameter lambda fitted)"
+    source = "contact registry 'md': eqs 2.24-2.35 (SOURCE-NOTES 3); lambda = 2.06 / z0 (W^2 R / (pi K^2))^(1/3)"
+    description = "The DMT-JKR transition: a Dugdale attraction of range fixed by lambda; lambda -> 0 is DMT, large lambda JKR."
+    needs = "a resolved pull-off and the shape of the retract near it"
+    params = (_W, CauseParam("lam", "1", 0.05, 10.0, 1.0, "Maugis transition parameter", scale="log", starts=(0.2, 3.0)))
+    contact = "md"
+
+    def start_sets(self):
+        return [{"W": 0.03, "lam": 5.0}, {"W": 0.03, "lam": 0.3}, {"W": 0.3, "lam": 1.0}, {"W": 0.003, "lam": 1.0}]
+
+    def effect(self, v, s):
+        super().effect(v, s)
+        s.lam = v["lam"]

@@ -1,0 +1,28 @@
+"""A viscous friction term (the registry PT model's gamma: F = F0 sin(2 pi x / a) + gamma x')."""
+
+from __future__ import annotations
+
+from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
+
+
+@CAUSES.register
+class ViscousFriction(Cause):
+    key = "viscous-friction"
+    kind = "friction"
+    title = "Viscous friction term"
+    source = "friction registry 'pt' parameter gamma (F = F0 sin + gamma v); source eqs 2.7, 2.10 (F_nu v)"
+    description = "A friction force proportional to the sliding speed: the friction loop widens linearly with speed."
+    needs = "scans at two or more speeds"
+    changes = ()
+    params = (CauseParam("gamma", "N s/m", 0.0, 1.0, 0.0, "viscous coefficient (bounds: 10 x the lever force at the fastest speed)"),)
+
+    def constrain(self, problem):
+        g_hi = 10.0 * problem.data.k_x * problem.a_est / problem.v_max
+        return ViscousFriction((CauseParam("gamma", "N s/m", 0.0, g_hi, 0.0, "viscous coefficient",
+                                           starts=(1e-3 * g_hi, 1e-2 * g_hi)),))
+
+    def effect(self, v, s):
+        s.gamma += v["gamma"]
+
+    def derived(self, v, problem):
+        return {"force_at_fastest_speed_N": v["gamma"] * problem.v_max}

@@ -1,0 +1,18 @@
+"""The case lists of the rate study (benchmarks/diagnose_rates.py) and the default tests: seeds,
+effects, levers, truth models. Seeds are fixed so that the FEM truths can be cached."""
+
+from __future__ import annotations
+
+from diagnose_truth import LEVERS, MODAL_EFFECTS
+
+
+def modal_cases(n_effect: int = 56, n_null: int = 56) -> list[dict]:
+    levers = list(LEVERS)
+    out = []
+    for i in range(n_effect):
+        out.append({"seed": 1000 + i, "effect": MODAL_EFFECTS[i % len(MODAL_EFFECTS)],
+                    "lever": levers[(i // len(MODAL_EFFECTS)) % len(levers)], "truth_kind": "fem"})
+    for i in range(n_null):
+        out.append({"seed": 5000 + i, "effect": None, "lever": levers[i % len(levers)], "truth_kind": "fem",
+                    "declared_medium": "air" if i % 4 == 1 else "vacuum"})
+    return out

@@ -1,0 +1,111 @@
+"""The diagnosis engine's guarantees, on probedyn's own models (no toy problem):
+
+* a nested extension starts from the baseline optimum with its own parameters at their null
+  values and is never reported worse than the baseline it contains (a property of every cause);
+* the held-out evidence never exceeds what the data carry (Delta chi^2 / 2);
+* probedyn/diagnose holds no second beam model and no second Prandtl-Tomlinson model: the modal
+  baseline is the probe's FEM, friction runs on the FFM integrator of ``schemes/``, adhesion
+  laws come from the contact registry (a static check that fails if a copy is reintroduced).
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from diagnose_truth import make_force_case, make_friction_case, make_modal_case  # noqa: E402
+
+from probedyn.diagnose.engine import Fitter, diagnose  # noqa: E402
+from probedyn.diagnose.problems import make_problem  # noqa: E402
+
+DIAG = Path(__file__).resolve().parents[1] / "probedyn" / "diagnose"
+
+
+def _nested_never_worse(prob, keys=None):
+    F = Fitter(prob)
+    base = F.baseline()
+    out = {}
+    for c in prob.causes:
+        if keys is not None and c.key not in keys:
+            continue
+        f = F.nested(base, (c,))
+        # never worse than the model it contains (the engine falls back to the null start)
+        assert f.chi2 <= base.chi2 * (1 + 1e-9) + 1e-9, (c.key, f.chi2, base.chi2)
+        # the null values of the new parameters reproduce the baseline: the extension nests it
+        r0 = F.residuals({**base.values, **{p.name: p.null for p in c.params}}, (c,))
+        assert np.allclose(r0, base.r, rtol=1e-6, atol=1e-6 * (1 + np.abs(base.r).max())), c.key
+        out[c.key] = (base.chi2, f.chi2)
+    return out
+
+
+def test_nested_never_worse_force_curve(tmp_path):
+    """A DMT-adhesion curve from the contact registry (tests/diagnose_truth.py): every cause
+    nests the Hertz baseline; the registry's adhesion laws lower chi^2 by orders of magnitude."""
+    path, truth = make_force_case(tmp_path, 7, "adhesion-dmt")
+    out = _nested_never_worse(make_problem(path), {"adhesion-dmt", "tip-radius-error"})
+    b, f = out["adhesion-dmt"]
+    assert f < 0.2 * b
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind", ["modal", "force", "friction"])
+def test_nested_never_worse_whole_catalog(tmp_path, kind):
+    if kind == "modal":
+        path, _ = make_modal_case(tmp_path, 1003, None, "C", truth_kind="timoshenko")
+    elif kind == "force":
+        path, _ = make_force_case(tmp_path, 7, "adhesion-dmt")
+    else:
+        path, _ = make_friction_case(tmp_path, 11, "viscous-friction")
+    _nested_never_worse(make_problem(path))
+
+
+@pytest.mark.slow
+def test_evidence_never_exceeds_the_likelihood_ratio(tmp_path):
+    path, _ = make_modal_case(tmp_path, 1000, "point-mass", "A", compute=False)
+    res = diagnose(make_problem(path))
+    for c in res["candidates"]:
+        if c["evidence"] is not None and c["evidence_method"].startswith("cross"):
+            assert c["evidence"] <= 0.5 * c["delta_chi2"] + 1e-9
+    for f in res["findings"]:
+        for name, p in f["parameters"].items():
+            if p.get("identifiable", True) and p.get("sigma") is not None:
+                assert np.isfinite(p["sigma"]) and p["sigma"] > 1e-6 * abs(p["value"]) or p["at_bound"], (name, p)
+
+
+# ---- one beam model, one PT model: none in probedyn/diagnose --------------------------------
+
+_BEAM_ROOTS = (1.8751, 4.6940, 7.8547, 10.9955)  # clamped-free Euler-Bernoulli beta_n L
+
+
+def _modules():
+    return sorted(DIAG.rglob("*.py"))
+
+
+def test_no_second_beam_or_friction_model_in_diagnose():
+    bad = []
+    for path in _modules():
+        tree = ast.parse(path.read_text())
+        rel = path.relative_to(DIAG.parents[1])
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, float):
+                if any(abs(node.value - r) < 5e-4 for r in _BEAM_ROOTS):
+                    bad.append(f"{rel}:{node.lineno}: clamped-beam root {node.value} (a private beam model)")
+            if isinstance(node, (ast.Import, ast.ImportFrom)):
+                mod = node.module if isinstance(node, ast.ImportFrom) else node.names[0].name
+                if mod and (mod.startswith("scipy.integrate") or mod == "numba"):
+                    bad.append(f"{rel}:{node.lineno}: imports {mod} (a private integrator or kernel)")
+            if isinstance(node, ast.ClassDef):
+                bases = {getattr(b, "id", getattr(b, "attr", "")) for b in node.bases}
+                if bases & {"FrictionModel", "ContactModel", "BristleModel", "Probe"} or "Beam" in node.name:
+                    bad.append(f"{rel}:{node.lineno}: class {node.name} (a model belongs in its registry)")
+    assert not bad, "\n".join(bad)
+    src = {p.name: p.read_text() for p in _modules()}
+    assert "from probedyn.schemes.ffm import" in src["friction.py"]  # the FFM integrator users run
+    assert "probedyn.schemes.contact" in src["forcecurve.py"]  # the contact registry's adhesion laws
+    assert "probe.build(" in src["modal_model.py"]  # the probe's own FEM
