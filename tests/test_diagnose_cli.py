@@ -42,6 +42,10 @@ def test_json_contract_and_out_files(capsys, tmp_path):
     # compliance -- the two leading causes on the FEM baseline, within a few nats of each other
     assert f["cause"] in ("point-mass", "clamp-compliance")
     assert res["final"]["chi2"] < res["baseline"]["chi2"]
+    # the report prints the stored result: it must be what the code computes now
+    stored = json.loads((EX / "al_cantilever_length_sweep.diagnose.json").read_text())
+    assert stored["verdict"] == res["verdict"] and stored["findings"][0]["cause"] == f["cause"]
+    assert stored["final"]["chi2"] == pytest.approx(res["final"]["chi2"], rel=0.05)
 
 
 def test_bad_input_one_line_error(capsys, tmp_path):
