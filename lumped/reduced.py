@@ -52,6 +52,7 @@ basis, ``NAME.ritz.npz`` beside it (its SHA-256 is recorded in the JSON); both a
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import math
 import time
@@ -359,11 +360,14 @@ class ReducedProbe:
         d = self.to_dict()
         if self.ritz is not None:
             npz = path.with_name(path.stem + ".ritz.npz")
+            buf = io.BytesIO()
+            np.savez(buf, **self.ritz.to_arrays(include_basis=include_basis))
+            blob = buf.getvalue()
+            # hash the bytes in memory: inside an output transaction the rename is deferred
             with atomic_path(npz) as tmp:
-                with open(tmp, "wb") as fh:
-                    np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
+                Path(tmp).write_bytes(blob)
             d["ritz_file"] = npz.name
-            d["ritz_sha256"] = hashlib.sha256(npz.read_bytes()).hexdigest()
+            d["ritz_sha256"] = hashlib.sha256(blob).hexdigest()
             d["ritz_meta"] = to_jsonable(self.ritz.meta)
         write_json(path, d)
         return path
