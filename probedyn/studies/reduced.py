@@ -300,13 +300,14 @@ def higher_modes_study(probe: ReducedProbe | None = None, speeds: Sequence[float
 # Geometry and the pushing regime boundary; a mesh-independent apex stiffness
 # ------------------------------------------------------------------------------------------
 
-#: pushing-boundary geometries: the default FFM cantilever, a thinner one, and a soft
-#: contact-mode lever (1 um thick, 450 um long; in-plane elements 3 um) whose scan spring is
-#: comparable to the ~3 N/m Hertz contact, so that the tip stiffness moves the boundary
+#: pushing-boundary geometries: the default FFM cantilever, a thinner one, and a soft narrow
+#: contact-mode lever (400 x 15 x 2 um, ~1e5 DOFs with one element layer) whose scan spring
+#: (~4 N/m: lateral bending of the narrow beam) is comparable to the ~3 N/m Hertz contact, so
+#: that the tip stiffness moves the boundary
 PUSH_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("default", {}),
     ("thickness 3 um", {"thickness": 3e-6}),
-    ("soft lever t = 1 um, L = 450 um", {"thickness": 1e-6, "length": 450e-6, "element_size": 3e-6}),
+    ("soft lever 400 x 15 x 2 um", {"thickness": 2e-6, "width": 15e-6, "length": 400e-6}),
 )
 
 
