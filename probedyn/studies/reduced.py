@@ -318,8 +318,9 @@ def pushing_boundary(overrides: Mapping[str, Any] | None = None, substrate: str 
     mass and damping at the apex): **predicted** from the reduced stiffness by the quasi-static
     Prandtl–Tomlinson criterion (:func:`pushing_prediction`, the tip spring in series with the
     Hertz contact) and **simulated** by bisection on pushes from rest
-    (``schemes.pushing.transition_speed``, ``rel_tol`` bracket), plus the mean step of a push at
-    the default speed (3 um/s) against one lattice constant."""
+    (``schemes.pushing.transition_speed``, ``rel_tol`` bracket; the upper end is raised from 1.6
+    to 6.4 x the prediction while still stick-slip), plus the mean step of a push at the default
+    speed (3 um/s) against one lattice constant."""
     ov = dict(FFM_CANTILEVER, **COARSE)
     ov.update(dict(overrides or {}))
     rp = reduce_probe("cantilever", ov, n_modes=n_modes, Q=STUDY_Q)
@@ -328,7 +329,14 @@ def pushing_boundary(overrides: Mapping[str, Any] | None = None, substrate: str 
     Vp = pred["predicted_transition_m_s"]
     t0 = time.perf_counter()
     _, an = pu.push(substrate, dict(tip))
-    tr = pu.transition_speed(substrate, dict(tip), lo=0.8 * Vp, hi=1.6 * Vp, rel_tol=rel_tol)
+    tr = None
+    for hi in (1.6, 3.2, 6.4):  # widen the bracket upwards while the top is still stick-slip
+        try:
+            tr = pu.transition_speed(substrate, dict(tip), lo=0.8 * Vp, hi=hi * Vp, rel_tol=rel_tol)
+            break
+        except ParameterError as exc:
+            if "upper speed" not in str(exc) or hi == 6.4:
+                raise
     return dict(label=label, overrides={k: v for k, v in (overrides or {}).items()}, dofs=rp.provenance.get("dofs"),
                 tip=tip, prediction=pred, step_m=an.get("mean_step_m"), step_over_a=(an.get("mean_step_m") or math.nan) / pred["lattice_m"],
                 regime_slow=an.get("regime"), V_sim_m_s=tr["V_transition_m_s"], V_bracket_m_s=(tr["V_low_m_s"], tr["V_high_m_s"]),
