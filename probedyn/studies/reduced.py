@@ -338,7 +338,10 @@ def pushing_boundary(overrides: Mapping[str, Any] | None = None, substrate: str 
             if "upper speed" not in str(exc) or hi == 6.4:
                 raise
     return dict(label=label, overrides={k: v for k, v in (overrides or {}).items()}, dofs=rp.provenance.get("dofs"),
-                tip=tip, prediction=pred, step_m=an.get("mean_step_m"), step_over_a=(an.get("mean_step_m") or math.nan) / pred["lattice_m"],
+                tip=tip, prediction=pred, step_m=an.get("mean_step_m"),
+                step_lengths_over_a=[float(x) / pred["lattice_m"] for x in an.get("step_lengths_m", [])],
+                site_hops=an.get("site_hops"), n_slips=an.get("n_slips"),
+                tip_damping_ratio=tip["c_t"] / (2 * math.sqrt(tip["k_tx"] * tip["m_tx"])), step_over_a=(an.get("mean_step_m") or math.nan) / pred["lattice_m"],
                 regime_slow=an.get("regime"), V_sim_m_s=tr["V_transition_m_s"], V_bracket_m_s=(tr["V_low_m_s"], tr["V_high_m_s"]),
                 ratio_sim_over_pred=tr["V_transition_m_s"] / Vp, evaluations=tr["evaluations"],
                 wall_s=time.perf_counter() - t0)
