@@ -142,7 +142,7 @@ def cmd_portrait(
     else:
         if U0 is not None:
             raise ParameterError("--U0 needs --probe")
-        vals, title = _floats(u0 or "0.5,6,25", "u0"), None
+        vals, title = _floats(u0 if u0 is not None else "0.5,6,25", "u0"), None
     png = plot_portraits(vals, psi, out, v=v, model=model, title=title)
     res = {"plot": str(png), "u0": vals, "psi": psi, "v": v}
     if sc is not None:
@@ -192,7 +192,7 @@ def cmd_limit_cycles(
         if U0 is not None or speeds is not None:
             raise ParameterError("--U0 and --speeds need --probe")
         u0 = 3.0 if u0 is None else u0
-        vv = _parse_values(v or "0.02:20:13:log", "v")
+        vv = _parse_values(v if v is not None else "0.02:20:13:log", "v")
     if (vv <= 0).any():
         raise ParameterError("--v values must be positive")
     lc = limit_cycles_result(u0, vv, model)
