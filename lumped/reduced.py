@@ -64,7 +64,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, ParameterError
-from probedyn.core.io import atomic_path, to_jsonable, write_json
+from probedyn.core.io import to_jsonable, write_bytes, write_json
 from probedyn.core.presets import preset as get_preset
 from probedyn.lumped.ritz import RitzBasis
 
@@ -360,12 +360,11 @@ class ReducedProbe:
         d = self.to_dict()
         if self.ritz is not None:
             npz = path.with_name(path.stem + ".ritz.npz")
-            buf = io.BytesIO()
-            np.savez(buf, **self.ritz.to_arrays(include_basis=include_basis))
-            blob = buf.getvalue()
+            fh = io.BytesIO()  # an in-memory archive (no file): hashed before the deferred write
+            np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
+            blob = fh.getvalue()
             # hash the bytes in memory: inside an output transaction the rename is deferred
-            with atomic_path(npz) as tmp:
-                Path(tmp).write_bytes(blob)
+            write_bytes(npz, blob)
             d["ritz_file"] = npz.name
             d["ritz_sha256"] = hashlib.sha256(blob).hexdigest()
             d["ritz_meta"] = to_jsonable(self.ritz.meta)
