@@ -26,8 +26,11 @@ phi of eq 2.39): ``m = (rho A int_0^L phi^2 dx + m_tip phi(x_tip)^2) / phi(x)^2`
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
+from skfem import FacetBasis, LinearForm
 
 from probedyn.core.errors import ParameterError
+from probedyn.fem.eigen import factorize
 from probedyn.lumped.beam import RectBeam, eb_mode_shape, eb_roots
 
 
@@ -84,3 +87,70 @@ def first_mode_effective_mass(beam: RectBeam, x: float | None = None, tip_mass: 
 
 
 __all__ = ["torsion_stiffness", "bending_stiffness", "scan_stiffness", "first_mode_effective_mass"]
+
+
+# ------------------------------------------------------------------------------------------
+# FEM side: a mesh-independent load at the apex (a Hertz-like pressure over a stated patch)
+# ------------------------------------------------------------------------------------------
+
+def apex_patch_operator(model, apex, radius: float) -> tuple[sp.csr_matrix, dict[str, float]]:
+    """(3, ndofs_total) operator of the weighted-average displacement over the boundary of the FE
+    model within ``radius`` [m] of ``apex``, with the Hertz-like weight
+    ``w = sqrt(1 - |x - apex|^2 / radius^2)``; its transpose applied to a force F gives the
+    consistent nodal loads of the traction ``F w / int w dS`` (work-conjugate, so ``d . A K^-1 A^T d``
+    is a compliance). Unlike a point load at the sharp apex (whose compliance grows like
+    1/h_apex), this load has finite energy: the compliance converges under mesh refinement at
+    a fixed ``radius``. Element-generic (the facet basis of the model's own scalar element)."""
+    if not (np.isfinite(radius) and radius > 0):
+        raise ParameterError(f"apex patch radius must be positive, got {radius!r} m")
+    mesh = model.mesh
+    c = np.asarray(apex, dtype=float).reshape(3, 1)
+    bf = mesh.boundary_facets()
+    P = mesh.p[:, mesh.facets[:, bf]]  # (3, nverts, nfacets)
+    cen = P.mean(axis=1)
+    spread = np.linalg.norm(P - cen[:, None, :], axis=0).max(axis=0)
+    sel = bf[np.linalg.norm(cen - c, axis=0) - spread < radius]  # facets whose bounding sphere meets the ball
+    if sel.size == 0:
+        raise ParameterError(f"no boundary facet within {radius:g} m of the apex: the patch is smaller than the mesh")
+    elem = model.basis.elem
+    scalar = getattr(elem, "elem", elem)  # ElementVector(e) -> e
+    fb = FacetBasis(mesh, type(scalar)(), facets=sel, intorder=10)
+    R2 = float(radius) ** 2
+
+    @LinearForm
+    def weighted(v, w):
+        r2 = sum((w.x[i] - c[i, 0]) ** 2 for i in range(3))
+        return v * np.sqrt(np.clip(1.0 - r2 / R2, 0.0, None))
+
+    @LinearForm
+    def one(v, w):
+        r2 = sum((w.x[i] - c[i, 0]) ** 2 for i in range(3))
+        return v * (r2 < R2)
+
+    a = weighted.assemble(fb)
+    total = float(a.sum())
+    if not total > 0:
+        raise ParameterError(f"the apex patch of radius {radius:g} m carries no load on this mesh")
+    nz = np.nonzero(a)[0]
+    rows = np.concatenate([np.full(nz.size, k) for k in range(3)])
+    cols = np.concatenate([3 * nz + k for k in range(3)])
+    data = np.concatenate([a[nz] / total] * 3)
+    A = sp.csr_matrix((data, (rows, cols)), shape=(3, 3 * a.size))
+    return A, {"radius": float(radius), "area": float(one.assemble(fb).sum()), "facets": int(sel.size),
+               "weight_integral": total}
+
+
+def patch_stiffness(model, A: sp.csr_matrix, directions, solver: str = "auto") -> list[float]:
+    """``1 / (d . A K^-1 A^T d)`` [N/m] for each unit direction d: the static stiffness for the
+    distributed load of an attachment operator ``A`` (one factorisation of the clamped K)."""
+    K, _ = model.assemble()
+    free = model.free_dofs
+    fac = factorize(K[free][:, free], spd=True, solver=solver)
+    Af = A.tocsr()[:, free]
+    out = []
+    for dvec in directions:
+        dv = np.asarray(dvec, dtype=float)
+        dv = dv / np.linalg.norm(dv)
+        u = np.asarray(fac.solve(np.asarray(Af.T @ dv).ravel())).ravel()
+        out.append(float(1.0 / (dv @ (Af @ u))))
+    return out

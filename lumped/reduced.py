@@ -28,7 +28,11 @@ Content (SI units)
 * ``ritz``: the :class:`~probedyn.lumped.ritz.RitzBasis` (modes + static shapes at the point)
   for attached masses and springs anywhere (nano-placing, holder studies).
 * ``actuation``: modal force per volt per electrode, ``{electrode: [f_1, ..., f_N]}`` [N/V]
-  (filled by the piezoelectric FEM; empty otherwise).
+  (filled by the piezoelectric FEM; empty otherwise); ``actuation_static``: the same for the
+  Ritz basis's static pseudo-modes (``t_j^T K u_e``, u_e the coupled static field per volt), the
+  static correction of the actuation: with it the reduced static response at the point is the
+  piezo FEM's exactly (the point's static shapes are in the basis, so by reciprocity the
+  Galerkin output there is exact; :meth:`actuation_matrix`).
 * ``provenance``: probe key, parameters, mesh hash, DOFs, source ("FEM" or "Table x.y"),
   probedyn version, build time.
 
@@ -48,6 +52,7 @@ basis, ``NAME.ritz.npz`` beside it (its SHA-256 is recorded in the JSON); both a
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import math
 import time
@@ -59,7 +64,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, ParameterError
-from probedyn.core.io import atomic_path, to_jsonable, write_json
+from probedyn.core.io import to_jsonable, write_bytes, write_json
 from probedyn.core.presets import preset as get_preset
 from probedyn.lumped.ritz import RitzBasis
 
@@ -162,6 +167,26 @@ class ReducedProbe:
     actuation: dict[str, list[float]] = field(default_factory=dict)
     provenance: dict[str, Any] = field(default_factory=dict)
     directions: tuple[str, ...] = DIRECTIONS
+    actuation_static: dict[str, list[float]] = field(default_factory=dict)
+
+    def actuation_matrix(self, electrodes: Sequence[str] | None = None,
+                         static_correction: bool = True) -> np.ndarray:
+        """Generalised force per volt [N/V] on the Ritz coordinates, (r, n_electrodes): the
+        retained modes' ``actuation`` and, with ``static_correction``, the static pseudo-modes'
+        ``actuation_static`` (r = the Ritz basis's columns; else r = N retained modes)."""
+        if not self.actuation:
+            raise ParameterError("this reduced probe has no actuation (fill it from the piezo FEM: "
+                                 "probedyn.probes.reduced_tracking.actuated_probe)")
+        els = list(self.actuation) if electrodes is None else list(electrodes)
+        missing = [e for e in els if e not in self.actuation]
+        if missing:
+            raise ParameterError(f"no actuation for electrode(s) {', '.join(missing)} (known: {', '.join(self.actuation)})")
+        A = np.array([self.actuation[e] for e in els], dtype=float).T
+        if static_correction:
+            if self.ritz is None or not self.actuation_static:
+                raise ParameterError("this reduced probe has no static correction of its actuation")
+            A = np.vstack([A, np.array([self.actuation_static[e] for e in els], dtype=float).T])
+        return A
 
     # ---- per-direction views ------------------------------------------------------------
     @property
@@ -308,7 +333,8 @@ class ReducedProbe:
                     frame={d: self.frame[i].tolist() for i, d in enumerate(DIRECTIONS)},
                     directions=list(self.directions), validity_hz=self.validity_hz, damping=self.damping,
                     modes=[m.to_dict() for m in self.modes], static_compliance=self.static_compliance.tolist(),
-                    actuation=self.actuation, provenance=self.provenance, per_direction=views,
+                    actuation=self.actuation, actuation_static=self.actuation_static,
+                    provenance=self.provenance, per_direction=views,
                     ritz=None if self.ritz is None else self.ritz.describe())
 
     def summary(self) -> dict[str, Any]:
@@ -338,11 +364,13 @@ class ReducedProbe:
         d = self.to_dict()
         if self.ritz is not None:
             npz = path.with_name(path.stem + ".ritz.npz")
-            with atomic_path(npz, defer=defer) as tmp:
-                with open(tmp, "wb") as fh:
-                    np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
-                d["ritz_sha256"] = hashlib.sha256(tmp.read_bytes()).hexdigest()
+            fh = io.BytesIO()  # an in-memory archive (no file): hashed before the deferred write
+            np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
+            blob = fh.getvalue()
+            # hash the bytes in memory: inside an output transaction the rename is deferred
+            write_bytes(npz, blob, defer=defer)
             d["ritz_file"] = npz.name
+            d["ritz_sha256"] = hashlib.sha256(blob).hexdigest()
             d["ritz_meta"] = to_jsonable(self.ritz.meta)
         write_json(path, d, defer=defer)
         return path
@@ -375,7 +403,8 @@ class ReducedProbe:
             return cls(point=str(d["point"]), frame=frame, modes=modes, static_compliance=C,
                        validity_hz=d.get("validity_hz"), damping=d.get("damping", {"kind": "none"}), ritz=ritz,
                        actuation={k: list(v) for k, v in (d.get("actuation") or {}).items()},
-                       provenance=d.get("provenance", {}), directions=tuple(d.get("directions", DIRECTIONS)))
+                       provenance=d.get("provenance", {}), directions=tuple(d.get("directions", DIRECTIONS)),
+                       actuation_static={k: list(v) for k, v in (d.get("actuation_static") or {}).items()})
         except (KeyError, TypeError, ValueError, OSError) as exc:
             raise DataFormatError(f"{path}: malformed reduced-probe file ({exc})") from None
 

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.core.errors import ParameterError, SolverError
-from probedyn.schemes.stickslip import (DEFAULT_MODEL, REGIMES, basin_cell, default_basin_window, equilibria,
+from probedyn.schemes.stickslip import (DEFAULT_MODEL, REGIMES, TwoMassModel, basin_cell, default_basin_window, equilibria,
                                         limit_cycles, linear_response_amplitude, regime_cell, stick_boundary)
 from probedyn.schemes.sweep import GridError, axis, run_sweep, validate_grid
 
@@ -67,10 +67,14 @@ def json_regimes() -> str:
 
 
 def run_regime_map(v_values, u0_values, out: Path | None, workers: int = 2, scheduler: str | None = None,
-                   processes: bool = True, progress: bool = True, restart: bool = False, n_ic: int = 6) -> dict[str, Any]:
+                   processes: bool = True, progress: bool = True, restart: bool = False, n_ic: int = 6,
+                   model_params: dict[str, float] | None = None) -> dict[str, Any]:
     """Regime over the grid (u0, v) (Fig 4.13) on the sweep engine (NetCDF ``out`` if given):
     the share of cells per regime, the boundaries on the grid and refined by bisection, and
-    the Dataset (``dataset``)."""
+    the Dataset (``dataset``). ``model_params``: m1, m2, k1, k2, zeta1, zeta2, a of the
+    two-mass model (default Table 4.3; e.g. a reduced probe's, ``schemes.probe_hooks``)."""
+    mp = {k: float(x) for k, x in (model_params or {}).items()}
+    model = TwoMassModel.from_params(mp) if mp else DEFAULT_MODEL  # validates before a cluster starts
     if isinstance(n_ic, bool) or int(n_ic) != n_ic or not 1 <= n_ic <= 1000:  # before a cluster is started
         raise ParameterError(f"n_ic (initial conditions per cell) must be an integer from 1 to 1000, got {n_ic!r}")
     g = validate_grid({"u0": np.asarray(u0_values, float), "v": np.asarray(v_values, float)})
@@ -78,30 +82,33 @@ def run_regime_map(v_values, u0_values, out: Path | None, workers: int = 2, sche
         raise GridError("grid axis 'v' must be positive (v = 0 is the quasi-static problem: use basins/equilibria)")
     if np.any(g["u0"] < 0):
         raise GridError("grid axis 'u0' must be >= 0")
-    res = run_sweep(regime_cell, g, fixed={"n_ic": int(n_ic)}, out=out, workers=workers, scheduler=scheduler,
+    res = run_sweep(regime_cell, g, fixed={"n_ic": int(n_ic), **mp}, out=out, workers=workers, scheduler=scheduler,
                     processes=processes, progress=progress, restart=restart, attrs={"regimes": json_regimes()})
     ds = res.dataset
     reg = ds["regime"].values
     return {**res.to_dict(), "fractions": {REGIMES[k]: float((reg == k).mean()) for k in REGIMES},
-            "grid_boundaries": regime_boundaries(ds), **bisected_boundaries(g["v"], g["u0"]), "dataset": ds}
+            "grid_boundaries": regime_boundaries(ds), **bisected_boundaries(g["v"], g["u0"], model_params=mp),
+            "time_unit_s": model.time_scale, "k_series": model.k, "a": model.a, "dataset": ds}
 
 
-def bisected_boundaries(v_values, u0_values, n_u: int = 6) -> dict[str, Any]:
+def bisected_boundaries(v_values, u0_values, n_u: int = 6, model_params: dict[str, float] | None = None) -> dict[str, Any]:
     """Stick-slip boundary refined by bisection: the speed v*(u0) above which stick ends, for
     a few u0 > 1.2 of the map, and the amplitude u0* above which stick-slip starts at the
     lowest speed of the map (-> 1, the fold criterion, as v -> 0)."""
+    mp = dict(model_params or {})
+    model = TwoMassModel.from_params(mp) if mp else DEFAULT_MODEL
     vmin, vmax = float(np.min(v_values)), float(np.max(v_values))
     rows = []
     us = [u for u in np.linspace(max(1.2, float(np.min(u0_values))), float(np.max(u0_values)), n_u) if u >= 1.2]
     for u in us:
         try:
-            vs = stick_boundary(float(u), vmin, vmax, along="v", rtol=1e-2)
+            vs = stick_boundary(float(u), vmin, vmax, along="v", rtol=1e-2, **mp)
         except SolverError:
             continue
-        rows.append({"u0": float(u), "v_star": vs, "V_star_m_s": DEFAULT_MODEL.speed_from_v(vs),
-                     "v_star_over_well_frequency": vs / math.sqrt(u / DEFAULT_MODEL.mu2)})
+        rows.append({"u0": float(u), "v_star": vs, "V_star_m_s": model.speed_from_v(vs),
+                     "v_star_over_well_frequency": vs / math.sqrt(u / model.mu2)})
     try:
-        u_star = stick_boundary(vmin, 0.3, 2.0, along="u0", rtol=1e-3)
+        u_star = stick_boundary(vmin, 0.3, 2.0, along="u0", rtol=1e-3, **mp)
     except SolverError:
         u_star = None
     return {"v_star": rows, "u0_star_at_vmin": u_star, "vmin": vmin}
@@ -122,12 +129,12 @@ def regime_boundaries(ds) -> list[dict[str, Any]]:
     return rows
 
 
-def limit_cycles_result(u0: float, v_values) -> dict[str, Any]:
+def limit_cycles_result(u0: float, v_values, model: TwoMassModel = DEFAULT_MODEL) -> dict[str, Any]:
     """:func:`probedyn.schemes.stickslip.limit_cycles` with the linear forced-response amplitude
     (the high-speed limit), the lab speed V [m/s] of each v and whether the motion sticks (the
-    sample's lab speed drops below v/2)."""
-    lc = limit_cycles(u0, np.asarray(v_values, float))
-    lc["linear_amplitude"] = np.array([linear_response_amplitude(u0, v) for v in lc["v"]])
-    lc["speed_m_s"] = np.array([DEFAULT_MODEL.speed_from_v(v) for v in lc["v"]])
+    sample's lab speed drops below v/2). ``model``: default Table 4.3."""
+    lc = limit_cycles(u0, np.asarray(v_values, float), model)
+    lc["linear_amplitude"] = np.array([linear_response_amplitude(u0, v, model) for v in lc["v"]])
+    lc["speed_m_s"] = np.array([model.speed_from_v(v) for v in lc["v"]])
     lc["stick"] = lc["w_min"] < 0.5 * lc["v"]
     return lc

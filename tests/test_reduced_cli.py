@@ -86,3 +86,56 @@ def test_push_with_a_table_probe_is_the_preset(capsys):
     a = _json(["simulate", "push"], capsys)
     b = _json(["simulate", "push", "--probe", "table-4.1"], capsys)
     assert b["mean_step_m"] == pytest.approx(a["mean_step_m"], rel=1e-9) and b["probe"]["source"] == "Table 4.1"
+
+
+def test_stickslip_limit_cycles_with_a_table_probe_is_the_plain_model(capsys, tmp_path):
+    # Table 4.3 as the probe gives Table 4.3's model back: the same cycles at the same (u0, v)
+    from probedyn.schemes.stickslip import TwoMassModel
+
+    tm = TwoMassModel()
+    V = [1e-4]
+    d = _json(["stickslip", "limit-cycles", "--probe", "table-4.3", "--U0", repr(tm.U0_from_u0(3.0)),
+               "--speeds", ",".join(map(repr, V))], capsys)
+    v = [tm.v_from_speed(x) for x in V]
+    assert d["u0"] == pytest.approx(3.0, rel=1e-9) and d["v"] == pytest.approx(v, rel=1e-9)
+    ref = _json(["stickslip", "limit-cycles", "--u0", repr(d["u0"]), "--v", ",".join(map(repr, d["v"]))], capsys)
+    assert d["amplitude"] == pytest.approx(ref["amplitude"], rel=1e-9, abs=1e-12)
+    assert any(line.startswith("(4.6)  v = (2 pi/a)") for line in d["derivation"])
+    # portrait: u0 list from U0 list, psi from x0
+    png = tmp_path / "p.png"
+    p = _json(["stickslip", "portrait", "--probe", "table-4.3", "--U0", repr(tm.U0_from_u0(6.0)),
+               "--x0", repr(tm.a / 4), "--out", str(png)], capsys)
+    assert p["u0"] == pytest.approx([6.0], rel=1e-9) and p["psi"] == pytest.approx(math.pi / 2, rel=1e-9)
+    assert png.exists()
+
+
+def test_stickslip_limit_cycles_with_the_fem_probe(capsys):
+    d = _json(["stickslip", "limit-cycles", *FEM, "--U0", "1.6e-19", "--speeds", "1e-4"], capsys)
+    s = d["scaling"]
+    # eq 4.5 series spring and eq 4.7: the probe's static scan stiffness and its effective mass
+    assert s["k1"] == pytest.approx(s["probe"]["scan"]["static_stiffness"], rel=1e-12)
+    assert s["k"] == pytest.approx(s["k1"] * s["k2"] / (s["k1"] + s["k2"]), rel=1e-12)
+    assert d["u0"] == pytest.approx(4 * math.pi**2 * 1.6e-19 / (s["k"] * s["a"] ** 2), rel=1e-12)
+    assert d["v"][0] == pytest.approx(2 * math.pi / s["a"] * math.sqrt(s["m"] / s["k"]) * 1e-4, rel=1e-12)
+    assert s["zeta1"] == pytest.approx(s["c1"] / (2 * math.sqrt(s["k"] * s["m"])), rel=1e-12)
+    assert d["stick"] == [True]  # u0 ~ 25, v ~ 1.7 < the well frequency sqrt(u0 m/m2) ~ 5: stick-slip (Fig 4.13)
+
+
+@pytest.mark.slow
+def test_stickslip_regime_map_with_a_table_probe_is_the_plain_map(capsys, tmp_path):
+    a = _json(["stickslip", "regime-map", "--u0", "2,8", "--v", "0.1,3", "--out", str(tmp_path / "a.nc"),
+               "--workers", "1", "--no-progress"], capsys)
+    b = _json(["stickslip", "regime-map", "--probe", "table-4.3", "--u0", "2,8", "--v", "0.1,3",
+               "--out", str(tmp_path / "b.nc"), "--workers", "1", "--no-progress"], capsys)
+    assert a["fractions"] == b["fractions"] and len(b["U0_axis_J"]) == 2 and len(b["V_axis_m_s"]) == 2
+
+
+@pytest.mark.slow
+def test_track_a_saved_reduced_smart_probe(capsys, tmp_path):
+    f = tmp_path / "duo.json"
+    d = _json(["reduced-probe", "duo-bimorph", "--actuation", "--out", str(f)], capsys)
+    assert d["actuation"] and d["actuation_static"]
+    t = _json(["track", str(f), "--body", "reduced", "--path", "line"], capsys)
+    assert "reduced probe" in t["provenance"]["body"]
+    # composite control of the two-body model: the tracking error is far below the path size
+    assert t["metrics"]["relative_max_error_after_transient"] < 1e-3

@@ -117,3 +117,30 @@ def test_report_section_quick(tmp_path):
     assert "reduced-ffm-table-vs-fem.png" in md and (tmp_path / "reduced-ffm-table-vs-fem.png").stat().st_size > 10_000
     for needle in ("Springs and masses at the apex", "Modal truncation", "Geometry matters", "Higher modes"):
         assert needle in md
+
+
+@pytest.mark.slow
+def test_pushing_boundary_moves_with_the_geometry_as_predicted():
+    # Prediction from the reduced stiffness: the quasi-static Prandtl–Tomlinson speed with the
+    # tip spring in series with the Hertz contact. For the default lever the simulated boundary
+    # lies above it by the healing of the pinning between slips (docs/pushing.md: 0.9-1.3 x the
+    # quasi-static value for Table 4.1's tip) and the step is one lattice constant. The soft
+    # lever (scan spring ~4 N/m, comparable to the contact) moves the boundary up, as predicted;
+    # its quasi-static slip (F_s - F_c)/k_s exceeds a (1.8 a), so some slips pass two sites:
+    # the mean step lies between a and 2a. The 3 um lever splits each hop into two slips
+    # (0.78 a + 0.22 a, docs/reduced-probes.md section 11): its slips still add up to whole
+    # lattice constants, and with 50x its (Q = 100) damping the step is a again.
+    from probedyn.schemes import pushing as pu
+    from probedyn.studies.reduced import pushing_boundary_study
+
+    base, thin, soft = pushing_boundary_study()
+    assert 0.9 < base["ratio_sim_over_pred"] < 1.3
+    assert base["step_over_a"] == pytest.approx(1.0, abs=0.02)
+    assert soft["pred_shift"] > 1.05 and soft["sim_shift"] > 1.05
+    assert soft["prediction"]["slip_qs_m"] > 1.5 * soft["prediction"]["lattice_m"] and 1.1 < soft["step_over_a"] < 2.0
+    steps = np.array(thin["step_lengths_over_a"])
+    pairs = steps[: 2 * (len(steps) // 2)].reshape(-1, 2).sum(axis=1)
+    assert np.allclose(pairs, 1.0, atol=0.02) and steps.min() < 0.5
+    tip = dict(thin["tip"], c_t=50 * thin["tip"]["c_t"])
+    _, an = pu.push("mica", tip)
+    assert an["mean_step_over_a"] == pytest.approx(1.0, abs=0.02)

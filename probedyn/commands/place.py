@@ -18,7 +18,8 @@ place_app = typer.Typer(help="Vibrational nano-placing (section 4.2): approach, 
                              "several samples.", no_args_is_help=True)
 app.add_typer(place_app, name="place")
 
-PROBE_ARG = typer.Argument("fem", help="fem (Table 4.4 cantilever, FEM), beam, table-4.4, or a probe name/TOML.")
+PROBE_ARG = typer.Argument("fem", help="fem (Table 4.4 cantilever, FEM), beam, table-4.4, a probe name/TOML, "
+                                        "or a saved reduced probe (.json, probedyn reduced-probe --out).")
 MASS_OPT = typer.Option("geometric", "--mass-source",
                         help="geometric (the beam's own mass) or table (Table 4.4's m = 2e-12 kg).")
 

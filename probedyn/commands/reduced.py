@@ -21,6 +21,8 @@ def reduced_probe_cmd(
     mu: Optional[float] = typer.Option(None, "--mu", help="Environment damping of eq 3.2 [N s/m^2] (beam-like probes)."),
     point: Optional[str] = typer.Option(None, "--point", help="Named point or face (default: the tip apex / lumped tip)."),
     cache: bool = typer.Option(True, "--cache/--no-cache", help="Reuse / store the reduction under its content hash."),
+    actuation: bool = typer.Option(False, "--actuation", help="Smart probes: reduce the body without its tip at the "
+                                   "holder and fill the piezo FEM's modal force per volt (for probedyn track)."),
     out: Optional[Path] = typer.Option(None, "--out", help="Write the reduced probe: FILE.json (+ FILE.ritz.npz)."),
     as_json: bool = JSON_OPT,
 ) -> None:
@@ -36,6 +38,13 @@ def reduced_probe_cmd(
             raise ParameterError("--set, --q, --mu and --point apply to a probe reduced from its FEM, "
                                  "not to a saved or table probe")
         rp = resolve_probe(probe)
+    elif actuation:
+        from probedyn.probes.reduced_tracking import actuated_probe
+
+        if q is not None or mu is not None or point is not None:
+            raise ParameterError("--actuation reduces the smart probe's body at its holder with the probe's own mu: "
+                                 "no --q, --mu or --point")
+        rp = actuated_probe(probe, over, n_modes=modes, cache=cache)
     else:
         rp = reduce_probe(probe, over, n_modes=modes, Q=q, mu=mu, point=point, cache=cache)
     res: dict[str, Any] = rp.to_dict()
@@ -57,6 +66,10 @@ def reduced_probe_cmd(
                 lines.append(format_table(rows, [("mode", "mode", ""), ("family", "family", ""), ("f", "f [Hz]", ".5g"),
                                                  ("m", "mass [kg]", ".4g"), ("k", "stiffness [N/m]", ".4g"),
                                                  ("c", "damping [N s/m]", ".3g"), ("p", "participation", ".4f")]))
+        if d.get("actuation"):
+            ns = len(next(iter((d.get("actuation_static") or {"": []}).values())))
+            lines.append(f"actuation (piezo FEM, modal force per volt of the {len(d['modes'])} modes"
+                         + (f" + {ns} static pseudo-modes" if ns else "") + f"): electrodes {', '.join(d['actuation'])}")
         if d.get("file"):
             lines.append(f"written: {d['file']}")
         return "\n".join(lines)

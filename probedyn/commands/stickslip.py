@@ -5,6 +5,8 @@ are computed by :mod:`probedyn.schemes.regimes`; the figures and the report sect
 
 from __future__ import annotations
 
+import math
+
 from pathlib import Path
 from typing import Any, Optional
 
@@ -24,6 +26,30 @@ def _parse_values(spec: str, name: str):
     from probedyn.schemes.sweep import parse_axis
 
     return parse_axis(f"{name}={spec}")[1]
+
+
+def _probe_scaling(probe, probe_sets, probe_modes, probe_q, sample, U0: float = 0.0, speed: float = 0.0, x0: float = 0.0):
+    """(scaling, TwoMassModel) of ``--probe`` through the section 4.1.3 scaling (eqs 4.3-4.7)."""
+    from probedyn.core.params import parse_sets
+    from probedyn.schemes.probe_hooks import stickslip_scaling, two_mass_model
+
+    rp = load_probe(probe, probe_sets, probe_modes, probe_q)
+    sc = stickslip_scaling(rp, U0, V=speed, x_s0=x0, sample=parse_sets(sample))
+    return sc, two_mass_model(sc)
+
+
+def _derivation(sc: dict[str, Any] | None, lines: list[str] | None = None) -> str:
+    if not sc:
+        return ""
+    return "\n".join(["scaling of section 4.1.3:"] + ["  " + line for line in (lines or sc["derivation"])]) + "\n"
+
+
+def _floats(spec: str, name: str) -> list[float]:
+    return [float(x) for x in _parse_values(spec, name)]
+
+
+SAMPLE_OPT = typer.Option(None, "--sample", help="With --probe: m2, k2, zeta2 or a as NAME=VALUE (default Table 4.3). "
+                                                  "Repeatable.")
 
 
 # --------------------------------------------------------------------------------------
@@ -84,46 +110,109 @@ def cmd_equilibria(
 
 @stickslip_app.command("portrait")
 def cmd_portrait(
-    u0: str = typer.Option("0.5,6,25", "--u0", help="Comma-separated u0 values."),
+    u0: Optional[str] = typer.Option(None, "--u0", help="Comma-separated u0 values (default 0.5,6,25)."),
     psi: float = PSI_OPT,
     v: float = typer.Option(0.0, "--v", help="Non-dimensional speed (0 = quasi-static)."),
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
+    U0: Optional[str] = typer.Option(None, "--U0", help="With --probe: corrugation amplitudes U0 of eq 4.1 [J], "
+                                                       "comma-separated (u0 = 4 pi^2 U0/(k a^2))."),
+    x0: float = typer.Option(0.0, "--x0", help="With --probe: sample position in the potential [m] (psi = 2 pi x0/a)."),
+    speed: float = typer.Option(0.0, "--speed", help="With --probe: pushing speed V [m/s] (v = (2 pi/a) sqrt(m/k) V)."),
+    sample: Optional[list[str]] = SAMPLE_OPT,
     out: Path = out_file_option(Path("stickslip-portraits.png"), "PNG file."),
     as_json: bool = JSON_OPT,
 ) -> None:
-    """Solutions of eq 4.11 vs psi and sample phase portraits (Fig 4.8)."""
+    """Solutions of eq 4.11 vs psi and sample phase portraits (Fig 4.8); with --probe, u0, psi, v
+    and the model's ratios and damping come from the probe through eqs 4.3-4.7."""
+    from probedyn.core.errors import ParameterError
     from probedyn.report.stickslip import plot_portraits
 
-    vals = [float(x) for x in _parse_values(u0, "u0")]
-    png = plot_portraits(vals, psi, out, v=v)
-    emit({"plot": str(png), "u0": vals, "psi": psi, "v": v}, as_json, lambda r: f"wrote {r['plot']}")
+    sc = model = None
+    if probe is not None:
+        if U0 is None or u0 is not None:
+            raise ParameterError("with --probe give the corrugation(s) --U0 [J] (u0 is then computed), not --u0")
+        Us = _floats(U0, "U0")
+        scs = [_probe_scaling(probe, probe_sets, probe_modes, probe_q, sample, U, speed, x0) for U in Us]
+        sc, model = scs[0]
+        vals, psi, v = [c["u0"] for c, _ in scs], sc["psi"], sc["v"]
+        title = f"{sc['probe'].get('probe')} ({sc['probe'].get('source')}): k1 = {sc['k1']:.3g} N/m, zeta1 = {sc['zeta1']:.3g}"
+    else:
+        if U0 is not None:
+            raise ParameterError("--U0 needs --probe")
+        vals, title = _floats(u0 if u0 is not None else "0.5,6,25", "u0"), None
+    png = plot_portraits(vals, psi, out, v=v, model=model, title=title)
+    res = {"plot": str(png), "u0": vals, "psi": psi, "v": v}
+    if sc is not None:
+        res["scaling"] = sc
+        res["U0"] = Us
+
+    def human(r):
+        return _derivation(r.get("scaling")) + f"u0 = {', '.join(f'{x:.4g}' for x in r['u0'])}, psi = {r['psi']:.4g}, " \
+            f"v = {r['v']:.4g}: wrote {r['plot']}"
+
+    emit(res, as_json, human)
 
 
 @stickslip_app.command("limit-cycles")
 def cmd_limit_cycles(
-    u0: float = typer.Option(3.0, "--u0"),
-    v: str = typer.Option("0.02:20:13:log", "--v", help="Speeds: LO:HI:N[:log] or V1,V2,..."),
+    u0: Optional[float] = typer.Option(None, "--u0", help="Non-dimensional amplitude (default 3)."),
+    v: Optional[str] = typer.Option(None, "--v", help="Speeds: LO:HI:N[:log] or V1,V2,... (default 0.02:20:13:log)."),
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
+    U0: Optional[float] = typer.Option(None, "--U0", help="With --probe: corrugation amplitude U0 of eq 4.1 [J]."),
+    speeds: Optional[str] = typer.Option(None, "--speeds", help="With --probe: pushing speeds V [m/s], LO:HI:N[:log] "
+                                                              "or V1,V2,... (v = (2 pi/a) sqrt(m/k) V)."),
+    sample: Optional[list[str]] = SAMPLE_OPT,
     out: Optional[Path] = out_file_option(None, "PNG file for the cycles and amplitude/centre vs v."),
     as_json: bool = JSON_OPT,
 ) -> None:
-    """Limit cycles as the speed rises: amplitude and centre vs v (Figs 4.10-4.11)."""
+    """Limit cycles as the speed rises: amplitude and centre vs v (Figs 4.10-4.11); with --probe,
+    u0, v and the model come from the probe through eqs 4.3-4.7."""
     from probedyn.core.errors import ParameterError
     from probedyn.schemes.regimes import limit_cycles_result
+    from probedyn.schemes.stickslip import DEFAULT_MODEL
 
-    vv = _parse_values(v, "v")
+    sc, model = None, DEFAULT_MODEL
+    if probe is not None:
+        if U0 is None or speeds is None or u0 is not None or v is not None:
+            raise ParameterError("with --probe give --U0 [J] and --speeds [m/s] (u0 and v are then computed), "
+                                 "not --u0/--v")
+        sc, model = _probe_scaling(probe, probe_sets, probe_modes, probe_q, sample, U0, 0.0, 0.0)
+        Vs = _parse_values(speeds, "speeds")
+        if (Vs <= 0).any():
+            raise ParameterError("--speeds values must be positive")
+        u0 = sc["u0"]
+        vv = Vs * (2 * math.pi / sc["a"]) * sc["time_unit_s"]
+    else:
+        if U0 is not None or speeds is not None:
+            raise ParameterError("--U0 and --speeds need --probe")
+        u0 = 3.0 if u0 is None else u0
+        vv = _parse_values(v if v is not None else "0.02:20:13:log", "v")
     if (vv <= 0).any():
         raise ParameterError("--v values must be positive")
-    lc = limit_cycles_result(u0, vv)
+    lc = limit_cycles_result(u0, vv, model)
     if out is not None:
         from probedyn.report.stickslip import plot_limit_cycles
 
         lc["plot"] = str(plot_limit_cycles(lc, u0, out))
     res = {k: val for k, val in lc.items() if k != "orbits"}
+    res["u0"] = u0
+    if sc is not None:
+        res["scaling"] = sc
+        res["derivation"] = sc["derivation"][:6] + [
+            f"(4.6)  v = (2 pi/a) sqrt(m/k) V = V x {2 * math.pi / sc['a'] * sc['time_unit_s']:.4g} s/m"]
 
     def human(r):
         rows = [dict(v=r["v"][i], V=r["speed_m_s"][i], amp=r["amplitude"][i], c=r["centre"][i],
                      f=r["friction_mean"][i], st="stick-slip" if r["stick"][i] else "smooth") for i in range(len(r["v"]))]
-        return format_table(rows, [("v", "v", ".4g"), ("V", "V [m/s]", ".3g"), ("amp", "amplitude", ".4f"),
-                                   ("c", "centre", ".4f"), ("f", "mean friction", ".4f"), ("st", "motion", "")])
+        return _derivation(r.get("scaling"), r.get("derivation")) + f"u0 = {r['u0']:.4g}\n" + format_table(
+            rows, [("v", "v", ".4g"), ("V", "V [m/s]", ".3g"), ("amp", "amplitude", ".4f"),
+                   ("c", "centre", ".4f"), ("f", "mean friction", ".4f"), ("st", "motion", "")])
 
     emit(res, as_json, human)
 
@@ -139,18 +228,39 @@ def cmd_regime_map(
     restart: bool = typer.Option(False, "--restart", help="Discard finished chunks of an interrupted run."),
     progress: bool = typer.Option(True, "--progress/--no-progress"),
     processes: bool = typer.Option(False, "--processes/--threads", help="Local workers as processes or threads."),
+    probe: Optional[str] = PROBE_OPT,
+    probe_sets: Optional[list[str]] = PROBE_SET_OPT,
+    probe_modes: int = PROBE_MODES_OPT,
+    probe_q: float = PROBE_Q_OPT,
+    sample: Optional[list[str]] = SAMPLE_OPT,
     as_json: bool = JSON_OPT,
 ) -> None:
-    """Regime map over (v, u0) with numerically found boundaries (Fig 4.13), on Dask."""
+    """Regime map over (v, u0) with numerically found boundaries (Fig 4.13), on Dask; with --probe
+    the two-mass model's ratios and damping are the probe's (eqs 4.3-4.7) and the axes are also
+    given in SI (U0 [J], V [m/s])."""
     from probedyn.report.stickslip import plot_regime_map
     from probedyn.schemes.regimes import run_regime_map
 
-    res = run_regime_map(_parse_values(v, "v"), _parse_values(u0, "u0"), out, workers=workers,
-                         scheduler=scheduler, progress=progress, restart=restart, n_ic=n_ic, processes=processes)
+    sc = mp = None
+    if probe is not None:
+        sc, model = _probe_scaling(probe, probe_sets, probe_modes, probe_q, sample)
+        mp = dict(m1=model.m1, m2=model.m2, k1=model.k1, k2=model.k2, zeta1=model.zeta1, zeta2=model.zeta2, a=model.a)
+    vv, uu = _parse_values(v, "v"), _parse_values(u0, "u0")
+    res = run_regime_map(vv, uu, out, workers=workers, scheduler=scheduler, progress=progress, restart=restart,
+                         n_ic=n_ic, processes=processes, model_params=mp)
     res["plot"] = str(plot_regime_map(res.pop("dataset"), Path(out).with_suffix(".png"), res))
+    if sc is not None:
+        k, a, T = sc["k"], sc["a"], sc["time_unit_s"]
+        res["scaling"] = sc
+        res["U0_axis_J"] = [float(x * k * a * a / (4 * math.pi**2)) for x in uu]
+        res["V_axis_m_s"] = [float(x * a / (2 * math.pi * T)) for x in vv]
+        res["derivation"] = sc["derivation"][:5] + [
+            f"(4.7)  axis u0 -> U0 = u0 k a^2/(4 pi^2) = u0 x {k * a * a / (4 * math.pi**2):.4g} J",
+            f"(4.6)  axis v -> V = v a/(2 pi sqrt(m/k)) = v x {a / (2 * math.pi * T):.4g} m/s"]
 
     def human(r):
-        lines = [f"wrote {r['path']} and {r['plot']} ({r['chunks_run']} chunks run, {r['chunks_skipped']} resumed)"]
+        lines = ([_derivation(r["scaling"], r["derivation"]).rstrip()] if r.get("scaling") else [])
+        lines += [f"wrote {r['path']} and {r['plot']} ({r['chunks_run']} chunks run, {r['chunks_skipped']} resumed)"]
         lines += [f"  {k}: {100 * f:.1f} % of cells" for k, f in r["fractions"].items()]
         return "\n".join(lines)
 

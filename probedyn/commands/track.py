@@ -17,7 +17,8 @@ from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_t
 
 @app.command("track")
 def track_cmd(
-    probe: str = typer.Argument(..., help="duo-bimorph, piezotube, or a TOML probe file"),
+    probe: str = typer.Argument(..., help="duo-bimorph, piezotube, a TOML probe file, or a saved reduced smart-probe "
+                                          "body with its actuation (.json, probedyn reduced-probe NAME --actuation --out)"),
     path: str = typer.Option(..., "--path", help="line|circle|square (duo-bimorph), circle|cylinder|sphere|cone "
                                                  "(piezotube), or a CSV file t,x,y,z [s, m]"),
     control: str = typer.Option("composite", "--control", help="open|slow|composite|pid"),
@@ -27,7 +28,10 @@ def track_cmd(
     duration: Optional[float] = typer.Option(None, "--duration", help="path duration [s] (default 1 s)"),
     size: Optional[float] = typer.Option(None, "--size", help="path radius or side [m]"),
     k_t: Optional[float] = typer.Option(None, "--k-t", help="holder stiffness in every direction [N/m]"),
-    body: str = typer.Option("analytic", "--body", help="analytic | fem: where the body's J, K2, C2 come from"),
+    body: str = typer.Option("analytic", "--body", help="analytic | fem | reduced | reduced-modal: where the body's J, "
+                                                     "K2, C2 come from (reduced: the reduced probe of the body with the "
+                                                     "piezo FEM's actuation; reduced-modal: all its Ritz coordinates, "
+                                                     "open loop only)"),
     gains: str = typer.Option("analytic", "--gains", help="analytic | fem: actuation gains (formulas or the piezo FEM)"),
     v_max: Optional[float] = typer.Option(None, "--v-max", help="amplifier limit [V] (default 200 tube, 20 duo-bimorph)"),
     eccentricity: Optional[float] = typer.Option(None, "--eccentricity", help="tube bore offset delta_x = delta_y [m]"),
@@ -41,7 +45,10 @@ def track_cmd(
     from probedyn.probes.tracking import plant_factory
     from probedyn.schemes.tracking.studies import track
 
-    res, summary = track(plant_factory(body, gains=gains), probe, path, control, disturbance=disturbance,
+    factory = plant_factory(body, gains=gains)
+    if probe.endswith(".json"):
+        factory, probe = _saved_factory(Path(probe), body, gains)
+    res, summary = track(factory, probe, path, control, disturbance=disturbance,
                          disturbance_scale=disturbance_scale, speed=speed, duration=duration, size=size, k_t=k_t,
                          v_max=v_max, eccentricity=eccentricity, noise_rms=noise, overrides=parse_sets(sets))
     if out is not None:
@@ -65,3 +72,27 @@ def track_cmd(
         return "\n".join(lines)
 
     emit(summary, as_json, human)
+
+
+def _saved_factory(path: Path, body: str, gains: str):
+    """A plant factory over a saved reduced smart-probe body (its piezo FEM gains) and the probe's
+    name; only the tip (mass, holder springs) can be changed on top of it."""
+    from probedyn.core.errors import ParameterError
+    from probedyn.lumped.reduced import ReducedProbe
+    from probedyn.probes.reduced_tracking import reduced_modal_plant, reduced_two_body_plant
+    from probedyn.probes.tracking import _TIP_KEYS
+
+    rp = ReducedProbe.load(path)
+    if body not in ("reduced", "reduced-modal") or gains != "analytic":
+        raise ParameterError("a saved reduced probe is its own body and gains: use --body reduced|reduced-modal "
+                             "and no --gains")
+
+    def factory(name, k_t=None, overrides=None):
+        bad = sorted(set(overrides or {}) - set(_TIP_KEYS))
+        if bad:
+            raise ParameterError(f"a saved reduced probe cannot take {', '.join(bad)}: reduce the probe again")
+        if body == "reduced-modal":
+            return reduced_modal_plant(rp, k_t=k_t, overrides=overrides)
+        return reduced_two_body_plant(rp, k_t=k_t, overrides=overrides)
+
+    return factory, str(rp.provenance.get("probe"))

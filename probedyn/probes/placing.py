@@ -16,17 +16,23 @@ several-sample models (low-rank additions, no FEM re-solve).
 * ``"beam"``: the same geometry as an Euler-Bernoulli beam (analytic);
 * ``"table-4.4"``: Table 4.4's numbers alone (``k``, ``m``, ``L``);
 * any other probe name or TOML file of :mod:`probedyn.probes` with a beam along x clamped at
-  x = 0 and a ``free_end`` face (its first flapwise modes and static stiffness from the FEM).
+  x = 0 and a ``free_end`` face (its first flapwise modes and static stiffness from the FEM);
+* a saved reduced probe (``.json``, :class:`probedyn.lumped.reduced.ReducedProbe`), another
+  source table (``table-x.y``: must describe the normal direction) or a ``ReducedProbe`` object:
+  :func:`placing_probe_from_reduced` (the normal stiffness and the normal modes at the reduced
+  probe's point, its Ritz basis and, rebuilt from the mesh cache, its FE model).
 """
 
 from __future__ import annotations
 
 from typing import Any, Mapping
 
-from probedyn.core.errors import ParameterError
+from probedyn.core.errors import ParameterError, ProbedynError
 from probedyn.lumped.beam import RectBeam
+from probedyn.lumped.reduced import ReducedProbe
 from probedyn.lumped.ritz import RitzBasis
 from probedyn.probes import get_probe
+from probedyn.probes.reduce import attach_model, resolve_probe
 from probedyn.schemes.placing.probe import (SILICON_E, SILICON_NU, SILICON_RHO, PlacingProbe, sample_point,
                                             table_beam_geometry)
 
@@ -54,6 +60,11 @@ def placing_model(overrides: Mapping[str, Any] | None = None, probe: str = "cant
 def placing_probe(spec: str = "fem", overrides: Mapping[str, Any] | None = None, mass_source: str = "geometric",
                   n_modes: int = 4, zeta: float | None = None) -> PlacingProbe:
     """A :class:`PlacingProbe` from ``spec`` (module docstring)."""
+    if isinstance(spec, ReducedProbe) or str(spec).endswith(".json") or (
+            str(spec).lower().startswith("table-") and str(spec) != "table-4.4"):
+        if overrides:
+            raise ParameterError("a reduced probe or a table cannot take parameter overrides; reduce the probe again")
+        return placing_probe_from_reduced(resolve_probe(spec), mass_source=mass_source, n_modes=n_modes, zeta=zeta)
     spec = str(spec)
     if spec == "table-4.4":
         if overrides:
@@ -80,6 +91,23 @@ def placing_probe(spec: str = "fem", overrides: Mapping[str, Any] | None = None,
     return pp
 
 
+def placing_probe_from_reduced(rp: ReducedProbe, mass_source: str = "geometric", n_modes: int = 4,
+                               zeta: float | None = None) -> PlacingProbe:
+    """Nano-placing's probe from a reduced probe (issue 10): ``PlacingProbe.from_reduced`` on its
+    normal direction (static stiffness at its point, the first ``n_modes`` modes that move the
+    point along the normal). A FEM-reduced probe gets its FE model back (mesh cache; the mesh must
+    hash the same) so that the capture and several-sample models can attach samples anywhere."""
+    if "normal" not in rp.directions:
+        raise ParameterError(f"the {rp.source} probe describes no normal direction: nano-placing needs the "
+                             "normal stiffness and modes (use fem, beam, table-4.4 or a FEM-reduced probe)")
+    if rp.ritz is not None and rp.ritz.model is None and rp.source == "FEM" and rp.provenance.get("probe"):
+        try:
+            attach_model(rp)
+        except ProbedynError:
+            pass  # the probe file was reduced on another mesh: static and modal numbers still hold
+    return PlacingProbe.from_reduced(rp, zeta=zeta, mass_source=mass_source, n_modes=n_modes)
+
+
 def placing_ritz(model, n_modes: int = RITZ_MODES):
     """The FEM-mode Ritz basis nano-placing uses: ``n_modes`` FEM modes plus static correction
     shapes along z at the free-end face (the tip: capture, release) and at the centroid line at
@@ -89,4 +117,4 @@ def placing_ritz(model, n_modes: int = RITZ_MODES):
     return RitzBasis.from_model(model, int(n_modes), attachments=att)
 
 
-__all__ = ["placing_probe", "placing_model", "placing_ritz", "SPECS", "DEFAULT_MESH", "RITZ_MODES"]
+__all__ = ["placing_probe", "placing_probe_from_reduced", "placing_model", "placing_ritz", "SPECS", "DEFAULT_MESH", "RITZ_MODES"]

@@ -154,13 +154,34 @@ def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str
                 d31: float | None = None) -> MechanicalPlant:
     """The two-body tracking plant (3.37) of ``duo-bimorph`` or ``piezotube``.
 
-    ``body = "analytic" | "fem"`` selects J, K2, C2; ``k_t`` overrides the holder spring in every
+    ``body = "analytic" | "fem" | "reduced" | "reduced-modal"`` selects J, K2, C2 (``reduced``: the
+    two-body model of the probe's reduced body with the piezo FEM's actuation filled in,
+    :mod:`probedyn.probes.reduced_tracking`; ``reduced-modal``: every Ritz coordinate of that
+    reduced body, open loop only - its gains are the piezo FEM's, ``gains`` is ignored); ``k_t`` overrides the holder spring in every
     modelled direction (section 3.4.1); ``tip_q``: quality factor of the tip on its spring (tip
     damping ``c = sqrt(k_t m) / Q``, an assumption: Tables 3.1/3.2 give none); ``gains``:
     ``"analytic"`` (:func:`stroke_matrix`, ``d31`` default the table's), ``"fem"`` (the coupled
     piezo FEM, :func:`fem_stroke_matrix`) or a stroke matrix G [m/V] named by ``gains_source``."""
     probe, v = _probe_values(name, overrides)
     dirs, inputs = SETUP[probe.name]["dirs"], SETUP[probe.name]["inputs"]
+    if body in ("reduced", "reduced-modal"):
+        from probedyn.probes import reduced_tracking as rt  # composes piezo FEM + reduction (heavy)
+
+        tip_ov = {k: x for k, x in (overrides or {}).items() if k in _TIP_KEYS}
+        rp = rt.actuated_probe(name, {k: x for k, x in (overrides or {}).items() if k not in _TIP_KEYS})
+        if body == "reduced-modal":
+            return rt.reduced_modal_plant(rp, k_t=k_t, tip_q=tip_q, overrides=tip_ov)
+        if isinstance(gains, str) and gains == "fem":
+            return rt.reduced_two_body_plant(rp, k_t=k_t, tip_q=tip_q, overrides=tip_ov)
+        if isinstance(gains, str) and gains == "analytic":
+            G, ginfo = stroke_matrix(probe, v, True, d31)
+            plant = rt.reduced_two_body_plant(rp, k_t=k_t, tip_q=tip_q, overrides=tip_ov, G=G, gains_source=ginfo["gains"])
+            plant.provenance.update({k: x for k, x in ginfo.items() if k != "gains"})
+            return plant
+        if isinstance(gains, str):
+            raise ParameterError(f"gains must be 'analytic', 'fem' or a stroke matrix, got {gains!r}")
+        return rt.reduced_two_body_plant(rp, k_t=k_t, tip_q=tip_q, overrides=tip_ov, G=gains,
+                                         gains_source=gains_source or "user-supplied stroke matrix")
     if body == "analytic":
         J, K2, C2, info = analytic_body(probe, v)
         holder_face = False
@@ -168,7 +189,7 @@ def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str
         J, K2, C2, info = fem_body(probe, v)
         holder_face = True
     else:
-        raise ParameterError(f"body must be 'analytic' or 'fem', got {body!r}")
+        raise ParameterError(f"body must be 'analytic', 'fem', 'reduced' or 'reduced-modal', got {body!r}")
     if isinstance(gains, str) and gains == "analytic":
         G, ginfo = stroke_matrix(probe, v, holder_face, d31)
     elif isinstance(gains, str) and gains == "fem":

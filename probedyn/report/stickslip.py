@@ -98,8 +98,9 @@ def plot_limit_cycles(lc: dict[str, Any], u0: float, path: Path) -> Path:
     return savefig(fig, path)
 
 
-def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
-    """Fig 4.8: solutions of eq 4.11 vs psi (stable / unstable) and phase portraits at ``psi``."""
+def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0, model=None, title: str | None = None) -> Path:
+    """Fig 4.8: solutions of eq 4.11 vs psi (stable / unstable) and phase portraits at ``psi``
+    (``model``: the two-mass model of the trajectories, default Table 4.3)."""
     plt = pyplot()
     fig, axes = plt.subplots(2, len(u0_list), figsize=(4.2 * len(u0_list), 7))
     axes = np.atleast_2d(axes).reshape(2, len(u0_list))
@@ -115,7 +116,7 @@ def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
         ax.set_title(f"u0 = {u0:g}: equilibria of eq 4.11")
         ax.legend(fontsize=7, loc="upper right", markerscale=6)
         ax = axes[1, j]
-        pp = phase_portrait(u0, psi, v=v, n_ic=18, t_end=40.0)
+        pp = phase_portrait(u0, psi, v=v, n_ic=18, t_end=40.0, **({"model": model} if model is not None else {}))
         for k, tr in enumerate(pp["trajectories"]):
             ax.plot(tr[:, 3], tr[:, 4], lw=0.6, color="0.35", label="trajectories" if k == 0 else None)
         e = equilibria(u0, psi)
@@ -124,7 +125,7 @@ def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0) -> Path:
         ax.set_xlabel("$x_3$ (sample, moving frame)")
         ax.set_ylabel("$x_4$ (sample velocity)")
         ax.legend(fontsize=8, loc="upper right")
-        ax.set_title(f"phase portrait, psi = {psi:g}")
+        ax.set_title(f"phase portrait, psi = {psi:g}" + (f"\n{title}" if title else ""), fontsize=9 if title else None)
     fig.tight_layout()
     return savefig(fig, path)
 

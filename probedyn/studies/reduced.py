@@ -294,3 +294,117 @@ def higher_modes_study(probe: ReducedProbe | None = None, speeds: Sequence[float
                              wall_s=s["wall_s"]))
         ref.pop("trace", None)
     return dict(participation=part, runs=runs, validity_hz=probe.validity_hz, k_scan=probe.static_stiffness("scan"))
+
+
+# ------------------------------------------------------------------------------------------
+# Geometry and the pushing regime boundary; a mesh-independent apex stiffness
+# ------------------------------------------------------------------------------------------
+
+#: pushing-boundary geometries: the default FFM cantilever, a thinner one, and a soft narrow
+#: contact-mode lever (400 x 15 x 2 um, ~1e5 DOFs with one element layer) whose scan spring
+#: (~4 N/m: lateral bending of the narrow beam) is comparable to the ~3 N/m Hertz contact, so
+#: that the tip stiffness moves the boundary
+PUSH_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("default", {}),
+    ("thickness 3 um", {"thickness": 3e-6}),
+    ("soft lever 400 x 15 x 2 um", {"thickness": 2e-6, "width": 15e-6, "length": 400e-6}),
+)
+
+
+def pushing_boundary(overrides: Mapping[str, Any] | None = None, substrate: str = "mica", n_modes: int = 4,
+                     rel_tol: float = 0.02, label: str = "") -> dict[str, Any]:
+    """The stick-slip -> sliding speed of nano-pushing (section 4.1.1) with the tip of a
+    FEM-reduced cantilever (``schemes.probe_hooks.pushing_tip``: static scan stiffness, effective
+    mass and damping at the apex): **predicted** from the reduced stiffness by the quasi-static
+    Prandtl–Tomlinson criterion (:func:`pushing_prediction`, the tip spring in series with the
+    Hertz contact) and **simulated** by bisection on pushes from rest
+    (``schemes.pushing.transition_speed``, ``rel_tol`` bracket; the upper end is raised from 1.6
+    to 6.4 x the prediction while still stick-slip), plus the mean step of a push at the default
+    speed (3 um/s) against one lattice constant."""
+    ov = dict(FFM_CANTILEVER, **COARSE)
+    ov.update(dict(overrides or {}))
+    rp = reduce_probe("cantilever", ov, n_modes=n_modes, Q=STUDY_Q)
+    tip = pu_tip(rp)
+    pred = pushing_prediction(tip["k_tx"], substrate)
+    Vp = pred["predicted_transition_m_s"]
+    t0 = time.perf_counter()
+    _, an = pu.push(substrate, dict(tip))
+    tr = None
+    for hi in (1.6, 3.2, 6.4):  # widen the bracket upwards while the top is still stick-slip
+        try:
+            tr = pu.transition_speed(substrate, dict(tip), lo=0.8 * Vp, hi=hi * Vp, rel_tol=rel_tol)
+            break
+        except ParameterError as exc:
+            if "upper speed" not in str(exc) or hi == 6.4:
+                raise
+    return dict(label=label, overrides={k: v for k, v in (overrides or {}).items()}, dofs=rp.provenance.get("dofs"),
+                tip=tip, prediction=pred, step_m=an.get("mean_step_m"),
+                step_lengths_over_a=[float(x) / pred["lattice_m"] for x in an.get("step_lengths_m", [])],
+                site_hops=an.get("site_hops"), n_slips=an.get("n_slips"),
+                tip_damping_ratio=tip["c_t"] / (2 * math.sqrt(tip["k_tx"] * tip["m_tx"])), step_over_a=(an.get("mean_step_m") or math.nan) / pred["lattice_m"],
+                regime_slow=an.get("regime"), V_sim_m_s=tr["V_transition_m_s"], V_bracket_m_s=(tr["V_low_m_s"], tr["V_high_m_s"]),
+                ratio_sim_over_pred=tr["V_transition_m_s"] / Vp, evaluations=tr["evaluations"],
+                wall_s=time.perf_counter() - t0)
+
+
+def pu_tip(rp: ReducedProbe) -> dict[str, float]:
+    """Nano-pushing's tip parameters of a reduced probe (``schemes.probe_hooks.pushing_tip``)."""
+    from probedyn.schemes.probe_hooks import pushing_tip
+
+    return pushing_tip(rp)
+
+
+def pushing_boundary_study(variants: Sequence[tuple[str, Mapping[str, Any]]] = PUSH_VARIANTS,
+                           substrate: str = "mica") -> list[dict[str, Any]]:
+    """:func:`pushing_boundary` for each geometry; the prediction's *shift* between geometries
+    (``V_pred / V_pred(first)``) against the simulated one is the check that the geometry acts
+    through the reduced stiffness as predicted."""
+    rows = [pushing_boundary(ov, substrate, label=name) for name, ov in variants]
+    for r in rows:
+        r["pred_shift"] = r["prediction"]["predicted_transition_m_s"] / rows[0]["prediction"]["predicted_transition_m_s"]
+        r["sim_shift"] = r["V_sim_m_s"] / rows[0]["V_sim_m_s"]
+    return rows
+
+
+def observed_order(h: Sequence[float], q: Sequence[float]) -> tuple[float, float]:
+    """Observed convergence order p and the Richardson limit of ``q(h) = q* + C h^p`` from three
+    (h, q) pairs (any refinement ratios): solves ``(q1 - q2)/(q2 - q3) = (h1^p - h2^p)/(h2^p - h3^p)``."""
+    from scipy.optimize import brentq
+
+    h1, h2, h3 = (float(x) for x in h[-3:])
+    q1, q2, q3 = (float(x) for x in q[-3:])
+    ratio = (q1 - q2) / (q2 - q3)
+    f = lambda p: (h1**p - h2**p) / (h2**p - h3**p) - ratio  # noqa: E731
+    try:
+        p = brentq(f, 0.05, 12.0)
+    except ValueError:
+        return math.nan, math.nan
+    C = (q2 - q3) / (h2**p - h3**p)
+    return float(p), float(q3 - C * h3**p)
+
+
+def apex_patch_convergence(radius: float = 4e-6, layers: Sequence[int] = (1, 2, 3),
+                           overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Static stiffness at the apex of the default FFM cantilever's tip for a load spread over the
+    tip surface within ``radius`` of the apex (Hertz-like weight, :func:`probedyn.lumped.apex.apex_patch_operator`)
+    on meshes of ``layers`` element layers through the thickness (h = t / layers), beside the
+    point-load value at the apex (which diverges like 1/h); observed order and Richardson limit
+    of the patch values."""
+    p, _ = get_probe("cantilever")
+    rows = []
+    for n in layers:
+        v = p.resolve({**FFM_CANTILEVER, **dict(overrides or {}), "elements_through_thickness": int(n)})
+        model = p.build(v)
+        apex = np.asarray(p.tip_point(v), dtype=float)
+        t0 = time.perf_counter()
+        A, info = ax.apex_patch_operator(model, apex, radius)
+        ks, kn, kl = ax.patch_stiffness(model, A, [(0, 1, 0), (0, 0, 1), (1, 0, 0)])
+        rows.append(dict(layers=int(n), h=v["thickness"] / n, dofs=model.dofs, k_scan=ks, k_normal=kn, k_lateral=kl,
+                         k_scan_point=model.static_stiffness("tip", (0.0, 1.0, 0.0)), patch_facets=info["facets"],
+                         patch_area=info["area"], solve_s=time.perf_counter() - t0))
+    out: dict[str, Any] = dict(radius=radius, rows=rows)
+    if len(rows) >= 3:
+        h = [r["h"] for r in rows]
+        for key in ("k_scan", "k_normal", "k_scan_point"):
+            out[f"order_{key}"], out[f"limit_{key}"] = observed_order(h, [r[key] for r in rows])
+    return out

@@ -303,14 +303,17 @@ class PlacingProbe:
 
     @classmethod
     def from_reduced(cls, reduced, zeta: float | None = None, mass_source: MassSource = "geometric",
-                     direction: str = "normal", length: float | None = None) -> "PlacingProbe":
+                     direction: str = "normal", length: float | None = None,
+                     n_modes: int | None = None) -> "PlacingProbe":
         """From a :class:`probedyn.lumped.reduced.ReducedProbe` (issue 10): the FEM static
-        stiffness along ``direction`` and the retained modes that move the point along it
-        (:meth:`~probedyn.lumped.reduced.ReducedProbe.direction_modes`: modal mass ``1/phi^2``,
-        frequency). ``L`` from the probe parameters (``length``) unless given; ``EI = k L^3/3``;
-        ``rho A = m_1 / (0.2427 L)`` with ``m_1 = k / omega_1^2`` (exact for a uniform beam).
-        ``zeta``: the table's 0.1 unless given (the reduced probe's own damping ratios are
-        kept in the provenance)."""
+        stiffness along ``direction`` at the reduced probe's point and the retained modes that move
+        the point along it (:meth:`~probedyn.lumped.reduced.ReducedProbe.direction_modes`: modal
+        mass ``1/phi^2``, frequency; the first ``n_modes`` of them). ``L`` from the probe parameters
+        (``length``) unless given; ``EI = k L^3/3``; ``rho A`` = FE mass / L when the reduced probe's
+        Ritz basis has its FE model attached, else ``m_1 / (0.2427 L)`` with ``m_1 = k / omega_1^2``
+        (exact for a uniform beam). The Ritz basis and the FE model are kept (``.ritz``,
+        ``.model``) for the capture and several-sample models. ``zeta``: the table's 0.1 unless
+        given (the reduced probe's own damping ratios are kept in the provenance)."""
         zeta = float(TABLE["mu"]) if zeta is None else float(zeta)
         try:
             k = float(reduced.static_stiffness(direction))
@@ -320,6 +323,10 @@ class PlacingProbe:
             raise ParameterError(f"reduced probe lacks what nano-placing needs ({exc})") from None
         if not osc:
             raise ParameterError(f"the reduced probe has no mode along {direction}")
+        if n_modes is not None:
+            if int(n_modes) < 1:
+                raise ParameterError(f"n_modes must be >= 1, got {n_modes}")
+            osc = osc[: int(n_modes)]
         if length is None:
             length = (prov.get("parameters") or {}).get("length")
         if length is None:
@@ -328,12 +335,18 @@ class PlacingProbe:
         omegas = tuple(2 * math.pi * float(o.frequency_hz) for o in osc)
         masses = tuple(float(o.mass) for o in osc)
         EI = k * L**3 / 3.0
-        rhoA = (k / omegas[0] ** 2) / (EQUIV_MASS_RATIO * L)
+        ritz = getattr(reduced, "ritz", None)
+        model = getattr(ritz, "model", None)
+        if model is not None:
+            rhoA = float(model.total_mass()) / L
+        else:
+            rhoA = (k / omegas[0] ** 2) / (EQUIV_MASS_RATIO * L)
         prov.update({"m_equivalent_geometric": k / omegas[0] ** 2, "beam_mass_geometric": rhoA * L,
-                     "m_table": float(TABLE["m"]), "mass_scale": 1.0,
-                     "reduced_damping_ratios": [float(o.damping_ratio) for o in osc]})
+                     "m_table": float(TABLE["m"]), "mass_scale": 1.0, "reduced_point": getattr(reduced, "point", None),
+                     "reduced_damping_ratios": [float(o.damping_ratio) for o in osc],
+                     "reduced_modes": [int(o.mode) for o in osc]})
         probe = cls(k, omegas, masses, zeta, L, EI, rhoA, "geometric", str(prov.get("source", "FEM")), prov,
-                    getattr(getattr(reduced, "ritz", None), "model", None), None)
+                    model, None, ritz)
         return probe.with_mass_source(mass_source)
 
 
