@@ -273,11 +273,14 @@ def compare_lumped_fem(model, lumped: SmartLumpedModel, result, attach: str,
 
 
 def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence[str], n_modes: int = 4,
-                       body_regions: Sequence[str] = (), groups: dict[str, Sequence[str]] | None = None) -> list[dict[str, Any]]:
+                       body_regions: Sequence[str] = (), groups: dict[str, Sequence[str]] | None = None,
+                       solve=None) -> list[dict[str, Any]]:
     """FEM modes of the assembled probe for holder spring ``k`` in ``stiffnesses`` (applied in
     ``directions``; the other components keep their value). Per mode: frequency, direction,
     kinetic-energy share of the tip, of holder + tip (holder regions, point masses, tip), of
-    the body, and the strain-energy share of the holder spring."""
+    the body, and the strain-energy share of the holder spring. ``solve(model, n_modes)``
+    returns the modes of the model with its current holder spring (default ``model.modes``;
+    :func:`probedyn.probes.studies.study_localisation` passes a reduced-model solver)."""
     lt0 = model.lumped_tip
     if lt0 is None:
         raise ParameterError("the holder-stiffness sweep needs tip = 'lumped'")
@@ -288,7 +291,7 @@ def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence
             for d in directions:
                 ks[AX[d]] = float(k)
             model.lumped_tip = LumpedTip(lt0.mass, tuple(ks), lt0.attach)
-            res = model.modes(n_modes)
+            res = model.modes(n_modes) if solve is None else solve(model, n_modes)
             dirs = fem_mode_groups(model, res, lt0.attach, groups or {"x": ("x",), "y": ("y",), "z": ("z",)})
             for m, d in zip(res.modes, dirs):
                 ke = m.kinetic_energy_share

@@ -21,6 +21,7 @@ from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.lumped import beam as bm
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
+from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, cantilever_hex_mesh
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
@@ -40,9 +41,13 @@ _PARAMS = ParamSet([
           choices=("none", "pyramid", "cone")),
     Param("tip_height", 10e-6, "m", "tip height (if tip_shape is not none)", lo=1e-7, hi=0.005, positive=True),
     Param("tip_half_angle", 0.35, "rad", "tip half-angle (0.35 rad = 20 deg)", lo=0.01, hi=1.5, positive=True),
-    Param("elements_through_thickness", 2, "", "element layers through the thickness (P2 tets)", lo=1, hi=40,
+    Param("elements_through_thickness", 2, "", "element layers through the thickness", lo=1, hi=40,
           kind=int),
-    Param("element_size", None, "m", "maximum element size; None = thickness / elements_through_thickness",
+    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
+          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
+          choices=ELEMENT_CHOICES),
+    Param("element_size", None, "m", "maximum element size (hexahedra: along the beam away from the clamp); "
+          "None = thickness / elements_through_thickness (hexahedra: 1.5 x thickness)",
           lo=1e-8, hi=0.01, positive=True),
 ])
 
@@ -70,7 +75,22 @@ class Cantilever(Probe):
         return get_material(values["material"]).with_overrides(
             values.get("youngs_modulus"), values.get("poisson_ratio"), values.get("density"))
 
+    def element(self, values: dict[str, Any]) -> str:
+        """The element kind of the mesh: hexahedra for the plain beam (``auto``: hex-s2, the
+        fastest to 0.1 %, docs/fem.md), P2 tetrahedra when a tip is meshed."""
+        el = values.get("element", "auto")
+        if values["tip_shape"] != "none":
+            if el.startswith("hex"):
+                raise GeometryError(f"element '{el}': hexahedral meshes are for the plain beam (tip_shape = none); "
+                                    f"a {values['tip_shape']} tip needs element = tet-p2 or auto")
+            return "tet-p2"
+        return "hex-s2" if el == "auto" else el
+
     def mesh(self, values: dict[str, Any]):
+        el = self.element(values)
+        if el != "tet-p2":
+            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"))
+            return cantilever_hex_mesh(values["length"], values["width"], values["thickness"], div, el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return cantilever_mesh(values["length"], values["width"], values["thickness"], values["tip_shape"],
                                values["tip_height"], values["tip_half_angle"], options=opts)
