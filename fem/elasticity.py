@@ -34,7 +34,7 @@ from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, BilinearForm, ElementVector, FacetBasis, LinearForm
+from skfem import Basis, BilinearForm, ElementVector, FacetBasis, LinearForm, MeshHex2
 
 from probedyn.core.errors import GeometryError, MaterialError
 from probedyn.fem import assembly as asm
@@ -284,14 +284,18 @@ def face_average_operator(mesh, facets: np.ndarray, element: str | None = None) 
     Its transpose applied to a force F gives the consistent nodal loads of the uniform
     traction F / area, so the pair (F, averaged displacement) is work-conjugate.
     """
-    # degree 2 on flat triangles; 2 x 2 Gauss on (bilinear, here flat) quadrilaterals is exact too
-    fb = FacetBasis(mesh, element_kind(mesh, element).element(), facets=np.asarray(facets), intorder=2)
+    kind = element_kind(mesh, element)
+    if isinstance(mesh, MeshHex2):
+        a = _hex_face_weights(mesh, kind, np.asarray(facets))
+    else:
+        # degree 2 on flat triangles; 2 x 2 Gauss on (bilinear, here flat) quadrilaterals is exact too
+        fb = FacetBasis(mesh, kind.element(), facets=np.asarray(facets), intorder=2)
 
-    @LinearForm
-    def one(v, w):
-        return v
+        @LinearForm
+        def one(v, w):
+            return v
 
-    a = one.assemble(fb)
+        a = one.assemble(fb)
     area = float(a.sum())
     if area <= 0:
         raise MaterialError("face_average_operator: empty face")
@@ -300,6 +304,43 @@ def face_average_operator(mesh, facets: np.ndarray, element: str | None = None) 
     cols = np.concatenate([3 * nz + c for c in range(3)])
     data = np.concatenate([a[nz] / area] * 3)
     return sp.csr_matrix((data, (rows, cols)), shape=(3, 3 * a.size)), area
+
+
+def _hex_face_weights(mesh, kind, facets: np.ndarray) -> np.ndarray:
+    """``int_face N_a dA`` for every scalar DOF, on the faces ``facets`` of a curved hexahedral
+    mesh, by 3 x 3 Gauss points on the element's own reference face (scikit-fem's FacetBasis
+    inverts the curved map by a clipped Newton iteration, which fails to converge on some
+    curved faces).  Surface element |dx/du x dx/dv| from the element map."""
+    basis = scalar_basis(mesh, 1, kind.key)
+    elem = kind.element()
+    nb = elem.doflocs.shape[0]
+    ref = mesh.elem().doflocs[:8] if mesh.elem().doflocs.shape[0] > 8 else mesh.elem().doflocs  # vertex reference coords
+    g1, w1 = np.polynomial.legendre.leggauss(3)
+    g1, w1 = 0.5 * (g1 + 1.0), 0.5 * w1
+    U, V = np.meshgrid(g1, g1, indexing="ij")
+    WQ = np.outer(w1, w1).ravel()
+    out = np.zeros(basis.N)
+    elems = mesh.f2t[0, facets]
+    mp = mesh._mapping()
+    groups: dict[tuple[int, float], list[int]] = {}
+    for k, (f, e) in enumerate(zip(facets, elems)):
+        loc = [int(np.nonzero(mesh.t[:, e] == v)[0][0]) for v in mesh.facets[:, f]]
+        r = ref[loc]
+        axis = int(np.nonzero(np.all(r == r[0], axis=0))[0][0])
+        groups.setdefault((axis, float(r[0, axis])), []).append(k)
+    for (axis, val), ks in groups.items():
+        others = [i for i in range(3) if i != axis]
+        X = np.zeros((3, WQ.size))
+        X[axis] = val
+        X[others[0]], X[others[1]] = U.ravel(), V.ravel()
+        es = elems[ks]
+        DF = np.asarray(mp.DF(X, tind=es))  # (3, 3, ne, nq): dx_i / dxi_j
+        n = np.cross(DF[:, others[0]], DF[:, others[1]], axis=0)
+        dA = np.linalg.norm(n, axis=0) * WQ[None, :]  # (ne, nq)
+        Nv = np.stack([elem.lbasis(X, i)[0] for i in range(nb)])  # (nb, nq)
+        contrib = dA @ Nv.T  # (ne, nb)
+        np.add.at(out, basis.element_dofs[:, es].T.ravel(), contrib.ravel())
+    return out
 
 
 def lumped_weights(mesh, elem_density: np.ndarray, element: str | None = None, basis=None) -> np.ndarray:

@@ -31,6 +31,28 @@ from probedyn.meshes.structured import box_grid, ring_grid, subdivide, with_face
 #: values of the probes' ``element`` parameter
 ELEMENT_CHOICES = ("auto", "tet-p2", "hex-s2", "hex-q2")
 
+#: default divisions (docs/fem.md, "Accuracy per second": the cheapest meshes found with every
+#: reported frequency within the target of the converged value)
+CANTILEVER_DEFAULT = {"n_thick": 3, "h_over_t": 1.0, "aspect": 1.2}  # 10 modes within 0.06 % (0.1 % target)
+DUO_DEFAULT = {"n_thick": 1, "h_over_t": 1.0, "aspect": 1.0}  # 8 modes within 0.24 % (0.3 % target)
+TUBE_DEFAULT = {"n_thick": 1, "h_over_wall": 8.0}
+
+#: measured accuracy of the default meshes (max relative frequency error of the reported modes
+#: against the Richardson-extrapolated value) and the lowest observed convergence order in h
+#: (singular stresses at the clamp edges and re-entrant corners limit it): docs/fem.md
+DEFAULT_ACCURACY = {"cantilever": (6.0e-4, 0.8), "duo-bimorph": (2.4e-3, 1.1), "piezotube": (1.1e-3, 1.1)}
+
+
+def refinement_for(probe: str, accuracy: float | None) -> float:
+    """Refinement factor of the default hexahedral mesh that reaches ``accuracy`` (relative
+    frequency error) by the measured error of the default mesh and its convergence order:
+    ``r = (e0 / accuracy)^(1 / p)`` (1 when the default is already as accurate)."""
+    if accuracy is None:
+        return 1.0
+    e0, p = DEFAULT_ACCURACY[probe]
+    return max(1.0, (e0 / float(accuracy)) ** (1.0 / p))
+
+
 #: limit on the number of hexahedra of one mesh (a typo in a size must not exhaust memory)
 MAX_HEX = 400_000
 
@@ -53,7 +75,18 @@ def graded(a: float, b: float, h0: float, h: float, ratio: float = 1.5) -> np.nd
         n = max(1, math.ceil(rest / h - 1e-9))
         sizes += [rest / n] * n
     sizes = np.asarray(sizes) * (length / np.sum(sizes))
-    return a + np.concatenate([[0.0], np.cumsum(sizes)])
+    x = a + np.concatenate([[0.0], np.cumsum(sizes)])
+    x[-1] = b  # exactly (a point on the end face must lie in the mesh, not 1e-19 outside)
+    return x
+
+
+def graded_both(a: float, b: float, h0a: float, h0b: float, h: float, ratio: float = 1.5) -> np.ndarray:
+    """Nodes from ``a`` to ``b`` graded towards both ends (first elements ``h0a`` at ``a`` and
+    ``h0b`` at ``b``), meeting at the middle."""
+    m = 0.5 * (a + b)
+    left = graded(a, m, h0a, h, ratio)
+    right = b - graded(0.0, b - m, h0b, h, ratio)[::-1]
+    return np.concatenate([left, right[1:]])
 
 
 def _merge(breaks, tol: float) -> list[float]:
@@ -71,15 +104,19 @@ def _split(breaks, size: float, minimum=1):
 
 @dataclass(frozen=True)
 class HexDivisions:
-    """Element counts and sizes of a structured hexahedral mesh (module docstring)."""
+    """Element counts and sizes of a structured hexahedral mesh (module docstring); None = the
+    builder's default (the fastest mesh found to reach the accuracy target, docs/fem.md)."""
 
-    n_thick: int = 2
-    h: float | None = None  # axial size far from the clamp (None: the builder's default multiple of h0)
-    ratio: float = 1.5
+    n_thick: int | None = None  # elements through the thinnest layer (beam, bimorph layer, tube wall)
+    h: float | None = None  # axial size far from the clamp [m]
+    ratio: float = 1.5  # growth of the axial size away from the clamp
     refine: float = 1.0  # divides all sizes (a refinement study keeps the rest fixed)
+    clamp: float = 0.25  # first element at the clamp: clamp x the through-thickness size
+    aspect: float | None = None  # size across the width (bimorph, beam) / around (tube) over the through size
 
     def as_dict(self) -> dict[str, Any]:
-        return {"n_thick": int(self.n_thick), "h": self.h, "ratio": float(self.ratio), "refine": float(self.refine)}
+        return {"n_thick": self.n_thick, "h": self.h, "ratio": float(self.ratio), "refine": float(self.refine),
+                "clamp": float(self.clamp), "aspect": self.aspect}
 
 
 def _count_check(n: int) -> None:
@@ -98,11 +135,12 @@ def cantilever_hex(L: float, w: float, t: float, div: HexDivisions, element: str
     y = 0 carries the named point ``tip``) of elements of about the thickness size; along x
     from ``h0 = t / n_thick`` at the clamp to ``h`` (default ``3 t``)."""
     r = float(div.refine)
-    nz = max(1, math.ceil(div.n_thick * r - 1e-9))
+    nz = max(1, math.ceil((div.n_thick or CANTILEVER_DEFAULT["n_thick"]) * r - 1e-9))
     hz = t / nz
-    ny = 2 * max(1, math.ceil(w / (2 * 2.0 * hz) - 1e-9))  # y elements about twice the z size
-    h = (div.h if div.h else 3.0 * t) / r
-    x = graded(0.0, L, hz, max(h, hz), div.ratio)
+    aspect = div.aspect or CANTILEVER_DEFAULT["aspect"]
+    ny = 2 * max(1, math.ceil(w / (2 * aspect * hz) - 1e-9))  # even: the centre line y = 0 is a node line
+    h = (div.h if div.h else CANTILEVER_DEFAULT["h_over_t"] * t) / r
+    x = graded(0.0, L, div.clamp * hz, max(h, hz), div.ratio)
     y = np.linspace(-w / 2, w / 2, ny + 1)
     z = np.linspace(-t / 2, t / 2, nz + 1)
     _count_check((x.size - 1) * ny * nz)
@@ -134,20 +172,21 @@ def duo_bimorph_hex(q: dict[str, Any], div: HexDivisions, element: str) -> MeshB
     L, w, h, g = q["length"], q["width"], q["thickness"], q["electrode_gap"]
     mh = q["holder"] == "meshed"
     Lh, wh, th, tp = q["holder_length"], q["holder_width"], q["holder_thickness"], q["piezolayer_thickness"]
-    nl = max(1, math.ceil(div.n_thick * r - 1e-9))
+    nl = max(1, math.ceil((div.n_thick or DUO_DEFAULT["n_thick"]) * r - 1e-9))
     hz = (h / 2) / nl
+    aspect = div.aspect or DUO_DEFAULT["aspect"]
     xb = [0.0, L] + ([L + Lh] if mh else [])
     yb = _merge({-w / 2, -g / 2, g / 2, w / 2} | ({-wh / 2, wh / 2} if mh else set()), 1e-9 * w)
     zb = _merge({-h / 2, 0.0, h / 2} | ({-h / 2 + th, -h / 2 + th + tp} if mh else set()), 1e-9 * h)
-    hmax = (div.h if div.h else 3.0 * h) / r
-    xa = graded(0.0, L, hz, max(hmax, hz), div.ratio)
+    hmax = (div.h if div.h else DUO_DEFAULT["h_over_t"] * h) / r
+    xa = graded(0.0, L, div.clamp * hz, max(hmax, hz), div.ratio)
     if mh:
         xh, _ = _split([L, L + Lh], min(hmax, max(hz, Lh / 2)))
         x = np.concatenate([xa, xh[1:]])
         xown = np.concatenate([np.zeros(xa.size - 1, int), np.ones(xh.size - 1, int)])
     else:
         x, xown = xa, np.zeros(xa.size - 1, int)
-    y, yown = _split(yb, 2.0 * hz)
+    y, yown = _split(yb, aspect * hz)
     z, zown = _split(zb, hz)
     _count_check((x.size - 1) * (y.size - 1) * (z.size - 1))
 
@@ -195,16 +234,16 @@ def piezotube_hex(q: dict[str, Any], div: HexDivisions, element: str, curved: bo
     mh = q["holder"] == "meshed"
     Lh, hw, tp = q["holder_length"], q["holder_wall"], q["piezolayer_thickness"]
     wall = Re - Ri
-    nw = max(1, math.ceil(div.n_thick * r - 1e-9))
+    nw = max(1, math.ceil((div.n_thick or TUBE_DEFAULT["n_thick"]) * r - 1e-9))
     hr = wall / nw
-    h = (div.h if div.h else 8.0 * wall) / r
+    h = (div.h if div.h else TUBE_DEFAULT["h_over_wall"] * wall) / r
     arc = 2 * math.pi * 0.5 * (Re + Ri) / N_SECT
     n_sector = max(1, math.ceil(arc / h - 1e-9))
     theta = np.radians(-15.0) + np.arange(N_SECT * n_sector) * (2 * math.pi / (N_SECT * n_sector))
     th_own = np.arange(N_SECT * n_sector) // n_sector
-    xa = graded(0.0, L, hr, max(h, hr), div.ratio)
-    if mh:
-        xh, _ = _split([L, L + Lh], h)
+    if mh:  # graded towards the clamp and towards the re-entrant junction with the collar
+        xa = graded_both(0.0, L, div.clamp * hr, div.clamp * hr, max(h, hr), div.ratio)
+        xh = L + graded(0.0, Lh, div.clamp * hr, max(h, hr), div.ratio)
         x = np.concatenate([xa, xh[1:]])
         xown = np.concatenate([np.zeros(xa.size - 1, int), np.ones(xh.size - 1, int)])
         n_hw = max(1, math.ceil(hw / (2 * hr) - 1e-9))
@@ -213,6 +252,7 @@ def piezotube_hex(q: dict[str, Any], div: HexDivisions, element: str, curved: bo
                             2 + np.linspace(0, 1, n_tp + 1)[1:]])
         sown = np.concatenate([np.zeros(nw, int), np.ones(n_hw, int), np.full(n_tp, 2)])
     else:
+        xa = graded(0.0, L, div.clamp * hr, max(h, hr), div.ratio)
         x, xown = xa, np.zeros(xa.size - 1, int)
         s, sown = np.linspace(0, 1, nw + 1), np.zeros(nw, int)
     _count_check((x.size - 1) * theta.size * (s.size - 1))
@@ -306,5 +346,5 @@ def piezotube_hex_mesh(q: dict[str, Any], div: HexDivisions | None = None, eleme
                    lambda p: piezotube_hex(p, HexDivisions(**p["div"]), p["element"], p["curved"]))
 
 
-__all__ = ["ELEMENT_CHOICES", "HexDivisions", "graded", "cantilever_hex", "duo_bimorph_hex", "piezotube_hex", "MAX_HEX",
+__all__ = ["ELEMENT_CHOICES", "DEFAULT_ACCURACY", "refinement_for", "HexDivisions", "graded", "cantilever_hex", "duo_bimorph_hex", "piezotube_hex", "MAX_HEX",
            "cantilever_hex_mesh", "duo_bimorph_hex_mesh", "piezotube_hex_mesh"]

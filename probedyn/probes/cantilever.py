@@ -21,7 +21,7 @@ from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.lumped import beam as bm
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
-from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, cantilever_hex_mesh
+from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, cantilever_hex_mesh, refinement_for
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
@@ -41,13 +41,16 @@ _PARAMS = ParamSet([
           choices=("none", "pyramid", "cone")),
     Param("tip_height", 10e-6, "m", "tip height (if tip_shape is not none)", lo=1e-7, hi=0.005, positive=True),
     Param("tip_half_angle", 0.35, "rad", "tip half-angle (0.35 rad = 20 deg)", lo=0.01, hi=1.5, positive=True),
-    Param("elements_through_thickness", 2, "", "element layers through the thickness", lo=1, hi=40,
+    Param("elements_through_thickness", 3, "", "element layers through the thickness", lo=1, hi=40,
           kind=int),
+    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+          lo=1e-5, hi=0.05, positive=True),
     Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
           "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
           choices=ELEMENT_CHOICES),
     Param("element_size", None, "m", "maximum element size (hexahedra: along the beam away from the clamp); "
-          "None = thickness / elements_through_thickness (hexahedra: 1.5 x thickness)",
+          "None = thickness / elements_through_thickness (hexahedra: the thickness, graded towards the clamp)",
           lo=1e-8, hi=0.01, positive=True),
 ])
 
@@ -89,7 +92,8 @@ class Cantilever(Probe):
     def mesh(self, values: dict[str, Any]):
         el = self.element(values)
         if el != "tet-p2":
-            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"))
+            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                               refine=refinement_for("cantilever", values.get("accuracy")))
             return cantilever_hex_mesh(values["length"], values["width"], values["thickness"], div, el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return cantilever_mesh(values["length"], values["width"], values["thickness"], values["tip_shape"],

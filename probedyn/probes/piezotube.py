@@ -37,7 +37,7 @@ from probedyn.lumped.smart import piezotube_references
 from probedyn.lumped.smart_analytic import Piezotube as Tube
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.piezotube import DEFAULTS as GEOM
-from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, piezotube_hex_mesh
+from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, piezotube_hex_mesh, refinement_for
 from probedyn.meshes.piezotube import piezotube_mesh, validate
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
@@ -78,6 +78,9 @@ _PARAMS = ParamSet([
           source="Table 3.2"),
     Param("elements_through_thickness", 1, "", "elements through the tube wall", lo=1, hi=12,
           kind=int),
+    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+          lo=1e-5, hi=0.05, positive=True),
     Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
           "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
           choices=ELEMENT_CHOICES),
@@ -117,7 +120,8 @@ class Piezotube(SmartProbe):
     def mesh(self, values: dict[str, Any]):
         el = self.element(values)
         if el != "tet-p2":
-            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"))
+            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                               refine=refinement_for("piezotube", values.get("accuracy")))
             return piezotube_hex_mesh(validate({k: values[k] for k in GEOM_KEYS}), div, el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return piezotube_mesh({k: values[k] for k in GEOM_KEYS}, options=opts)

@@ -40,8 +40,8 @@ from probedyn.fem.augmented import LumpedTip
 from probedyn.fem.eigen import reuse_factorizations
 from probedyn.fem.modes import ModalResult
 from probedyn.lumped.ritz import LUMPED_TIP, RitzBasis
-from probedyn.lumped.smart import (AX, compare_lumped_fem, holder_displacements, localisation_sweep, observed_order,
-                                   reduce_from_fem)
+from probedyn.lumped.smart import (AX, beamlike, compare_lumped_fem, holder_displacements, localisation_sweep,
+                                   observed_order, reduce_from_fem)
 from probedyn.lumped.smart_analytic import EccentricSection
 from probedyn.probes import get_probe
 from probedyn.probes._smart import SmartProbe
@@ -245,7 +245,7 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
             raise ParameterError(f"the eccentricity study needs a tube probe (piezotube), not '{p.key}'")
         model = p.build(v)
         res = model.modes(n_modes)
-        lat = [i for i, m in enumerate(res.modes) if m.family in ("lateral", "flapwise")][:2]
+        lat = [i for i, m in enumerate(res.modes) if beamlike(m) and m.family != "axial"][:2]
         ax = [i for i, m in enumerate(res.modes) if m.family == "axial"][:1]
         if len(lat) < 2:
             raise SolverError("eccentricity: the lateral pair was not found among the lowest modes")
