@@ -27,12 +27,14 @@ from typing import Any, Mapping, Sequence, Union
 import numpy as np
 import scipy.sparse as sp
 
+from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.assembly import element_kind, element_volumes
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
+from probedyn.fem.size import check_model
 
 Where = Union[str, Sequence[float], np.ndarray]
 
@@ -189,11 +191,13 @@ class ElasticModel:
     def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
         if self._K is None:
+            check_model(self.dofs, self.name or "model", element=self.element)  # announce a large model, refuse one too large
             t0 = time.perf_counter()
-            K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations,
-                                      element=self.element, basis=self.basis)
-            t1 = time.perf_counter()
-            M = el.assemble_mass(self.mesh, self.elem_density, element=self.element, basis=self.basis)
+            with progress.stage(f"assembling K and M ({self.dofs} DOFs)"):
+                K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations,
+                                          element=self.element, basis=self.basis)
+                t1 = time.perf_counter()
+                M = el.assemble_mass(self.mesh, self.elem_density, element=self.element, basis=self.basis)
             t2 = time.perf_counter()
             self._Kel, self._Mel = K, M
             for pm in self.point_masses:
@@ -252,7 +256,8 @@ class ElasticModel:
         Kf, Mf = self.free_matrices()
         if sigma is None and self.clamp:
             sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
-        res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
+        with progress.stage(f"solving for {int(n_modes)} modes ({self.dofs} DOFs)"):
+            res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
         t0 = time.perf_counter()
         Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
         Phi[free] = res.vectors
@@ -369,7 +374,8 @@ class ElasticModel:
         for where, F in force_at.items():
             f += self.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)
         free = self.free_dofs
-        fac = factorize(self.free_matrices()[0], spd=True, solver=solver)
+        with progress.stage(f"factorising K for a static solve ({self.dofs} DOFs)"):
+            fac = factorize(self.free_matrices()[0], spd=True, solver=solver)
         try:
             u = np.zeros(self.ndofs_total)
             u[free] = fac.solve(f[free])

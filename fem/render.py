@@ -1,9 +1,14 @@
 """Off-screen pictures of mode shapes (pyvista/VTK), for reports and papers (source Figs 3.15–3.16).
 
-* :func:`check_offscreen_gl` makes sure an off-screen OpenGL library (OSMesa or EGL) can be
-  loaded *before* VTK is imported: without one, VTK does not raise but kills the process.
-  A missing library gives :class:`probedyn.core.errors.SystemLibraryError` naming the Debian
-  packages ``libosmesa6`` / ``libegl1``.
+* :func:`check_offscreen_gl` proves that an off-screen OpenGL context can be created *before*
+  VTK is used in this process: a child process (``sys.executable``, time-limited) imports VTK,
+  opens an off-screen render window of each candidate back-end (EGL, then OSMesa) and renders
+  one frame. A library that loads but cannot make a context (libEGL without a working vendor
+  driver, no OSMesa) crashes the child, not probedyn; VTK in this process is then pinned to
+  the back-end that worked (``VTK_DEFAULT_OPENGL_WINDOW``). None working gives
+  :class:`probedyn.core.errors.SystemLibraryError` naming the Debian packages ``libosmesa6`` /
+  ``libegl1``. ``PROBEDYN_GL_BACKENDS=EGL`` (or ``OSMesa``, comma-separated) restricts the
+  candidates.
 * :func:`render_mode` writes one PNG per mode: the deformed shape coloured by the displacement
   magnitude (normalised to its maximum: a mode's amplitude is arbitrary), the undeformed
   outline in grey, a scalar bar and the title "mode n — family — f".
@@ -19,7 +24,6 @@ the largest section half-size). Coordinates are drawn in micrometres.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
 import math
 import os
 from pathlib import Path
@@ -37,6 +41,25 @@ _GL_CANDIDATES: list[tuple[str, str, tuple[str, ...]]] = [
 ]
 
 _GL_BACKEND: str | None = None
+#: seconds the child process may take to import VTK and render one frame
+GL_CHECK_TIMEOUT_S = 90.0
+
+# Run in a child process: open an off-screen window of the class named by
+# VTK_DEFAULT_OPENGL_WINDOW, render one frame, report the class VTK really used.
+_GL_PROBE = r"""
+import sys
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (registers the OpenGL window classes)
+from vtkmodules.vtkRenderingCore import vtkRenderWindow, vtkRenderer
+w = vtkRenderWindow()
+w.SetOffScreenRendering(1)
+w.SetSize(8, 8)
+w.AddRenderer(vtkRenderer())
+w.Render()
+ok = bool(w.SupportsOpenGL()) if hasattr(w, "SupportsOpenGL") else True
+sys.stdout.write("PROBEDYN-GL %s %d\n" % (w.GetClassName(), ok))
+sys.stdout.flush()
+w.Finalize()
+"""
 
 
 def _loadable(sonames: Sequence[str]) -> bool:
@@ -49,22 +72,70 @@ def _loadable(sonames: Sequence[str]) -> bool:
     return False
 
 
-def check_offscreen_gl() -> str:
-    """Return the usable off-screen GL back-end ("EGL" or "OSMesa"); raise if there is none.
+def _probe_backend(window_class: str) -> tuple[str | None, str]:
+    """Try ``window_class`` in a child process: (class VTK used, or None; reason if it failed)."""
+    import signal
+    import subprocess
+    import sys
 
-    Uses ctypes only (VTK itself would segfault). Without a display (no ``$DISPLAY``), tells
-    VTK which window class to use (``VTK_DEFAULT_OPENGL_WINDOW``) so it does not try X first.
+    env = dict(os.environ, VTK_DEFAULT_OPENGL_WINDOW=window_class)
+    try:
+        cp = subprocess.run([sys.executable, "-c", _GL_PROBE], env=env, capture_output=True, text=True,
+                            timeout=GL_CHECK_TIMEOUT_S, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return None, f"no frame within {GL_CHECK_TIMEOUT_S:g} s"
+    except OSError as exc:
+        return None, f"cannot start a check process ({exc.strerror})"
+    if cp.returncode < 0:
+        try:
+            name = signal.Signals(-cp.returncode).name
+        except ValueError:
+            name = f"signal {-cp.returncode}"
+        return None, f"creating a context crashed ({name})"
+    for line in cp.stdout.splitlines():
+        if line.startswith("PROBEDYN-GL "):
+            _, used, ok = line.split()
+            if ok == "1":
+                return used, ""
+            return None, f"{used} has no usable OpenGL"
+    return None, f"check process failed (exit {cp.returncode})"
+
+
+def check_offscreen_gl() -> str:
+    """Return the off-screen GL back-end proven to work ("EGL" or "OSMesa"); raise if there is none.
+
+    The proof runs in a child process (see the module docstring), once per process. With a
+    display (``$DISPLAY`` set) VTK's own choice is kept and only checked.
     """
     global _GL_BACKEND
-    for name, window_class, sonames in _GL_CANDIDATES:
-        if _loadable(sonames):
-            if not os.environ.get("DISPLAY"):
-                os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", window_class)
-            _GL_BACKEND = name
-            return name
+    if _GL_BACKEND is not None:
+        return _GL_BACKEND
+    wanted = {w.strip().lower() for w in os.environ.get("PROBEDYN_GL_BACKENDS", "").split(",") if w.strip()}
+    candidates = [c for c in _GL_CANDIDATES if not wanted or c[0].lower() in wanted]
+    reasons = []
+    by_class = {cls: name for name, cls, _ in _GL_CANDIDATES}
+    for name, window_class, sonames in candidates:
+        if not _loadable(sonames):
+            reasons.append(f"{name}: library not found")
+            continue
+        used, why = _probe_backend(window_class)
+        if used is None:
+            reasons.append(f"{name}: {why}")
+            continue
+        if used not in by_class and os.environ.get("DISPLAY"):
+            _GL_BACKEND = used  # a display's own window class (X): fine
+            return used
+        if by_class.get(used) not in [c[0] for c in candidates]:
+            reasons.append(f"{name}: VTK fell back to {used}")
+            continue
+        if not os.environ.get("DISPLAY"):
+            os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = used
+        _GL_BACKEND = by_class[used]
+        return _GL_BACKEND
+    detail = "; ".join(reasons) if reasons else "no back-end selected by PROBEDYN_GL_BACKENDS"
     raise SystemLibraryError(
-        "no off-screen OpenGL library for rendering (neither libEGL nor libOSMesa loads); "
-        "install the Debian package libosmesa6 or libegl1 (./dev setup does it)"
+        f"no working off-screen OpenGL for rendering ({detail}); install the Debian package libosmesa6 "
+        "(or a working libegl1 driver, libegl-mesa0); ./dev setup does it"
     )
 
 

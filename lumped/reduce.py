@@ -106,6 +106,16 @@ def _point_mass_share(result: Any, mode: Any, direction: str) -> float:
     return total / tip**2
 
 
+def check_damping(mu: float | None = None, Q: float | None = None) -> None:
+    """Refuse a damping specification before any work: at most one of ``mu`` (>= 0) and ``Q`` (> 0)."""
+    if mu is not None and Q is not None:
+        raise ParameterError("give either an environment damping mu or a quality factor Q, not both")
+    if mu is not None and (not math.isfinite(mu) or mu < 0):
+        raise ParameterError(f"environment damping mu must be >= 0, got {mu}")
+    if Q is not None and (not math.isfinite(Q) or Q <= 0):
+        raise ParameterError(f"quality factor Q must be positive, got {Q}")
+
+
 def reduce_mode(result: Any, mode: Any, *, mu: float | None = None, Q: float | None = None,
                 mass_per_length: float | None = None, total_mass: float | None = None,
                 direction: str | None = None) -> LumpedModel:
@@ -115,12 +125,7 @@ def reduce_mode(result: Any, mode: Any, *, mu: float | None = None, Q: float | N
     ``c = sqrt(k m)/Q``. Give at most one. A mode with (numerically) no tip motion in
     ``direction`` has no lumped model there: mass and stiffness are ``inf`` and a note says so.
     """
-    if mu is not None and Q is not None:
-        raise ParameterError("give either an environment damping mu or a quality factor Q, not both")
-    if mu is not None and (not math.isfinite(mu) or mu < 0):
-        raise ParameterError(f"environment damping mu must be >= 0, got {mu}")
-    if Q is not None and (not math.isfinite(Q) or Q <= 0):
-        raise ParameterError(f"quality factor Q must be positive, got {Q}")
+    check_damping(mu, Q)
     d = direction or dominant_direction(mode)
     tip = np.asarray(mode.tip_displacement, dtype=float)
     m_eff = float(mode.effective_mass_tip[d])

@@ -55,6 +55,7 @@ are the attachment ``"lumped_tip"``.
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping, Sequence, Union
@@ -63,7 +64,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from probedyn.core.errors import GeometryError, ParameterError, SolverError
+from probedyn.core.errors import DataFormatError, GeometryError, ParameterError, SolverError
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.model import PointMass, Spring
 
@@ -215,6 +216,7 @@ class RitzBasis:
         self.model = model
         self._sys = system
         self.meta = dict(meta or {})
+        self.static_coeffs = np.zeros((self.K.shape[0], 0))
 
     # ---- construction -------------------------------------------------------------------
     @classmethod
@@ -250,17 +252,23 @@ class RitzBasis:
             for d in dirs:
                 loads.append(np.asarray(A.T @ d).ravel())
         s_kept = 0
+        static_response: dict[str, Any] = {}
+        Psi_raw = None
         if loads:
             F = np.column_stack(loads)
             fac = factorize(sysm.K, spd=True, solver=solver)
             try:
-                # one right-hand side at a time: Factorization.solve of fem/eigen.py passes a
-                # C-ordered (n, k) block to PARDISO, which reads it column-major (wrong for k > 1)
-                Psi = np.column_stack([np.asarray(fac.solve(F[:, j])).ravel() for j in range(F.shape[1])])
+                Psi = np.asarray(fac.solve(F)).reshape(sysm.n, -1)
             finally:
                 fac.release()
             if not np.all(np.isfinite(Psi)):
                 raise SolverError("static correction shapes are not finite (singular stiffness)")
+            Psi_raw = Psi
+            j = 0
+            for where, dirs in specs:  # the FEM static solves themselves: displacement at the attachment
+                U = np.asarray(sysm.attachment(where) @ Psi_raw[:, j:j + len(dirs)])
+                static_response[str(_key(where))] = {"directions": np.array(dirs).T, "displacement": U}
+                j += len(dirs)
             MPsi = sysm.M @ Psi
             Psi = Psi - Phi @ (Phi.T @ MPsi)          # M-orthogonal to the modes
             Psi = Psi - Phi @ (Phi.T @ (sysm.M @ Psi))  # second pass (Gram-Schmidt re-orthogonalisation)
@@ -292,15 +300,20 @@ class RitzBasis:
         ops: dict[Any, np.ndarray] = {}
         for where, _ in specs:
             ops[_key(where)] = np.asarray(sysm.attachment(where) @ Tf)
+        # coefficients of the raw static shapes K^-1 A^T d in the basis (they lie in its span):
+        # what :meth:`truncate` needs to rebuild the static block for fewer modes
+        coeffs = Tf.T @ (sysm.M @ Psi_raw) if Psi_raw is not None else np.zeros((Tf.shape[1], 0))
         T = sysm.embed(Tf) if keep_basis else None
-        meta = dict(dofs=int(sysm.n), ndofs_total=int(sysm.ndofs_total), n_extra=int(sysm.n_extra),
+        meta = dict(static_response=static_response, dofs=int(sysm.n), ndofs_total=int(sysm.ndofs_total), n_extra=int(sysm.n_extra),
                     n_static_requested=len(loads), n_static_kept=s_kept,
                     mesh_key=getattr(getattr(model, "bundle", None), "key", ""),
                     timings=dict(system_s=t1 - t0, modes_s=t2 - t1, static_s=t3 - t2, total_s=t3 - t0),
                     eigen_backend=res.backend)
-        return cls(K, M, np.sqrt(w2), kinds, n_modes, T=T, operators=ops,
-                   attachments=[(w if isinstance(w, str) else list(map(float, np.ravel(w))), dirs) for w, dirs in specs],
-                   model=model, system=sysm, meta=meta)
+        out = cls(K, M, np.sqrt(w2), kinds, n_modes, T=T, operators=ops,
+                  attachments=[(w if isinstance(w, str) else list(map(float, np.ravel(w))), dirs) for w, dirs in specs],
+                  model=model, system=sysm, meta=meta)
+        out.static_coeffs = coeffs
+        return out
 
     # ---- basic properties -----------------------------------------------------------------
     @property
@@ -332,18 +345,45 @@ class RitzBasis:
         self._ops[k] = op
         return op
 
-    def leading(self, n_modes: int) -> "RitzBasis":
-        """The basis of the first ``n_modes`` FEM modes only (no static shapes): the reduction
-        :meth:`from_model` would give with ``n_modes`` and no attachments, without a new
-        eigen-solve.  (Static columns are dropped: they were made M-orthogonal to all modes of
-        this basis, so with fewer modes they would no longer span ``K^-1 A^T``.)"""
+    def truncate(self, n_modes: int, static: bool = True) -> "RitzBasis":
+        """The basis :meth:`from_model` would give with ``n_modes`` (<= this basis's) and the
+        same attachments, without a new FEM solve: the first ``n_modes`` modes plus (``static``)
+        the static shapes ``K^-1 A^T d``, which lie in this basis's span (their coefficients are
+        kept in ``static_coeffs``), M-orthogonalised to the kept modes and M-orthonormalised.
+        ``static=False``: the modes only."""
         if not 1 <= int(n_modes) <= self.n_modes:
-            raise ParameterError(f"leading: n_modes must lie in 1..{self.n_modes}, got {n_modes}")
+            raise ParameterError(f"truncate: n_modes must lie in 1..{self.n_modes}, got {n_modes}")
+        if not np.allclose(self.M, np.eye(self.r), atol=1e-10) or np.count_nonzero(self.K - np.diag(np.diag(self.K))):
+            raise ParameterError("truncate needs the bare basis (no with_stiffness)")
         k = int(n_modes)
-        return RitzBasis(self.K[:k, :k].copy(), self.M[:k, :k].copy(), self.omega[:k], self.kinds[:k], k,
-                         T=None if self.T is None else self.T[:, :k],
-                         operators={w: op[:, :k] for w, op in self._ops.items()}, attachments=[],
-                         model=self.model, system=self._sys, meta=dict(self.meta, n_static_kept=0))
+        E = np.eye(self.r)[:, :k]
+        Q = E
+        kinds = ["mode"] * k
+        C = self.static_coeffs if static else np.zeros((self.r, 0))
+        if C.shape[1]:
+            P = C - E @ (E.T @ C)
+            P = P - E @ (E.T @ P)
+            G = 0.5 * (P.T @ P + (P.T @ P).T)
+            g, V = np.linalg.eigh(G)
+            keep = g > GRAM_RTOL * g.max() if g.size and g.max() > 0 else np.zeros(g.shape, dtype=bool)
+            P = P @ (V[:, keep] / np.sqrt(g[keep]))
+            Kss = P.T @ self.K @ P
+            mu, W = np.linalg.eigh(0.5 * (Kss + Kss.T))
+            Q = np.hstack([E, P @ W])
+            kinds += ["static"] * int(keep.sum())
+        Kn = Q.T @ self.K @ Q
+        Kn = 0.5 * (Kn + Kn.T)
+        out = RitzBasis(Kn, np.eye(Q.shape[1]), np.sqrt(np.maximum(np.diag(Kn), 0.0)), kinds, k,
+                        T=None if self.T is None else self.T @ Q,
+                        operators={w: op @ Q for w, op in self._ops.items()},
+                        attachments=self.attachments if static else [], model=self.model, system=self._sys,
+                        meta=dict(self.meta, n_static_kept=len(kinds) - k))
+        out.static_coeffs = Q.T @ C if static else np.zeros((Q.shape[1], 0))
+        return out
+
+    def leading(self, n_modes: int) -> "RitzBasis":
+        """The first ``n_modes`` FEM modes only (``truncate(n_modes, static=False)``)."""
+        return self.truncate(n_modes, static=False)
 
     def expand(self, a: np.ndarray) -> np.ndarray:
         """Full FEM field(s) ``T a`` for reduced coordinates ``a`` (r,) or (r, k)."""
@@ -473,27 +513,24 @@ class RitzBasis:
         for i, (k, op) in enumerate(self._ops.items()):
             arr[f"op{i}"] = op
             names.append(k if isinstance(k, str) else list(k))
-        import json
-
         arr["op_names"] = np.array(json.dumps(names))
         arr["attachments"] = np.array(json.dumps(self.attachments))
+        arr["static_coeffs"] = self.static_coeffs
         if include_basis and self.T is not None:
             arr["T"] = self.T
         return arr
 
     @classmethod
     def from_arrays(cls, arr: Mapping[str, np.ndarray], model: Any = None, meta: Mapping[str, Any] | None = None) -> "RitzBasis":
-        import json
-
         try:
             names = json.loads(str(arr["op_names"]))
             ops = {(n if isinstance(n, str) else tuple(n)): np.asarray(arr[f"op{i}"]) for i, n in enumerate(names)}
             b = cls(arr["K"], arr["M"], arr["omega"], [str(k) for k in arr["kinds"]], int(arr["n_modes"]),
                     T=np.asarray(arr["T"]) if "T" in arr else None, operators=ops, model=model, meta=meta)
             b.attachments = json.loads(str(arr["attachments"]))
+            if "static_coeffs" in arr:
+                b.static_coeffs = np.asarray(arr["static_coeffs"])
         except (KeyError, ValueError, TypeError) as exc:
-            from probedyn.core.errors import DataFormatError
-
             raise DataFormatError(f"not a probedyn Ritz basis ({exc})") from None
         return b
 
@@ -502,4 +539,26 @@ class RitzBasis:
                     frequencies_hz=self.frequencies_hz, attachments=self.attachments, **self.meta)
 
 
-__all__ = ["RitzBasis", "RitzSolution", "LUMPED_TIP"]
+def direct_compliance(model: Any, where: Where, direction: Sequence[float], frequencies_hz: Sequence[float],
+                      solver: str = "auto") -> np.ndarray:
+    """The FEM's own undamped frequency response at an attachment: ``d . A u`` with
+    ``(K - omega^2 M) u = A^T d`` solved directly (sparse symmetric indefinite factorisation per
+    frequency) [m/N].  The reference for modal truncation checks of reduced models."""
+    sysm = _System(model)
+    A = sysm.attachment(where)
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    f = np.asarray(A.T @ d).ravel()
+    out = []
+    for fz in np.atleast_1d(np.asarray(frequencies_hz, dtype=float)):
+        w2 = (2 * np.pi * fz) ** 2
+        fac = factorize((sysm.K - w2 * sysm.M).tocsr(), spd=(w2 == 0.0), solver=solver)
+        try:
+            u = np.asarray(fac.solve(f)).ravel()
+        finally:
+            fac.release()
+        out.append(float(d @ (A @ u)))
+    return np.array(out)
+
+
+__all__ = ["RitzBasis", "RitzSolution", "LUMPED_TIP", "direct_compliance"]

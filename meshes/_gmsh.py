@@ -50,10 +50,13 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
     # ...) that a machine may lack, and a cached mesh (meshes.cache) is read without it.
     import gmsh
 
+    from probedyn.core.signals import reassert_handlers
+
     with _LOCK:
         owner = not gmsh.isInitialized()
         if owner:
             gmsh.initialize(interruptible=False)
+            reassert_handlers()  # gmsh resets SIGTERM/SIGHUP to the default action
         try:
             gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
             gmsh.option.setNumber("General.Verbosity", 2 if verbose else 0)
@@ -69,6 +72,7 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
                 gmsh.model.remove()
             if owner:
                 gmsh.finalize()
+                reassert_handlers()
 
 
 def set_mesh_size(h_max: float, h_min: float | None = None) -> None:

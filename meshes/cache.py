@@ -9,9 +9,11 @@ meshio (:meth:`MeshBundle.export`).
 
 from __future__ import annotations
 
+import errno
 import hashlib
 import json
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -113,7 +115,7 @@ class MeshBundle:
         for name, x in self.points.items():
             arrays[f"pt::{name}"] = np.asarray(x, dtype=float)
         arrays["meta"] = np.array(json.dumps(to_jsonable({"key": self.key, "meta": self.meta, "version": CACHE_VERSION})))
-        with atomic_path(path) as tmp:
+        with atomic_path(path, defer=False) as tmp:  # a cache entry: kept even if the run fails
             with open(tmp, "wb") as fh:
                 np.savez(fh, **arrays)
         return path
@@ -137,11 +139,41 @@ class MeshBundle:
         return cls(mesh, pts, info.get("key", ""), path, info.get("meta", {}))
 
 
-def cache_dir() -> Path:
-    """``$PROBEDYN_CACHE`` or ``~/.cache/probedyn/meshes`` (created on demand)."""
-    env = os.environ.get("PROBEDYN_CACHE")
-    d = Path(env) if env else Path.home() / ".cache" / "probedyn" / "meshes"
+def _usable(d: Path) -> None:
+    """Raise OSError unless ``d`` is (or can be made) a folder this process can write in."""
     d.mkdir(parents=True, exist_ok=True)
+    if not d.is_dir():
+        raise NotADirectoryError(errno.ENOTDIR, "not a folder", str(d))
+    if not os.access(d, os.W_OK | os.X_OK):
+        raise PermissionError(errno.EACCES, "not writable", str(d))
+
+
+def cache_dir() -> Path:
+    """``$PROBEDYN_CACHE`` or ``~/.cache/probedyn/meshes`` (created on demand).
+
+    An unusable ``$PROBEDYN_CACHE`` (a file, a read-only or forbidden folder) is a one-line
+    :class:`~probedyn.core.errors.OutputError`: the user asked for it. An unusable default
+    location (a read-only home) falls back to a folder in the system's temporary directory.
+    """
+    from probedyn.core.errors import OutputError
+
+    env = os.environ.get("PROBEDYN_CACHE")
+    if env:
+        d = Path(env)
+        try:
+            _usable(d)
+        except OSError as exc:
+            reason = "it is a file" if isinstance(exc, (FileExistsError, NotADirectoryError)) else (
+                exc.strerror or type(exc).__name__).lower()
+            raise OutputError(f"PROBEDYN_CACHE={env} is not a usable folder ({reason}); point it at a "
+                              "writable folder or unset it") from None
+        return d
+    d = Path.home() / ".cache" / "probedyn" / "meshes"
+    try:
+        _usable(d)
+    except OSError:
+        d = Path(tempfile.gettempdir()) / f"probedyn-cache-{os.getuid()}" / "meshes"
+        _usable(d)
     return d
 
 
@@ -179,5 +211,10 @@ def cached_mesh(
     bundle.key = key
     bundle.meta = {"builder": builder_name, "params": params, **bundle.meta}
     if use_cache:
-        bundle.path = bundle.save(cache_dir() / f"{builder_name}-{key}.npz")
+        from probedyn.core.errors import OutputError
+
+        try:
+            bundle.path = bundle.save(cache_dir() / f"{builder_name}-{key}.npz")
+        except OutputError:  # a full disk under the cache: the mesh is still good, just not kept
+            bundle.path = None
     return bundle

@@ -128,12 +128,8 @@ def _count_check(n: int) -> None:
 # cantilever
 # ---------------------------------------------------------------------------------------------
 
-def cantilever_hex(L: float, w: float, t: float, div: HexDivisions, element: str) -> MeshBundle:
-    """Rectangular beam [0, L] x [-w/2, w/2] x [-t/2, t/2] (no tip), graded towards the clamp.
-
-    Through the thickness ``n_thick`` elements; across the width an even number (the centre line
-    y = 0 carries the named point ``tip``) of elements of about the thickness size; along x
-    from ``h0 = t / n_thick`` at the clamp to ``h`` (default ``3 t``)."""
+def cantilever_hex_grid(L: float, w: float, t: float, div: HexDivisions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Node coordinates (x, y, z) of the tensor grid of :func:`cantilever_hex`."""
     r = float(div.refine)
     nz = max(1, math.ceil((div.n_thick or CANTILEVER_DEFAULT["n_thick"]) * r - 1e-9))
     hz = t / nz
@@ -141,8 +137,37 @@ def cantilever_hex(L: float, w: float, t: float, div: HexDivisions, element: str
     ny = 2 * max(1, math.ceil(w / (2 * aspect * hz) - 1e-9))  # even: the centre line y = 0 is a node line
     h = (div.h if div.h else CANTILEVER_DEFAULT["h_over_t"] * t) / r
     x = graded(0.0, L, div.clamp * hz, max(h, hz), div.ratio)
-    y = np.linspace(-w / 2, w / 2, ny + 1)
-    z = np.linspace(-t / 2, t / 2, nz + 1)
+    return x, np.linspace(-w / 2, w / 2, ny + 1), np.linspace(-t / 2, t / 2, nz + 1)
+
+
+def grid_nodes(nx: int, ny: int, nz: int, element: str) -> int:
+    """Nodes of a full nx x ny x nz grid of quadratic hexahedra: vertices + edge midpoints
+    (``hex-s2``), + face and cell centres (``hex-q2``)."""
+    v = (nx + 1) * (ny + 1) * (nz + 1)
+    e = nx * (ny + 1) * (nz + 1) + (nx + 1) * ny * (nz + 1) + (nx + 1) * (ny + 1) * nz
+    if element == "hex-s2":
+        return v + e
+    f = nx * ny * (nz + 1) + nx * (ny + 1) * nz + (nx + 1) * ny * nz
+    return v + e + f + nx * ny * nz
+
+
+def cantilever_hex_dofs(L: float, w: float, t: float, div: HexDivisions, element: str) -> int:
+    """Free displacement DOFs of :func:`cantilever_hex` clamped at x = 0 (exact, before any
+    mesh is built): the grid's nodes less those of the clamp face, times 3."""
+    x, y, z = cantilever_hex_grid(L, w, t, div)
+    ny, nz = y.size - 1, z.size - 1
+    face = (ny + 1) * (nz + 1) + ny * (nz + 1) + (ny + 1) * nz + (ny * nz if element == "hex-q2" else 0)
+    return 3 * (grid_nodes(x.size - 1, ny, nz, element) - face)
+
+
+def cantilever_hex(L: float, w: float, t: float, div: HexDivisions, element: str) -> MeshBundle:
+    """Rectangular beam [0, L] x [-w/2, w/2] x [-t/2, t/2] (no tip), graded towards the clamp.
+
+    Through the thickness ``n_thick`` elements; across the width an even number (the centre line
+    y = 0 carries the named point ``tip``) of elements of about the thickness size; along x
+    from ``h0 = t / n_thick`` at the clamp to ``h`` (default ``3 t``)."""
+    x, y, z = cantilever_hex_grid(L, w, t, div)
+    ny, nz = y.size - 1, z.size - 1
     _count_check((x.size - 1) * ny * nz)
     zero = (np.zeros(x.size - 1, int), np.zeros(ny, int), np.zeros(nz, int))
     mesh = box_grid(x, y, z, zero, lambda i, j, k: "body")
@@ -346,5 +371,5 @@ def piezotube_hex_mesh(q: dict[str, Any], div: HexDivisions | None = None, eleme
                    lambda p: piezotube_hex(p, HexDivisions(**p["div"]), p["element"], p["curved"]))
 
 
-__all__ = ["ELEMENT_CHOICES", "DEFAULT_ACCURACY", "refinement_for", "HexDivisions", "graded", "cantilever_hex", "duo_bimorph_hex", "piezotube_hex", "MAX_HEX",
+__all__ = ["cantilever_hex_grid", "grid_nodes", "cantilever_hex_dofs", "ELEMENT_CHOICES", "DEFAULT_ACCURACY", "refinement_for", "HexDivisions", "graded", "cantilever_hex", "duo_bimorph_hex", "piezotube_hex", "MAX_HEX",
            "cantilever_hex_mesh", "duo_bimorph_hex_mesh", "piezotube_hex_mesh"]

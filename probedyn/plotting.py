@@ -59,6 +59,11 @@ def axis_label(quantity: str, unit: str = "") -> str:
     return f"{quantity} [{u}]" if u else quantity
 
 
+def fmt_um(x_m: float, digits: int = 4) -> str:
+    """A length given in metres, printed in micrometres: ``fmt_um(5e-6) == "5 µm"``."""
+    return f"{x_m * 1e6:.{digits}g} µm"
+
+
 def fmt_hz(f: float, digits: int = 5) -> str:
     """A frequency with its unit chosen by magnitude, ``digits`` significant: 152.75 kHz."""
     if f is None or not math.isfinite(f):

@@ -45,9 +45,11 @@ from scipy.integrate import solve_ivp
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset as table
+from probedyn.lumped.reduced import ReducedProbe
 from probedyn.schemes.friction import FrictionModel, model_class
 from probedyn.schemes.friction.bristle import bristle2d_eval
 from probedyn.schemes.friction.prandtl_tomlinson import MICA_LATTICE
+from probedyn.schemes.probe_hooks import ffm_cantilever
 from probedyn.schemes.stickslip_analysis import analyze
 
 # ------------------------------------------------------------------------------------------
@@ -103,14 +105,19 @@ class FFM:
     friction: FrictionModel
     friction_y: dict[str, float] = field(default_factory=lambda: Y_FRICTION_PARAMS.defaults())
     preset: str | None = None
+    #: the reduced probe the cantilever parameters came from (None: the preset's table values)
+    probe: ReducedProbe | None = None
 
     @classmethod
     def from_preset(cls, preset: str = "mica", model: str = "bristle",
                     overrides: Mapping[str, Any] | None = None, friction_scale: float = 1.0,
-                    normal_load: float | None = None) -> "FFM":
+                    normal_load: float | None = None, probe: ReducedProbe | None = None) -> "FFM":
         """Build from a preset; ``overrides`` may name cantilever, friction-model or y-friction
         parameters. ``friction_scale`` multiplies the friction levels (normal-load input of
-        the adhesion coupling); ``normal_load`` [N] does it with ``L / 141.75 nN``."""
+        the adhesion coupling); ``normal_load`` [N] does it with ``L / 141.75 nN``. ``probe``: a
+        :class:`~probedyn.lumped.reduced.ReducedProbe` whose scan / lateral one-mode models
+        replace the table's ``m, c, k`` (:func:`probedyn.schemes.probe_hooks.ffm_cantilever`);
+        explicit ``overrides`` still win."""
         if preset not in PRESETS:
             raise ParameterError(f"unknown FFM preset {preset!r} (known: {', '.join(PRESETS)})")
         pr = PRESETS[preset]
@@ -131,12 +138,13 @@ class FFM:
             fm = fm.at_load(normal_load)
         if friction_scale != 1.0:
             fm = fm.scaled(friction_scale)
-        cant = CANTILEVER_PARAMS.resolve({**pr["cantilever"], **cant_over})
+        from_probe = ffm_cantilever(probe) if probe is not None else {}
+        cant = CANTILEVER_PARAMS.resolve({**pr["cantilever"], **from_probe, **cant_over})
         fy = Y_FRICTION_PARAMS.resolve({**pr["friction_y"], **y_over})
         if fy["F_cy"] > fy["F_sy"]:
             raise ParameterError(f"F_cy = {fy['F_cy']:g} N > F_sy = {fy['F_sy']:g} N: kinetic friction "
                                  "cannot exceed static friction in the bristle model")
-        return cls(cantilever=cant, friction=fm, friction_y=fy, preset=preset)
+        return cls(cantilever=cant, friction=fm, friction_y=fy, preset=preset, probe=probe)
 
     @property
     def alpha(self) -> float:
@@ -430,12 +438,14 @@ def presliding_force(ffm: FFM, base: np.ndarray) -> np.ndarray:
 
 def run_ffm(preset: str = "mica", model: str = "bristle", overrides: Mapping[str, Any] | None = None,
             length: float | None = None, friction_scale: float = 1.0, normal_load: float | None = None,
-            rtol: float = 1e-5) -> tuple[ScanResult, dict[str, Any]]:
+            rtol: float = 1e-5, probe: ReducedProbe | None = None) -> tuple[ScanResult, dict[str, Any]]:
     """Line scan of ``preset`` with friction model ``model``; returns the scan and a summary:
     static / kinetic friction, period, regime (:func:`probedyn.schemes.stickslip_analysis.analyze`),
     the quasi-static estimates ``F_s / k_x`` (first slip) and ``(F_s - F_c) / k_x`` (period),
-    alpha, wall time and solver statistics."""
-    ffm = FFM.from_preset(preset, model, overrides, friction_scale=friction_scale, normal_load=normal_load)
+    alpha, wall time and solver statistics; with a ``probe`` (a reduced probe: its scan/lateral
+    one-mode models drive the cantilever) the summary carries the probe's provenance."""
+    ffm = FFM.from_preset(preset, model, overrides, friction_scale=friction_scale, normal_load=normal_load,
+                          probe=probe)
     line_scan(ffm, 1e-3 * ffm.cantilever["V"] * math.sqrt(ffm.cantilever["m_x"] / ffm.cantilever["k_x"]))
     # ^ loads / compiles the numba kernels so that wall_time_s measures the integration only
     t0 = time.perf_counter()
@@ -457,6 +467,8 @@ def run_ffm(preset: str = "mica", model: str = "bristle", overrides: Mapping[str
         F_s=lv[0] if lv else None, F_c=lv[1] if lv else None,
         wall_time_s=wall, n_steps=res.n_steps, n_rejected=res.n_rejected,
         parameters=dict(cantilever=dict(ffm.cantilever), friction=dict(fv)),
+        probe=probe.summary() if probe is not None else None,
+        probe_source=probe.source if probe is not None else PRESETS[preset]["source"],
     )
     return res, summary
 

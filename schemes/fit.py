@@ -28,8 +28,8 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.optimize import least_squares
 
-from probedyn.core.errors import DataFormatError, ParameterError
-from probedyn.core.io import write_text
+from probedyn.core.errors import DataFormatError, ParameterError, SolverError
+from probedyn.core.io import MAX_DATA_BYTES, read_text, write_text
 from probedyn.schemes.ffm import FFM, line_scan
 from probedyn.schemes.stickslip_analysis import analyze
 
@@ -47,12 +47,9 @@ class Trace:
 def read_trace(path: str | Path) -> Trace:
     """Read a trace CSV; malformed content raises DataFormatError naming file, line and column."""
     path = Path(path)
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except OSError as exc:
-        raise DataFormatError(f"{path}: cannot read file ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise DataFormatError(f"{path}: not a UTF-8 text file") from None
+    # a regular file of bounded size (no FIFO, device or endless stream), UTF-8; messages name
+    # positions, never the file's content
+    lines = read_text(path, what="trace file", max_bytes=MAX_DATA_BYTES).splitlines()
     meta: dict[str, Any] = {}
     rows: list[tuple[float, float]] = []
     header_seen = False
@@ -68,7 +65,7 @@ def read_trace(path: str | Path) -> Trace:
                     try:
                         meta[key] = float(val)
                     except ValueError:
-                        raise DataFormatError(f"{path}:{ln}: metadata '{key}' = {val!r} is not a number") from None
+                        raise DataFormatError(f"{path}:{ln}: metadata '{key}' is not a number") from None
                 else:
                     meta[key] = val
             continue
@@ -83,9 +80,9 @@ def read_trace(path: str | Path) -> Trace:
                 if not rows and not header_seen:
                     vals = None
                     break
-                raise DataFormatError(f"{path}:{ln}:{col}: cannot read {c!r} as a number") from None
+                raise DataFormatError(f"{path}:{ln}:{col}: cannot read column {col} as a number") from None
             if not math.isfinite(v):
-                raise DataFormatError(f"{path}:{ln}:{col}: value {c!r} is not finite")
+                raise DataFormatError(f"{path}:{ln}:{col}: value is not finite (NaN or infinite)")
             vals.append(v)
         if vals is None:
             header_seen = True
@@ -95,13 +92,13 @@ def read_trace(path: str | Path) -> Trace:
         if key not in meta:
             raise DataFormatError(f"{path}: missing metadata line '# {key} = ...' (required: speed [m/s], k_x [N/m])")
         if not meta[key] > 0:
-            raise DataFormatError(f"{path}: metadata '{key}' must be positive, got {meta[key]}")
+            raise DataFormatError(f"{path}: metadata '{key}' must be positive, got {meta[key]:g}")
     if len(rows) < 20:
         raise DataFormatError(f"{path}: {len(rows)} data rows; a trace needs at least 20")
     arr = np.array(rows)
     col = meta.get("column", "base")
     if col not in ("base", "time"):
-        raise DataFormatError(f"{path}: metadata 'column' must be 'base' or 'time', got {col!r}")
+        raise DataFormatError(f"{path}: metadata 'column' must be 'base' or 'time'")
     base = arr[:, 0] * (meta["speed"] if col == "time" else 1.0)
     d = np.diff(base)
     bad = np.nonzero(d <= 0)[0]
@@ -142,7 +139,13 @@ def fit_trace(trace: Trace, free: Sequence[str] = ("F_s", "F_c"), preset: str | 
     for n in free:
         if n not in ffm0.friction.values:
             raise ParameterError(f"fit_trace: '{n}' is not a parameter of model {ffm0.friction.name!r}")
+    if not np.ptp(trace.force) > 0:
+        raise SolverError(f"{trace.path}: the trace is flat (every force is equal): the data cannot inform "
+                          f"{', '.join(free)}")
     an = analyze(trace.base, trace.force, noise=noise)
+    if an["static_friction_n"] is None and {"F_s", "F_c"} & set(free):
+        raise SolverError(f"{trace.path}: the trace shows no slip above the noise: the data cannot inform "
+                          f"{', '.join(n for n in free if n in ('F_s', 'F_c'))} (a stick-slip trace is needed)")
     p0 = {n: float(ffm0.friction.values[n]) for n in free}
     k = trace.meta["k_x"]
     if an["static_friction_n"] is not None:
@@ -198,6 +201,10 @@ def fit_trace(trace: Trace, free: Sequence[str] = ("F_s", "F_c"), preset: str | 
         err = np.full(p, np.nan)
         corr = cov
     best = {nm: float(t * s) for nm, t, s in zip(free, sol.x, scale)}
+    uninformed = [nm for nm, e in zip(free, err) if not (math.isfinite(e) and e < abs(best[nm]))]
+    if uninformed:
+        raise SolverError(f"{trace.path}: the data cannot inform {', '.join(uninformed)} (uncertainty "
+                          "not below the value: the trace does not constrain it); fix it or give more data")
     return dict(
         preset=preset, model=model, free=free, values=best,
         uncertainties={nm: float(e) for nm, e in zip(free, err)},

@@ -69,7 +69,9 @@ from scipy.integrate import solve_ivp
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset
+from probedyn.lumped.reduced import ReducedProbe
 from probedyn.schemes.contact import ContactModel, get_contact_model
+from probedyn.schemes.probe_hooks import pushing_tip
 
 # --------------------------------------------------------------------------------------------
 # Substrates (Table 4.2)
@@ -143,9 +145,13 @@ PARAMS = ParamSet([
 
 
 def _probe_fields(probe: Any) -> dict[str, float]:
-    """k and m (and optional damping) of a LumpedModel-like object, a mapping or a number pair."""
+    """k and m (and optional damping) of a LumpedModel-like object, a mapping or a number pair;
+    a :class:`~probedyn.lumped.reduced.ReducedProbe` gives its scan / lateral one-mode models
+    (:func:`probedyn.schemes.probe_hooks.pushing_tip`)."""
     if probe is None:
         return {}
+    if isinstance(probe, ReducedProbe):
+        return pushing_tip(probe)
     if isinstance(probe, Mapping):
         get = probe.get
     else:
@@ -368,9 +374,10 @@ def make_model(substrate_name: str = "mica", overrides: Mapping[str, Any] | None
                dim: int = 1, probe: Any = None) -> PushModel:
     """Resolve parameters (Table 4.1 defaults, Table 4.2 substrate, user overrides) into a model.
 
-    ``probe`` may be a LumpedModel-like object (``stiffness``/``mass`` or ``k``/``m``) or a mapping;
-    it replaces the Table 4.1 tip values ``k_tx``, ``m_tx`` (and ``k_ty`` = k/3, ``m_ty`` = m unless
-    given).
+    ``probe`` may be a :class:`~probedyn.lumped.reduced.ReducedProbe` (scan -> ``k_tx, m_tx, c_t``,
+    lateral -> ``k_ty, m_ty``), a LumpedModel-like object (``stiffness``/``mass`` or ``k``/``m``) or
+    a mapping; it replaces the Table 4.1 tip values ``k_tx``, ``m_tx`` (and ``k_ty`` = k/3,
+    ``m_ty`` = m unless given).
     """
     sub = substrate(substrate_name)
     ov = dict(overrides or {})

@@ -204,6 +204,13 @@ class TwoMassModel:
 DEFAULT_MODEL = TwoMassModel()
 
 
+#: largest non-dimensional speed of the moving-base dynamics: the transient (t >= 300) is integrated
+#: with 128 steps per forcing period 2 pi / v, i.e. ~6000 v steps per cell
+V_MAX = 1e3
+#: largest |psi| accepted: beyond, X + psi (|X| <= u0 <= 1e4) keeps fewer than ~6 significant digits of X
+PSI_MAX = 1e6
+
+
 def _check_u0_psi(u0: float, psi: float) -> None:
     if not (isinstance(u0, (int, float, np.floating, np.integer)) and math.isfinite(u0)):
         raise ParameterError(f"u0 must be a finite number, got {u0!r}")
@@ -213,6 +220,9 @@ def _check_u0_psi(u0: float, psi: float) -> None:
         raise ParameterError(f"u0 = {u0:g} is too large (more than ~3000 equilibria); use u0 <= 1e4")
     if not math.isfinite(psi):
         raise ParameterError(f"psi must be finite, got {psi!r}")
+    if abs(psi) > PSI_MAX:
+        raise ParameterError(f"psi = {psi:g} rad: a phase beyond +-{PSI_MAX:g} rad loses its value in floating point "
+                             "(X + psi); give it modulo 2 pi")
 
 
 # --------------------------------------------------------------------------------------
@@ -584,6 +594,9 @@ def attractor_stats(
     u0f, vf, x3f, x4f = (q.ravel() for q in (u0a, va, x3a, x4a))
     if np.any(~np.isfinite(vf)) or np.any(vf <= 0):
         raise ParameterError("speed v must be positive and finite for the moving-base dynamics (use basins for v = 0)")
+    if np.any(vf > V_MAX):
+        raise ParameterError(f"speed v = {vf.max():g} is beyond {V_MAX:g}: the transient alone would take about "
+                             f"6000 v integration steps per cell (give v <= {V_MAX:g})")
     if np.any(~np.isfinite(u0f)) or np.any(u0f < 0):
         raise ParameterError("u0 must be finite and >= 0")
     n = u0f.size
@@ -765,6 +778,8 @@ def regime_cell(u0, v, n_ic: int = 6, psi: float = 0.0, steps_per_period: int = 
     Also returns the number of distinct periodic attractors, the period of the attractor
     reached from x3(0) = 0 (0 = irregular), the extreme lab-speed ratios and its mean friction.
     """
+    if isinstance(n_ic, bool) or int(n_ic) != n_ic or n_ic < 1:
+        raise ParameterError(f"n_ic (initial conditions per cell) must be a positive integer, got {n_ic!r}")
     out = _regime_pass(u0, v, n_ic, psi, steps_per_period, t_transient, transient_periods, record_periods,
                        model_params)
     redo = np.nonzero((out["regime"] == 2) | (out["regime"] == 4))[0]

@@ -32,10 +32,13 @@ worker count.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import json
 import logging
 import math
+import os
 import re
 import shutil
 import socket
@@ -47,8 +50,9 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from probedyn.core.errors import ParameterError, ProbedynError, SolverError
-from probedyn.core.io import atomic_path, write_json
+from probedyn.core.errors import DataFormatError, OutputError, ParameterError, ProbedynError, SolverError
+from probedyn.core.io import after_commit, as_output_error, atomic_path, read_text, write_json
+from probedyn.core.resources import check_memory, fmt_bytes
 
 __all__ = [
     "GridError",
@@ -59,7 +63,11 @@ __all__ = [
     "validate_grid",
     "cell_seeds",
     "run_sweep",
+    "open_sweep",
     "default_chunk_size",
+    "estimate_memory",
+    "probe_scheduler",
+    "SweepBusyError",
 ]
 
 
@@ -126,6 +134,10 @@ def parse_axis(spec: str) -> tuple[str, np.ndarray]:
         vals = np.array([float(x) for x in rhs.split(",") if x.strip()])
     except ValueError:
         raise GridError(form) from None
+    if vals.size == 0:
+        raise GridError(f"grid spec {spec!r}: no values (zero points); {form.split(': ', 1)[1]}")
+    if not np.all(np.isfinite(vals)):
+        raise GridError(f"grid spec {spec!r}: values must be finite numbers")
     return name, vals
 
 
@@ -174,8 +186,9 @@ def cell_seeds(seed: int, flat_index: np.ndarray) -> np.ndarray:
 
 
 def default_chunk_size(n_cells: int, target_chunks: int = 64) -> int:
-    """Cells per chunk: about ``target_chunks`` chunks, independent of the worker count."""
-    return max(1, math.ceil(n_cells / target_chunks))
+    """Cells per chunk: about ``target_chunks`` chunks, independent of the worker count, and at
+    most :data:`MAX_CHUNK_CELLS` (a task's memory stays bounded on huge grids)."""
+    return max(1, min(MAX_CHUNK_CELLS, math.ceil(n_cells / target_chunks)))
 
 
 # --------------------------------------------------------------------------------------
@@ -242,7 +255,7 @@ def _write_chunk(res: dict[str, np.ndarray], path: Path) -> None:
     for k, a in res.items():
         if a.dtype.kind == "O":
             raise SolverError(f"sweep output '{k}' has dtype object; return numeric or string arrays")
-    with atomic_path(path) as tmp:
+    with atomic_path(path, defer=False) as tmp:  # resumable state: kept even if the run fails
         with open(tmp, "wb") as fh:
             np.savez(fh, **{f"v_{k}": a for k, a in res.items()})
 
@@ -291,14 +304,30 @@ def _signature(func, grid, fixed, chunk_size, seed, vectorized) -> str:
 
 
 # --------------------------------------------------------------------------------------
-# Scheduler
+# Scheduler: address, handshake, workers, health during the run
 # --------------------------------------------------------------------------------------
 
 _ADDR_RE = re.compile(r"^(?:(tcp|tls)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})/?$")
 
 
+def _tls_security():
+    """Dask's TLS settings from its configuration (``distributed.comm.tls.*``), or an error."""
+    import dask
+    from distributed.security import Security
+
+    ca = dask.config.get("distributed.comm.tls.ca-file", None)
+    cert = dask.config.get("distributed.comm.tls.client.cert", None)
+    if not ca or not cert:
+        raise SchedulerError(
+            "a tls:// scheduler needs TLS certificates: set distributed.comm.tls.ca-file and "
+            "distributed.comm.tls.client.cert (and .key) in Dask's configuration, or use tcp:// "
+            "(for example through an SSH tunnel)"
+        )
+    return Security()
+
+
 def check_scheduler_address(address: str, timeout: float = 3.0) -> str:
-    """Validate ``tcp://HOST:PORT`` (or ``HOST:PORT``) and check that something listens there."""
+    """Validate ``tcp://HOST:PORT`` (``tls://``, or ``HOST:PORT``) and check that something listens there."""
     if not isinstance(address, str) or not address.strip():
         raise SchedulerError("empty Dask scheduler address (expected tcp://HOST:PORT)")
     address = address.strip()
@@ -322,31 +351,224 @@ def check_scheduler_address(address: str, timeout: float = 3.0) -> str:
     return f"{proto}://{m.group(2)}:{port}"
 
 
+def probe_scheduler(address: str, timeout: float = 5.0, security=None) -> dict[str, Any]:
+    """Speak Dask's protocol to ``address`` (bounded by ``timeout``); return its identity.
+
+    Something that accepts TCP but is not a Dask scheduler (a silent listener, an HTTP server,
+    a Dask worker) gives :class:`SchedulerError` instead of a hang.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def ask() -> Any:
+        kw = security.get_connection_args("client") if security is not None else {}
+        comm = await connect(address, timeout=timeout, **kw)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        info = asyncio.run(asyncio.wait_for(ask(), timeout=timeout))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise SchedulerError(
+            f"{address} accepts connections but did not answer as a Dask scheduler within {timeout:g} s "
+            "(wrong port, or not a Dask scheduler?)"
+        ) from None
+    except Exception as exc:  # handshake or decoding failed: something else listens there
+        raise SchedulerError(
+            f"{address} is not a Dask scheduler (the Dask handshake failed: {type(exc).__name__})"
+        ) from None
+    if not isinstance(info, Mapping) or info.get("type") != "Scheduler":
+        kind = info.get("type") if isinstance(info, Mapping) else type(info).__name__
+        raise SchedulerError(f"{address} answers as a Dask {kind}, not a scheduler: give the scheduler's address")
+    return dict(info)
+
+
+def _n_workers(client, timeout: float) -> int | None:
+    """Running workers known to the scheduler, or None if it did not answer within ``timeout``."""
+    try:
+        info = client.sync(client.scheduler.identity, n_workers=-1, callback_timeout=timeout)
+    except Exception:
+        return None
+    workers = info.get("workers", {}) if isinstance(info, Mapping) else {}
+    return sum(1 for w in workers.values() if not isinstance(w, Mapping) or w.get("status", "running") == "running")
+
+
+_DASK_LOGGERS = ("distributed", "distributed.worker", "distributed.scheduler", "distributed.nanny",
+                 "distributed.core", "distributed.client", "distributed.comm", "distributed.batched",
+                 "distributed.utils_perf", "distributed.worker_memory")
+
+
+@contextlib.contextmanager
+def _quiet_dask() -> Any:
+    """Silence Dask's own logging: a sweep reports failures itself, once, on one line.
+
+    Not restored afterwards: a client that lost its scheduler keeps logging from its event-loop
+    thread after the sweep has returned (reconnection attempts, "closing client").
+    """
+    import distributed  # noqa: F401  (its import configures these loggers: set them after)
+
+    for name in _DASK_LOGGERS:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    yield
+
+
 def _connect(scheduler: str | None, workers: int, processes: bool, threads_per_worker: int,
-             connect_timeout: float):
-    """Return (client, cluster-or-None)."""
+             connect_timeout: float, worker_timeout: float):
+    """Return (client, cluster-or-None); a remote scheduler is checked for being one, with workers."""
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
         addr = check_scheduler_address(scheduler, timeout=connect_timeout)
+        security = _tls_security() if addr.startswith("tls://") else None
+        probe_scheduler(addr, timeout=connect_timeout, security=security)
         try:
-            client = Client(addr, timeout=connect_timeout, set_as_default=False)
-        except (OSError, TimeoutError) as exc:
-            raise SchedulerError(f"cannot connect to Dask scheduler at {addr}: {exc}") from None
+            client = Client(addr, timeout=connect_timeout, set_as_default=False,
+                            **({"security": security} if security is not None else {}))
+        except Exception as exc:
+            raise SchedulerError(f"cannot connect to Dask scheduler at {addr}: {type(exc).__name__}: "
+                                 f"{' '.join(str(exc).split())}") from None
+        try:
+            deadline = time.monotonic() + worker_timeout
+            while True:
+                n = _n_workers(client, timeout=max(connect_timeout, 2.0))
+                if n:
+                    break
+                if time.monotonic() > deadline:
+                    what = "did not answer" if n is None else "has no workers"
+                    raise SchedulerError(
+                        f"the Dask scheduler at {addr} {what} (waited {worker_timeout:g} s); "
+                        f"start workers with `dask worker {addr}`"
+                    )
+                time.sleep(0.25)
+        except BaseException:
+            _close(client, None)
+            raise
         return client, None
     cluster = LocalCluster(
         n_workers=workers,
         threads_per_worker=threads_per_worker,
         processes=processes,
         dashboard_address=None,
-        silence_logs=logging.ERROR,
+        silence_logs=logging.CRITICAL + 1,
     )
     return Client(cluster, set_as_default=False), cluster
+
+
+def _close(client, cluster) -> None:
+    """Close the client and a local cluster within bounded times, whatever state they are in."""
+    with contextlib.suppress(BaseException):
+        if client is not None:
+            client.close(timeout=5)
+    with contextlib.suppress(BaseException):
+        if cluster is not None:
+            cluster.close(timeout=10)
+
+
+# --------------------------------------------------------------------------------------
+# The output's lock and the parts folder
+# --------------------------------------------------------------------------------------
+
+
+class SweepBusyError(ProbedynError):
+    """Another process is writing the same sweep output."""
+
+
+@contextlib.contextmanager
+def _sweep_lock(out: Path):
+    """Exclusive lock on ``out`` for the whole run (a lock file beside it, removed at the end)."""
+    lock = out.with_name(f".{out.name}.probedyn-lock")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise as_output_error(exc, out) from None
+    while True:
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o666)
+        except OSError as exc:
+            raise as_output_error(exc, out) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            try:
+                holder = os.read(fd, 32).decode("ascii", "replace").strip()
+            except OSError:
+                holder = ""
+            os.close(fd)
+            who = f" (pid {holder})" if holder.isdigit() else ""
+            raise SweepBusyError(
+                f"another probedyn sweep{who} is writing {out}; wait for it to finish or choose another output file"
+            ) from None
+        try:
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)  # the previous holder removed the file between our open and lock: retry
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(lock)
+        os.close(fd)
+
+
+def _existing_chunks(parts: Path, n_chunks: int) -> set[int]:
+    return {i for i in range(n_chunks) if _chunk_path(parts, i).exists()}
+
+
+def _resume_state(parts: Path, sig: str, n_chunks: int, restart: bool) -> set[int]:
+    """Chunks of this sweep already in ``parts``; refuses chunks of another sweep.
+
+    An empty parts folder, or one without chunks (a run stopped before its first chunk), is
+    not "another sweep": it is reused.
+    """
+    if not parts.exists():
+        return set()
+    if not parts.is_dir():
+        raise OutputError(f"cannot write {parts}: it is a file, not a folder")
+    if restart:
+        shutil.rmtree(parts)
+        return set()
+    if not any(parts.glob("chunk-*.npz")):
+        return set()
+    try:
+        old = json.loads(read_text(parts / "manifest.json", what="sweep manifest", max_bytes=1 << 20))
+    except (ProbedynError, ValueError):
+        old = None
+    if not isinstance(old, Mapping):
+        raise ParameterError(
+            f"{parts} holds chunks but no readable manifest, so they cannot be matched to this sweep; "
+            "remove the folder or rerun with restart"
+        )
+    if old.get("signature") != sig:
+        raise ParameterError(
+            f"{parts} holds chunks of a different sweep (function, grid, fixed parameters or chunk "
+            "size differ); remove it or rerun with restart"
+        )
+    return _existing_chunks(parts, n_chunks)
 
 
 # --------------------------------------------------------------------------------------
 # Driver
 # --------------------------------------------------------------------------------------
+
+#: cells per chunk at most (bounds the memory of one task, whatever the grid)
+MAX_CHUNK_CELLS = 1 << 18
+#: result bytes per cell assumed when a cell function does not declare ``sweep_bytes_per_cell``
+DEFAULT_BYTES_PER_CELL = 8
+
+
+def estimate_memory(n_cells: int, n_axes: int, bytes_per_cell: int) -> int:
+    """Bytes the client needs to merge a sweep: the outputs about 3 times (chunks, merged array,
+    NetCDF encoding) plus one 8-byte coordinate index per axis and cell."""
+    return int(n_cells) * (3 * int(bytes_per_cell) + 8 * int(n_axes))
 
 
 @dataclass
@@ -386,68 +608,67 @@ def run_sweep(
     seed: int | None = None,
     restart: bool = False,
     connect_timeout: float = 3.0,
+    worker_timeout: float = 30.0,
     attrs: Mapping[str, Any] | None = None,
 ) -> SweepResult:
     """Run ``func`` over the Cartesian ``grid`` on Dask; see the module docstring.
 
     ``out``: NetCDF file (written atomically); its finished chunks persist in ``out.parts/``
-    so an interrupted run resumes.  ``restart=True`` discards them.  Errors: :class:`GridError`
-    for bad grids, :class:`SchedulerError` for a bad/unreachable scheduler, the scheme's own
-    :class:`~probedyn.core.errors.ProbedynError` if it raises one, else :class:`SolverError`.
+    so an interrupted or failed run resumes; ``restart=True`` discards them. Only one process
+    at a time writes a given ``out`` (a second one gets :class:`SweepBusyError`).
+    ``worker_timeout``: how long a scheduler may have no worker (at the start, or because
+    workers died) or not answer before the run fails. Errors: :class:`GridError` for bad
+    grids, :class:`SchedulerError` for a bad/unreachable/failing scheduler,
+    :class:`~probedyn.core.errors.ResourceError` for a result that cannot fit in memory, the
+    scheme's own :class:`~probedyn.core.errors.ProbedynError` if it raises one, else
+    :class:`SolverError`.
     """
-    import xarray as xr
-
-    t0 = time.perf_counter()
     fixed = dict(fixed or {})
     g = validate_grid(grid, fixed)
     if "seed" in fixed:
         raise GridError("'seed' is reserved: pass the sweep seed as seed=")
-    if not isinstance(workers, (int, np.integer)) or workers < 1:
+    if not isinstance(workers, (int, np.integer)) or isinstance(workers, bool) or workers < 1:
         raise ParameterError(f"workers must be a positive integer, got {workers!r}")
-    if not (isinstance(connect_timeout, (int, float)) and connect_timeout > 0):
-        raise ParameterError(f"connect_timeout must be positive, got {connect_timeout!r}")
-    names = list(g)
+    for name, v in (("connect_timeout", connect_timeout), ("worker_timeout", worker_timeout)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise ParameterError(f"{name} must be a positive number of seconds, got {v!r}")
     shape = tuple(a.size for a in g.values())
-    n_cells = int(np.prod(shape))
+    n_cells = math.prod(shape)
+    per_cell = int(getattr(func, "sweep_bytes_per_cell", DEFAULT_BYTES_PER_CELL))
+    check_memory(estimate_memory(n_cells, len(shape), per_cell), f"a sweep of {n_cells:.4g} cells",
+                 how=f"{n_cells:.4g} cells x {3 * per_cell + 8 * len(shape)} B",
+                 hint="use fewer grid points")
     if chunk_size is None:
         chunk_size = default_chunk_size(n_cells)
-    if not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+    if not isinstance(chunk_size, (int, np.integer)) or isinstance(chunk_size, bool) or chunk_size < 1:
         raise ParameterError(f"chunk_size must be a positive integer, got {chunk_size!r}")
-    n_chunks = math.ceil(n_cells / chunk_size)
-    sig = _signature(func, g, fixed, chunk_size, seed, vectorized)
-
-    parts: Path | None = None
-    done: set[int] = set()
     if out is not None:
         out = Path(out)
         if out.suffix != ".nc":
             raise ParameterError(f"sweep output {out} must end in .nc")
-        parts = out.with_name(out.name + ".parts")
-        manifest = parts / "manifest.json"
-        if parts.exists() and restart:
-            shutil.rmtree(parts)
-        if parts.exists():
-            try:
-                old = json.loads(manifest.read_text())
-            except (OSError, ValueError):
-                old = None
-            if old is None and not any(parts.glob("chunk-*.npz")):
-                # killed between creating the folder and writing the manifest: nothing to resume
-                write_json(manifest, {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
-                                      "chunk_size": chunk_size, "shape": list(shape), "names": names})
-                old = {"signature": sig}
-            if old is None or old.get("signature") != sig:
-                raise ParameterError(
-                    f"{parts} holds chunks of a different sweep (function, grid, fixed parameters or chunk "
-                    "size differ); remove it or rerun with restart"
-                )
-            done = {i for i in range(n_chunks) if _chunk_path(parts, i).exists()}
-        else:
-            parts.mkdir(parents=True)
-            write_json(manifest, {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
-                                  "chunk_size": chunk_size, "shape": list(shape), "names": names})
+        if out.is_dir():
+            raise OutputError(f"cannot write {out}: a folder of that name is in the way")
+        with _sweep_lock(out):
+            return _run_locked(func, g, fixed, out, vectorized, int(chunk_size), int(workers), scheduler,
+                               processes, threads_per_worker, progress, seed, restart, connect_timeout,
+                               worker_timeout, attrs)
+    return _run_locked(func, g, fixed, None, vectorized, int(chunk_size), int(workers), scheduler, processes,
+                       threads_per_worker, progress, seed, restart, connect_timeout, worker_timeout, attrs)
 
-    # Flat cell index -> per-axis index (C order)
+
+def _run_locked(func, g, fixed, out, vectorized, chunk_size, workers, scheduler, processes, threads_per_worker,
+                progress, seed, restart, connect_timeout, worker_timeout, attrs) -> SweepResult:
+    import xarray as xr
+
+    t0 = time.perf_counter()
+    names = list(g)
+    shape = tuple(a.size for a in g.values())
+    n_cells = math.prod(shape)
+    n_chunks = math.ceil(n_cells / chunk_size)
+    sig = _signature(func, g, fixed, chunk_size, seed, vectorized)
+    parts = out.with_name(out.name + ".parts") if out is not None else None
+    done = _resume_state(parts, sig, n_chunks, restart) if parts is not None else set()
+
     def chunk_params(i: int) -> tuple[dict[str, np.ndarray], np.ndarray]:
         start, stop = i * chunk_size, min(n_cells, (i + 1) * chunk_size)
         flat = np.arange(start, stop)
@@ -457,48 +678,22 @@ def run_sweep(
     results: dict[int, dict[str, np.ndarray]] = {}
     todo = [i for i in range(n_chunks) if i not in done]
     if todo:
-        client, cluster = _connect(scheduler, int(workers), processes, threads_per_worker, connect_timeout)
-        try:
-            from dask.distributed import as_completed
-
-            from tqdm.auto import tqdm
-
-            run_id = uuid.uuid4().hex[:8]
-            futures = {}
-            for i in todo:
-                params, flat = chunk_params(i)
-                seeds = cell_seeds(seed, flat) if seed is not None else None
-                fut = client.submit(_run_chunk, func, params, fixed, seeds, vectorized,
-                                    key=f"probedyn-sweep-{sig[:10]}-{run_id}-{i}")
-                futures[fut.key] = (i, fut)
-            bar = tqdm(total=n_chunks, initial=len(done), disable=not progress, unit="chunk",
-                       desc=f"sweep {out.name if out else ''}".strip())
+        with _quiet_dask():
+            client, cluster = _connect(scheduler, workers, processes, threads_per_worker, connect_timeout,
+                                       worker_timeout)
             try:
-                for fut in as_completed([f for _, f in futures.values()], loop=client.loop):
-                    i = futures[fut.key][0]
-                    if fut.status == "error":
-                        exc = fut.exception()
-                        for _, f in futures.values():
-                            f.cancel()
-                        start = i * chunk_size
-                        if isinstance(exc, ProbedynError):
-                            raise exc
-                        raise SolverError(
-                            f"sweep chunk {i} (cells {start}..{min(n_cells, start + chunk_size) - 1}) failed: "
-                            f"{type(exc).__name__}: {exc}"
-                        ) from exc
-                    res = fut.result()
-                    if parts is not None:
-                        _write_chunk(res, _chunk_path(parts, i))
-                    else:
-                        results[i] = res
-                    bar.update(1)
+                if parts is not None:  # only now: a failed connection leaves nothing behind
+                    try:
+                        parts.mkdir(parents=True, exist_ok=True)
+                    except OSError as exc:
+                        raise as_output_error(exc, parts) from None
+                    write_json(parts / "manifest.json", defer=False, obj=
+                               {"signature": sig, "function": _qualname(func), "n_chunks": n_chunks,
+                                "chunk_size": chunk_size, "shape": list(shape), "names": names})
+                _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n_cells, chunk_size,
+                         chunk_params, parts, results, progress, out, scheduler, worker_timeout)
             finally:
-                bar.close()
-        finally:
-            client.close()
-            if cluster is not None:
-                cluster.close()
+                _close(client, cluster)
 
     # Merge
     if parts is not None:
@@ -531,9 +726,100 @@ def run_sweep(
             ds.attrs[k] = v if isinstance(v, (str, int, float)) else json.dumps(_jsonable(v))
     if out is not None:
         _write_nc(ds, out)
-        shutil.rmtree(parts, ignore_errors=True)
+        # the chunks go only once the NetCDF file is in place (at the end of the command's
+        # transaction: an interrupt before that keeps them for resumption)
+        after_commit(lambda: shutil.rmtree(parts, ignore_errors=True))
     return SweepResult(ds, out, n_chunks, chunks_run=todo, chunks_skipped=sorted(done),
                        elapsed=time.perf_counter() - t0)
+
+
+#: seconds between health checks of the scheduler and its workers while waiting for chunks
+POLL_S = 1.0
+
+
+def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n_cells, chunk_size, chunk_params,
+             parts, results, progress, out, scheduler, worker_timeout) -> None:
+    """Submit the chunks, persist each as it finishes, and watch the cluster's health."""
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    run_id = uuid.uuid4().hex[:8]
+    index: dict[str, int] = {}
+    pending = set()
+    for i in todo:
+        params, flat = chunk_params(i)
+        seeds = cell_seeds(seed, flat) if seed is not None else None
+        fut = client.submit(_run_chunk, func, params, fixed, seeds, vectorized,
+                            key=f"probedyn-sweep-{sig[:10]}-{run_id}-{i}", pure=False)
+        index[fut.key] = i
+        pending.add(fut)
+    finished = 0
+    where = scheduler or "the local Dask cluster"
+
+    def kept() -> str:
+        if parts is None:
+            return "no partial results are kept without an output file"
+        n = len(done) + finished
+        return f"{n} of {n_chunks} chunks are kept in {parts}; run the same command again to resume"
+
+    bar = tqdm(total=n_chunks, initial=len(done), disable=not progress, unit="chunk",
+               desc=f"sweep {out.name if out else ''}".strip())
+    unhealthy_since: float | None = None
+    last_check = time.monotonic()
+    try:
+        ac = as_completed(list(pending), loop=client.loop)
+        while pending:
+            fin = ac.next_batch(block=False)
+            if not fin:
+                time.sleep(0.05)
+            pending.difference_update(fin)
+            for fut in fin:
+                i = index[fut.key]
+                if fut.status == "error":
+                    exc = fut.exception(timeout=10)
+                    for f in pending:
+                        f.cancel()
+                    if isinstance(exc, ProbedynError):
+                        raise exc
+                    start = i * chunk_size
+                    cells = f"cells {start}..{min(n_cells, start + chunk_size) - 1}"
+                    if type(exc).__name__ == "KilledWorker":
+                        raise SolverError(f"sweep chunk {i} ({cells}) killed the Dask workers that ran it "
+                                          f"(out of memory or a crash); {kept()}") from None
+                    raise SolverError(
+                        f"sweep chunk {i} ({cells}) failed: {type(exc).__name__}: {' '.join(str(exc).split())}; "
+                        f"{kept()}"
+                    ) from exc
+                if fut.status != "finished":  # cancelled or lost: a worker or the scheduler went away
+                    if client.status == "running" and _n_workers(client, timeout=5.0) is not None:
+                        why = "the Dask worker running it died or left"
+                    else:
+                        why = f"the connection to the Dask scheduler ({where}) dropped or it restarted"
+                    raise SchedulerError(f"sweep chunk {i} was lost: {why}; {kept()}")
+                res = fut.result(timeout=60)
+                if parts is not None:
+                    _write_chunk(res, _chunk_path(parts, i))
+                else:
+                    results[i] = res
+                finished += 1
+                bar.update(1)
+            now = time.monotonic()
+            if pending and now - last_check >= POLL_S:
+                last_check = now
+                if client.status != "running":
+                    problem = f"lost the connection to the Dask scheduler ({where})"
+                else:
+                    n = _n_workers(client, timeout=5.0)
+                    problem = (f"the Dask scheduler ({where}) does not answer" if n is None else
+                               f"the Dask scheduler ({where}) has no workers left" if n == 0 else None)
+                if problem is None:
+                    unhealthy_since = None
+                elif unhealthy_since is None:
+                    unhealthy_since = now
+                elif now - unhealthy_since > worker_timeout:
+                    raise SchedulerError(f"{problem} for {worker_timeout:g} s; {kept()}")
+    finally:
+        bar.close()
 
 
 def open_sweep(path: str | Path):
@@ -541,9 +827,9 @@ def open_sweep(path: str | Path):
     path = Path(path)
     if not path.exists():
         raise ParameterError(f"{path}: no such sweep file")
+    if not path.is_file():
+        raise DataFormatError(f"{path}: not a regular file")
     try:
         return _read_nc(path)
     except Exception as exc:  # malformed / not NetCDF
-        from probedyn.core.errors import DataFormatError
-
-        raise DataFormatError(f"{path}: not a readable NetCDF sweep file ({type(exc).__name__}: {exc})") from None
+        raise DataFormatError(f"{path}: not a readable NetCDF sweep file ({type(exc).__name__})") from None

@@ -56,7 +56,8 @@ def test_bad_input_is_a_one_line_error(args):
 
 
 def test_fig_2_19_and_pull_off_table(tmp_path):
-    from probedyn.commands.contact import plot_fig_2_19, pull_off_table
+    from probedyn.report.contact import plot_fig_2_19
+    from probedyn.schemes.contact.carpick import pull_off_table
 
     path = plot_fig_2_19(tmp_path / "fig.png")
     assert path.stat().st_size > 20000
@@ -68,9 +69,9 @@ def test_fig_2_19_and_pull_off_table(tmp_path):
 
 @pytest.mark.slow
 def test_report_section_quick(tmp_path):
-    from probedyn.commands.contact import report_section
+    from probedyn.report.contact import section
 
-    md = report_section(tmp_path, quick=True)
+    md = section(tmp_path, quick=True)
     assert "contact_fig_2_19.png" in md and "coupling_fig_2_22.png" in md
     assert (tmp_path / "contact_fig_2_19.png").exists() and (tmp_path / "coupling_fig_2_22.png").exists()
     assert "Verdict" in md

@@ -2,12 +2,17 @@
 measures, and the claim of the source checked with FFM scans."""
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from probedyn.core.errors import ParameterError
 from probedyn.schemes.coupling import CouplingSetup, contact_at, scan_metrics
+
+sys.path.insert(0, str(Path(__file__).parent))
+from ffm_reference import MICA_LATTICE, MICA_X, pt_scan, reference_scan  # noqa: E402  (independent solvers)
 
 
 def test_no_adhesion_gives_hertz_and_unit_scale():
@@ -78,12 +83,10 @@ def test_bad_setup_raises(kw):
 
 # ---------------------------------------------------------------- FFM scans
 def test_reference_scan_mica_levels_and_first_stick():
-    # 1D reduction of 2.13-2.15 with 2.7-2.9 (SOURCE-NOTES item 12): the spring force rises with
+    # 1D reduction of 2.13-2.15 with 2.7-2.9 (docs/source-departures.md item 11): the spring force rises with
     # slope ~k_x until friction reaches F_s, so the first slip comes after F_s / k_x = 64.75 nm;
     # then a sawtooth between ~F_c and ~F_s. Stribeck at V/(2 V_s) = 0.1 lowers the peak by
     # (F_s - F_c)(1 - e^-0.01) = 0.005 nN (0.04 %); the tolerances are a few times that.
-    from probedyn.schemes.coupling import MICA_X, reference_scan
-
     Fs, Fc, k = MICA_X["Fs"], MICA_X["Fc"], MICA_X["k"]
     r = reference_scan(Fs / k + 4 * (Fs - Fc) / k, n_out=3000)
     m = scan_metrics(r["base"], r["spring_force"])
@@ -99,8 +102,6 @@ def test_reference_scan_mica_levels_and_first_stick():
 def test_friction_scale_rescales_lengths_in_the_bristle_model():
     # inertia and damping are negligible on the stick time scale, so multiplying F_s and F_c
     # by f multiplies the first stick and the period by f (to the sampling resolution)
-    from probedyn.schemes.coupling import MICA_X, reference_scan
-
     Fs, Fc, k = MICA_X["Fs"], MICA_X["Fc"], MICA_X["k"]
     L = Fs / k + 3 * (Fs - Fc) / k
     out = []
@@ -116,7 +117,7 @@ def test_prandtl_tomlinson_period_is_the_lattice_when_critically_damped():
     # eta > 1: stick-slip; with critical damping each slip ends in the next well, so the
     # period is the lattice constant. Sampling: 6000 points over ~16 a -> 0.3 % of a per sample;
     # 1 % tolerance (the issue's PT criterion).
-    from probedyn.schemes.coupling import MICA_LATTICE as a, pt_scan
+    a = MICA_LATTICE
 
     for eta in (3.0, 45.0):
         r = pt_scan(eta, eta * a / (2 * math.pi) + 10 * a, zeta=1.0)
@@ -131,7 +132,7 @@ def test_prandtl_tomlinson_period_is_the_lattice_when_critically_damped():
 def test_prandtl_tomlinson_underdamped_skips_sites_at_high_eta():
     # underdamped (zeta = 0.1), eta = 45: the tip overshoots several wells per slip; the period
     # is then an integer multiple (> 1) of the lattice constant
-    from probedyn.schemes.coupling import MICA_LATTICE as a, pt_scan
+    a = MICA_LATTICE
 
     r = pt_scan(45.0, 45 * a / (2 * math.pi) + 55 * a, zeta=0.1)
     m = scan_metrics(r["base"], r["spring_force"])
@@ -145,7 +146,7 @@ def test_prandtl_tomlinson_underdamped_skips_sites_at_high_eta():
 def test_project_ffm_agrees_with_the_independent_reference_scan(f):
     # same ODE (2.7-2.9, 2.13, 2.15), two integrators (numba Rosenbrock 2(3) vs scipy BDF) with
     # relative tolerances 1e-5 / 1e-7: levels agree to ~1e-5, slip positions to the sampling
-    from probedyn.schemes.coupling import MICA_X, ffm_scan, reference_scan
+    from probedyn.schemes.coupling import ffm_scan
 
     L = f * (MICA_X["Fs"] / MICA_X["k"] + 4 * (MICA_X["Fs"] - MICA_X["Fc"]) / MICA_X["k"])
     s = ffm_scan(L, 2e-6, f, n_out=3000)
@@ -160,7 +161,9 @@ def test_project_ffm_agrees_with_the_independent_reference_scan(f):
 
 
 def test_project_pt_agrees_with_the_independent_pt_scan():
-    from probedyn.schemes.coupling import MICA_LATTICE as a, ffm_pt_scan, pt_scan
+    from probedyn.schemes.coupling import ffm_pt_scan
+
+    a = MICA_LATTICE
 
     L = 14 * a / (2 * math.pi) + 15 * a
     s = ffm_pt_scan(14.0, L, zeta=0.1)

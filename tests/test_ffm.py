@@ -1,6 +1,8 @@
 """FFM line-scan model (2.13)-(2.16): quasi-static limits, the sawtooth, presets, full 2D model."""
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -58,11 +60,13 @@ def test_presliding_branch_with_a_compliant_bristle():
 
 
 def test_against_an_independent_bdf_solution():
-    """The Rosenbrock integrator against scipy BDF with a Jacobian (coupling.reference_scan, written
-    independently): slip positions and levels agree to well below the sampling error of the
-    analysis (1e-3 relative)."""
-    coupling = pytest.importorskip("probedyn.schemes.coupling")
-    ref = coupling.reference_scan(75e-9, n_out=20000)
+    """The Rosenbrock integrator against scipy BDF with a Jacobian (tests/ffm_reference.py,
+    written independently): slip positions and levels agree to well below the sampling error of
+    the analysis (1e-3 relative)."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from ffm_reference import reference_scan
+
+    ref = reference_scan(75e-9, n_out=20000)
     ours = F.line_scan(F.FFM.from_preset("mica"), 75e-9)
     a1 = analyze(ref["base"], ref["spring_force"])
     a2 = analyze(ours.base, ours.lateral_force)

@@ -57,7 +57,7 @@ def test_bad_input_is_a_one_line_error(args, msg, capsys):
 
 @pytest.mark.slow
 def test_report_section(tmp_path):
-    from probedyn.commands.friction import report_section
+    from probedyn.report.friction import section
 
-    md = report_section(tmp_path, quick=True)
+    md = section(tmp_path, quick=True)
     assert "friction_mica.png" in md and (tmp_path / "friction_pt2d.png").exists()

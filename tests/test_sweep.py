@@ -291,7 +291,7 @@ def test_killed_cli_sweep_resumes(tmp_path):
     saved = sorted(int(p.stem.split("-")[1]) for p in parts.glob("chunk-*.npz"))
     assert 2 <= len(saved) < 64  # 128*128/256 = 64 chunks
     # a temporary file of a chunk being written at the kill may remain; it is never read
-    from probedyn.commands.stickslip import run_basins
+    from probedyn.schemes.regimes import run_basins
 
     rr = run_basins(20.0, 5.0, 128, out, workers=2, processes=False, progress=False, chunk_size=256)
     assert rr["chunks_skipped"] == len(saved) and rr["chunks_run"] == 64 - len(saved)

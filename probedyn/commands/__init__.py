@@ -13,4 +13,8 @@ COMMAND_MODULES = [
     "probedyn.commands.stickslip",
     "probedyn.commands.push",
     "probedyn.commands.diagnose",
+    "probedyn.commands.piezo",
+    "probedyn.commands.place",
+    "probedyn.commands.reduced",
+    "probedyn.commands.track",
 ]

@@ -10,8 +10,33 @@ import typer
 
 from probedyn.core.io import dumps, write_json
 
+def _check_out_folder(value: Path | None) -> Path | None:
+    """Before any work: ``--out DIR`` must be able to become a folder (not a file, writable parent)."""
+    from probedyn.core.io import check_output_folder
+
+    return None if value is None else check_output_folder(value)
+
+
+def _check_out_file(value: Path | None) -> Path | None:
+    """Before any work: ``--out FILE`` must be writable (not a folder, its folder writable)."""
+    from probedyn.core.io import check_output_file
+
+    return None if value is None else check_output_file(value)
+
+
+def out_folder_option(default: Path | None = None, help: str = "Output folder for files (JSON, plots, VTU).") -> Any:
+    """``--out DIR``: checked before the command works; its files appear together when it succeeds
+    (the command line runs every command in one output transaction, probedyn.core.io)."""
+    return typer.Option(default, "--out", help=help, callback=_check_out_folder)
+
+
+def out_file_option(default: Any = None, help: str = "Output file.") -> Any:
+    """``--out FILE``: checked before the command works (see :func:`out_folder_option`)."""
+    return typer.Option(default, "--out", help=help, callback=_check_out_file)
+
+
 JSON_OPT = typer.Option(False, "--json", help="Print machine-readable JSON on stdout.")
-OUT_OPT = typer.Option(None, "--out", help="Output folder for files (JSON, plots, VTU).")
+OUT_OPT = out_folder_option()
 SET_OPT = typer.Option(None, "--set", help="Override a parameter: NAME=VALUE (SI units). Repeatable.")
 
 
@@ -55,17 +80,3 @@ def format_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]
         if j == 0:
             out.append("  ".join("-" * w for w in widths))
     return "\n".join(out)
-
-
-def markdown_table(rows: list[dict[str, Any]], columns: list[tuple[str, str, str]]) -> str:
-    """The same table as Markdown (for reports)."""
-    head = "| " + " | ".join(h for _, h, _ in columns) + " |"
-    sep = "|" + "|".join("---:" for _ in columns) + "|"
-    body = []
-    for r in rows:
-        vals = []
-        for key, _, spec in columns:
-            v = r.get(key)
-            vals.append("–" if v is None else (format(v, spec) if spec and isinstance(v, (int, float)) else str(v)))
-        body.append("| " + " | ".join(vals) + " |")
-    return "\n".join([head, sep, *body])

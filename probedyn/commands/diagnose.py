@@ -1,4 +1,5 @@
-"""``probedyn diagnose``: show what the simulation gets wrong, name the cause, measure the gain."""
+"""``probedyn diagnose``: show what the simulation gets wrong, name the cause, measure the gain.
+The text, the figures and the report section are in :mod:`probedyn.report.diagnose`."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import typer
 
 from probedyn.commands._apps import app
 from probedyn.commands._common import JSON_OPT, OUT_OPT, emit, format_table
+from probedyn.core.io import make_dirs
 
 
 def _human_list(rows: list[dict[str, Any]]) -> str:
@@ -46,62 +48,26 @@ def diagnose_cmd(
     problem = make_problem(measurement)
     res = diagnose(problem)
     if out is not None:
-        from probedyn.diagnose.report import markdown, plot_evidence, plot_residuals
         from probedyn.core.io import write_json, write_text
+        from probedyn.report.diagnose import markdown, plot_evidence, plot_residuals
 
         out = Path(out)
-        out.mkdir(parents=True, exist_ok=True)
+        make_dirs(out)
         fr = plot_residuals(res, out / "residuals.png", getattr(problem, "group_labels", None) if res["kind"] == "modal" else None)
         fe = plot_evidence(res, out / "evidence.png")
         write_json(out / "diagnose.json", res)
         write_text(out / "diagnose.md", markdown(res, fr.name, fe.name) + "\n")
         res["files"] = [str(out / "diagnose.json"), str(out / "diagnose.md"), str(fr), str(fe)]
 
+    from probedyn.report.diagnose import summary
+
     def human(r: dict[str, Any]) -> str:
         rows = [{"cause": c["cause"], "evidence": c["evidence"], "dchi2": c["delta_chi2"], "LR": "pass" if c["lr_pass"] else "fail"}
                 for c in r["candidates"]]
-        txt = r["summary"] + "\n\n" + format_table(rows, [("cause", "cause", ""), ("evidence", "evidence [nat]", ".1f"),
+        txt = summary(r) + "\n\n" + format_table(rows, [("cause", "cause", ""), ("evidence", "evidence [nat]", ".1f"),
                                                            ("dchi2", "delta chi2", ".1f"), ("LR", "LR test", "")])
         if "files" in r:
             txt += "\n\nwritten: " + ", ".join(r["files"])
         return txt
 
     emit(res, as_json, human)
-
-
-def report_section(outdir: Path, quick: bool) -> str:
-    """The worked example: the real aluminium cantilever with its tip sensor left out of the baseline."""
-    from probedyn.diagnose.engine import diagnose, make_problem
-    from probedyn.diagnose.report import markdown, plot_evidence, plot_residuals
-
-    here = Path(__file__).resolve().parents[2] / "examples" / "measurements"
-    ex = here / "al_cantilever_length_sweep.toml"
-    problem = make_problem(ex)
-    res = diagnose(problem)
-    outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
-    fr = plot_residuals(res, outdir / "diagnose_al_residuals.png", problem.group_labels)
-    fe = plot_evidence(res, outdir / "diagnose_al_evidence.png")
-    f0 = res["findings"][0] if res["findings"] else None
-    intro = [
-        "Measured f1 and f2 of an aluminium beam (50 mm x 2 mm) clamped at four free lengths with an "
-        "accelerometer on its tip (E. Demirkaya, Vibration-Tester-ADXL357-FFT, MIT licence; "
-        "`examples/measurements/al_cantilever_length_sweep.*`). The baseline is the bare clamped "
-        "Euler-Bernoulli beam: the sensor is deliberately not declared.",
-        "",
-    ]
-    if f0 and f0["cause"] == "point-mass":
-        m = f0["derived"]["mass_kg"]
-        mu = f0["parameters"]["mu"]
-        intro.append(f"Diagnosis: a point mass of {m * 1e3:.2f} ± {mu['sigma'] / mu['value'] * m * 1e3:.2f} g at "
-                     f"x/L = {f0['parameters']['xi']['value']:.3f} ± {f0['parameters']['xi']['sigma']:.3f}; the authors state a 5 g sensor "
-                     "(one of their scripts uses 10 g) mounted at the tip. Run time "
-                     f"{res['runtime_s']:.2f} s.")
-        intro.append("")
-    text = "\n".join(intro) + "\n" + markdown(res, fr.name, fe.name)
-    # a confounded case: one measured mode cannot tell a tip mass from a thickness error
-    conf = diagnose(here / "afm_cantilever_one_mode.toml")
-    text += ("\n\n**A confounded case.** Only the first flapwise mode of a Si cantilever with a hidden tip mass "
-             "(`examples/measurements/afm_cantilever_one_mode.*`): the report names the group and the "
-             "measurements that separate it instead of guessing.\n\n```\n" + conf["summary"] + "\n```\n")
-    return text

@@ -8,11 +8,12 @@ from typing import List, Optional
 import typer
 
 from probedyn.commands._apps import app
+from probedyn.commands._common import out_folder_option
 
 
 @app.command("report")
 def report(
-    out: Path = typer.Option(Path("out/report"), "--out", help="Output folder."),
+    out: Path = out_folder_option(Path("out/report"), "Output folder."),
     quick: bool = typer.Option(False, "--quick", help="Coarser meshes and shorter runs."),
     only: Optional[List[str]] = typer.Option(None, "--only", help="Only sections whose title contains this."),
 ) -> None:

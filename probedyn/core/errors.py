@@ -33,3 +33,12 @@ class DataFormatError(ProbedynError, ValueError):
 
 class SystemLibraryError(ProbedynError, RuntimeError):
     """A missing system library (for example no OpenGL for off-screen rendering)."""
+
+
+class OutputError(ProbedynError):
+    """An output that cannot be written (read-only or full file system, permissions, a file
+    where a folder should be); raised by :mod:`probedyn.core.io`."""
+
+
+class ResourceError(ProbedynError):
+    """A computation that cannot fit in this machine's memory (the message gives the estimate)."""

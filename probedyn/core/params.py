@@ -8,12 +8,11 @@ unit mistakes (micrometres typed as metres) are caught in one place.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from probedyn.core.errors import DataFormatError, ParameterError
+from probedyn.core.errors import ParameterError
 
 
 @dataclass(frozen=True)
@@ -72,10 +71,13 @@ class Param:
         return v
 
     def _range_msg(self, v: float) -> str:
-        msg = (
-            f"parameter '{self.name}' = {v:g} {self.unit} is outside the plausible range "
-            f"[{self.lo:g}, {self.hi:g}] {self.unit}".rstrip()
-        )
+        if self.lo is not None and self.hi is not None:
+            rng = f"the plausible range [{self.lo:g}, {self.hi:g}] {self.unit}".rstrip()
+        elif self.hi is not None:
+            rng = f"the plausible range (at most {self.hi:g} {self.unit})".replace(" )", ")")
+        else:
+            rng = f"the plausible range (at least {self.lo:g} {self.unit})".replace(" )", ")")
+        msg = f"parameter '{self.name}' = {v:g} {self.unit} is outside {rng}".replace("  ", " ")
         if self.unit == "m" and self.hi is not None and v > self.hi:
             msg += f" (values are SI: did you mean {v:g}e-6 m, i.e. micrometres?)"
         return msg
@@ -107,8 +109,12 @@ class ParamSet:
         values = self.defaults()
         for name, value in (overrides or {}).items():
             if name not in self._by_name:
+                import difflib
+
                 known = ", ".join(self._by_name)
-                raise ParameterError(f"unknown parameter '{name}' (known: {known})")
+                close = difflib.get_close_matches(str(name), list(self._by_name), n=1, cutoff=0.6)
+                hint = f" (did you mean '{close[0]}'?)" if close else ""
+                raise ParameterError(f"unknown parameter '{name}'{hint} (known: {known})")
             values[name] = self._by_name[name].coerce(value)
         return values
 
@@ -143,13 +149,8 @@ def parse_sets(items: Iterable[str] | None) -> dict[str, str]:
 
 
 def load_toml(path: str | Path) -> dict[str, Any]:
-    """Read a TOML file; syntax errors name the file, line and column."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise DataFormatError(f"{path}: cannot read file ({exc.strerror})") from None
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DataFormatError(f"{path}: {exc}") from None
+    """Read a TOML file (regular file, size-limited, UTF-8: :func:`probedyn.core.io.load_toml`);
+    syntax errors name the file, line and column."""
+    from probedyn.core.io import load_toml as _load_toml
+
+    return _load_toml(path)

@@ -57,6 +57,19 @@ class Probe(Model):
         """Coordinates [m] of the probe tip (where effective masses are evaluated)."""
         raise NotImplementedError
 
+    def static_stiffness(self, values: dict[str, Any], model) -> dict[str, Any]:
+        """FEM static stiffness of the probe's loaded end beside its analytic references, as
+        ``{name: N/m}``; a probe that declares no such reference returns ``{}``."""
+        return {}
+
+    def mass_per_length(self, values: dict[str, Any], model) -> float:
+        """Mass per length [kg/m] of the body for the damping per length ``mu`` of eq 3.2: the
+        FE model's mass without the rigid tip mass, over ``values["length"]``."""
+        L = values.get("length")
+        if not L:
+            raise ParameterError(f"--mu needs a beam length; probe '{self.name}' has none, use --q")
+        return (model.total_mass() - (values.get("tip_mass") or 0.0)) / L
+
     def modes(self, overrides: dict[str, Any] | None = None, n_modes: int = 8):
         """Convenience: resolve, build and solve."""
         values = self.resolve(overrides)

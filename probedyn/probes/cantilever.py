@@ -21,7 +21,8 @@ from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.lumped import beam as bm
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
-from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, cantilever_hex_mesh, refinement_for
+from probedyn.meshes.hexmeshes import (ELEMENT_CHOICES, HexDivisions, cantilever_hex_dofs, cantilever_hex_mesh,
+                                      refinement_for)
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
@@ -89,19 +90,36 @@ class Cantilever(Probe):
             return "tet-p2"
         return "hex-s2" if el == "auto" else el
 
+    def _divisions(self, values: dict[str, Any]) -> HexDivisions:
+        return HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                            refine=refinement_for("cantilever", values.get("accuracy")))
+
     def mesh(self, values: dict[str, Any]):
         el = self.element(values)
         if el != "tet-p2":
-            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
-                               refine=refinement_for("cantilever", values.get("accuracy")))
-            return cantilever_hex_mesh(values["length"], values["width"], values["thickness"], div, el)
+            return cantilever_hex_mesh(values["length"], values["width"], values["thickness"],
+                                       self._divisions(values), el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return cantilever_mesh(values["length"], values["width"], values["thickness"], values["tip_shape"],
                                values["tip_height"], values["tip_half_angle"], options=opts)
 
     def build(self, values: dict[str, Any]):
+        from probedyn.core import progress
+        from probedyn.fem.size import check_model, dofs_for_volume
+        from probedyn.meshes.cache import MeshOptions
+
         mat = self.material(values)
-        bundle = self.mesh(values)
+        # before meshing: the model this mesh gives must fit (tetrahedra: estimated from the
+        # beam's volume and the mesh size; structured hexahedra: counted exactly)
+        el = self.element(values)
+        L, w, t = values["length"], values["width"], values["thickness"]
+        if el == "tet-p2":
+            h = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"])).size_for(min(w, t))
+            check_model(dofs_for_volume(L * w * t, h), "cantilever model")
+        else:
+            check_model(cantilever_hex_dofs(L, w, t, self._divisions(values), el), "cantilever model", element=el)
+        with progress.stage("meshing the cantilever"):
+            bundle = self.mesh(values)
         regions = {"body": mat}
         if "tip" in (bundle.mesh.subdomains or {}):
             regions["tip"] = mat
@@ -123,6 +141,16 @@ class Cantilever(Probe):
             S = mat.S
             E, nu = 1.0 / S[0, 0], float(np.clip(-S[0, 1] / S[0, 0], -0.99, 0.49))
         return bm.RectBeam(values["length"], values["width"], values["thickness"], E, nu, mat.density)
+
+    def static_stiffness(self, values: dict[str, Any], model) -> dict[str, Any]:
+        """FEM static stiffness of the free end (face-averaged, z) beside 3EI/L^3 with and
+        without the Timoshenko shear correction."""
+        from probedyn.lumped import beam as bm
+
+        b = self.beam(values)
+        return {"fem_n_per_m": float(model.static_stiffness("free_end", (0, 0, 1))),
+                "euler_bernoulli_3EI_L3": bm.static_tip_stiffness(b, "flapwise", shear=False),
+                "with_shear_correction": bm.static_tip_stiffness(b, "flapwise", shear=True)}
 
     def references(self, values: dict[str, Any], result) -> list[dict[str, Any]]:
         """Per FEM mode, the beam formula of its family and order: Euler–Bernoulli (2.40–2.41)
