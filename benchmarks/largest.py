@@ -49,6 +49,40 @@ def one(divisor: float, element: str) -> dict:
             "peak_rss_gib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20}
 
 
+def rss_gib(pid: int) -> float:
+    """Resident memory [GiB] of a running process (0 when it is gone)."""
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) / 2**20
+    except OSError:
+        pass
+    return 0.0
+
+
+def run_capped(cmd: list[str], cap_gib: float | None) -> tuple[int, str, str, float]:
+    """Run ``cmd``; kill it if its resident memory exceeds ``cap_gib`` (other jobs share the
+    machine: an out-of-memory kill would hit them too). Returns (exit code, stdout, stderr,
+    highest RSS seen [GiB])."""
+    import tempfile
+
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        p = subprocess.Popen(cmd, stdout=out, stderr=err, text=True)
+        high = 0.0
+        while p.poll() is None:
+            high = max(high, rss_gib(p.pid))
+            if cap_gib is not None and high > cap_gib:
+                p.kill()
+                p.wait()
+                err.write(f"killed by the benchmark: resident memory {high:.2f} GiB above the cap {cap_gib:g} GiB\n")
+                break
+            time.sleep(0.2)
+        out.seek(0)
+        err.seek(0)
+        return p.returncode, out.read(), err.read(), high
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--one", type=float, default=None, help=argparse.SUPPRESS)
@@ -56,6 +90,8 @@ def main() -> None:
     ap.add_argument("--limit", type=float, default=22.0, help="GiB a step may be predicted to use")
     ap.add_argument("--start", type=float, default=5.0, help="first divisor (h = t / divisor)")
     ap.add_argument("--out", default=None)
+    ap.add_argument("--cap", type=float, default=None, help="kill a step whose resident memory exceeds this [GiB]")
+    ap.add_argument("--only", action="store_true", help="solve the --start size only (no ladder)")
     a = ap.parse_args()
     if a.one is not None:
         print(json.dumps(one(a.one, a.element)))
@@ -70,18 +106,21 @@ def main() -> None:
     d = a.start
     while True:
         cmd = [sys.executable, __file__, "--one", str(d), "--element", a.element]
-        p = subprocess.run(cmd, capture_output=True, text=True)
-        if p.returncode != 0:
-            msg = f"t/{d:.3g}: failed (exit {p.returncode}): {p.stderr.strip().splitlines()[-1] if p.stderr.strip() else 'killed'}"
+        code, stdout, stderr, high = run_capped(cmd, a.cap)
+        if code != 0:
+            msg = f"t/{d:.3g}: failed (exit {code}): {stderr.strip().splitlines()[-1] if stderr.strip() else 'killed'}"
             print(msg, flush=True)
             lines.append(msg)
             break
-        r = json.loads(p.stdout.strip().splitlines()[-1])
+        r = json.loads(stdout.strip().splitlines()[-1])
+        r["watched_rss_gib"] = high
         done.append(r)
         msg = (f"t/{d:.3g}: {r['dofs']} DOFs, total {r['total_s']:.0f} s (assembly {r['assemble_s']:.0f}, factor "
                f"{r['factor_s']:.0f}, eigen {r['eigen_s']:.0f}), peak {r['peak_rss_gib']:.2f} GiB, f1 {r['f1_hz']:.1f} Hz")
         print(msg, flush=True)
         lines.append(msg)
+        if a.only:
+            break
         # next: a power law in DOFs through the last two steps; DOFs ~ d^3
         if len(done) >= 2:
             n = np.log([done[-2]["dofs"], done[-1]["dofs"]])

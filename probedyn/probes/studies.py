@@ -243,8 +243,8 @@ def study_eccentricity(deltas: Sequence[float], angle_deg: float = 45.0, overrid
         p, v = smart_probe(probe, {**(overrides or {}), "delta_y": dy, "delta_z": dz, "tip": "none"})
         if not hasattr(p, "tube"):
             raise ParameterError(f"the eccentricity study needs a tube probe (piezotube), not '{p.key}'")
-        model = p.build(v)
-        res = model.modes(n_modes)
+        res = solve_modes(p, v, n_modes)  # delta = 0 is the memoised body + holder model
+        model = res.model
         lat = [i for i, m in enumerate(res.modes) if beamlike(m) and m.family != "axial"][:2]
         ax = [i for i, m in enumerate(res.modes) if m.family == "axial"][:1]
         if len(lat) < 2:
