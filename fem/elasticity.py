@@ -255,25 +255,29 @@ def _scalar_probes(basis, x: np.ndarray) -> sp.csr_matrix:
     """Scalar interpolation matrix (m, N).  A point that coincides with a P2 node (within
     1e-9 of the mesh extent, e.g. a tip apex that is a mesh vertex) takes that node's value
     exactly (Lagrange property), which avoids the element finder's round-off failures on
-    vertices and edges; other points must lie inside the mesh."""
+    vertices and edges; other points must lie inside the mesh.  All other points go to one
+    call of the element finder (vectorised; per point it costs a search of the whole mesh)."""
+    from scipy.spatial import cKDTree
+
     locs = basis.doflocs
     ext = float(np.ptp(locs, axis=1).max())
-    rows, cols, data = [], [], []
-    for j in range(x.shape[1]):
-        d = np.linalg.norm(locs - x[:, j : j + 1], axis=0)
-        i = int(np.argmin(d))
-        if d[i] <= 1e-9 * ext:
-            rows.append(np.array([j]))
-            cols.append(np.array([i]))
-            data.append(np.array([1.0]))
-            continue
+    d, near = cKDTree(locs.T).query(x.T)
+    exact = d <= 1e-9 * ext
+    rows, cols, data = [np.nonzero(exact)[0]], [near[exact]], [np.ones(int(exact.sum()))]
+    rest = np.nonzero(~exact)[0]
+    if rest.size:
         try:
-            Pj = basis.probes(x[:, j : j + 1]).tocoo()
+            P = basis.probes(x[:, rest]).tocoo()
         except ValueError:
-            raise GeometryError(f"point {x[:, j].tolist()} lies outside the mesh") from None
-        rows.append(np.full(Pj.nnz, j))
-        cols.append(Pj.col)
-        data.append(Pj.data)
+            for j in rest:  # name the first point outside the mesh
+                try:
+                    basis.probes(x[:, j : j + 1])
+                except ValueError:
+                    raise GeometryError(f"point {x[:, j].tolist()} lies outside the mesh") from None
+            raise
+        rows.append(rest[P.row])
+        cols.append(P.col)
+        data.append(P.data)
     return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
                          shape=(x.shape[1], basis.N))
 

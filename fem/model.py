@@ -395,6 +395,11 @@ class ElasticModel:
         """(positions (N, 3), displacements (N, 3)) at all P2 nodes (vertices and edge midpoints)."""
         return self.basis.doflocs.T.copy(), np.asarray(u, dtype=float).reshape(self.n_nodes, 3)
 
+    def points_operator(self, points: np.ndarray) -> sp.csr_matrix:
+        """(3 m, 3 N) operator giving the displacement at the points (3, m) (row 3 j + c:
+        component c at point j); one vectorised search of the mesh for all of them."""
+        return el.interpolation_operator(self.basis, np.asarray(points, dtype=float).reshape(3, -1))
+
     def displacement_at(self, u: np.ndarray, where: Where) -> np.ndarray:
         """Displacement (3,) [m] of the full vector ``u`` at an attachment."""
         return np.asarray(self.attachment(where) @ u).ravel()
