@@ -79,9 +79,13 @@ class AugmentedModel(ElasticModel):
         A = self.attachment(lt.attach).tocsr()
         Kt = sp.diags(np.asarray(lt.stiffness, dtype=float))
         Af = A[:, free]
-        Kff = K[free][:, free] + Af.T @ Kt @ Af
+        Kf, Mf = self.free_matrices()
+        Kff = Kf + Af.T @ Kt @ Af
         Ka = sp.bmat([[Kff, -Af.T @ Kt], [-Kt @ Af, Kt]], format="csr")
-        Ma = sp.bmat([[M[free][:, free], None], [None, sp.identity(3) * lt.mass]], format="csr")
+        Ma = sp.bmat([[Mf, None], [None, sp.identity(3) * lt.mass]], format="csr")
+        for X in (Ka, Ma):
+            X.sum_duplicates()
+            X.sort_indices()
         return Ka, Ma, free, A
 
     def modes(self, n_modes: int = 8, sigma: float | None = None, solver: str = "auto"):
@@ -91,6 +95,23 @@ class AugmentedModel(ElasticModel):
             raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
         Ka, Ma, free, A = self.augmented()
         res = shift_invert_eigsh(Ka, Ma, int(n_modes), sigma=sigma, solver=solver)
+        timings = dict(factor_s=res.factor_s, solve_s=res.factor_s + res.solve_s, arpack_s=res.solve_s,
+                       n_opinv=res.n_opinv)
+        return self.result_from(res.eigenvalues, res.vectors, timings, res.backend)
+
+    def result_from(self, eigenvalues: np.ndarray, vectors: np.ndarray, timings: dict | None = None,
+                    solver: str = "") -> ModalResult:
+        """The :class:`ModalResult` of eigenpairs ``(eigenvalues [rad^2/s^2], vectors)`` of the
+        augmented system (vectors in its unknowns: free mesh DOFs + 3 tip DOFs, M-normalised),
+        e.g. from a reduced model (:mod:`probedyn.lumped.ritz`); same post-processing as
+        :meth:`modes`."""
+
+        class _Res:  # the fields of an EigenResult the post-processing reads
+            pass
+
+        res = _Res()
+        res.eigenvalues, res.vectors = np.asarray(eigenvalues, dtype=float), np.asarray(vectors, dtype=float)
+        Ka, Ma, free, A = self.augmented()
         t0 = time.perf_counter()
         nf = free.size
         k = res.vectors.shape[1]
@@ -98,7 +119,7 @@ class AugmentedModel(ElasticModel):
         Phi[free] = res.vectors[:nf]
         qt = res.vectors[nf:].T  # (k, 3)
         _, M = self.assemble()
-        weights = el.lumped_weights(self.mesh, self.elem_density)
+        weights = el.lumped_weights(self.mesh, self.elem_density, self.element, self.basis)
         fams, shares = classify_shapes(self.basis.doflocs, weights, Phi.reshape(self.n_nodes, 3, k), axis=self.beam_axis)
         ke = self.energy_shares(Phi, qt)
         uh = (A @ Phi).T  # holder attachment displacement (k, 3)
@@ -132,10 +153,10 @@ class AugmentedModel(ElasticModel):
                 effective_stiffness_tip=keff, participation=gam, effective_mass_fraction=frac,
                 kinetic_energy_share=ke[i], family_shares=sh,
             ))
-        timings = dict(self.timings)
-        timings.update(factor_s=res.factor_s, solve_s=res.factor_s + res.solve_s, arpack_s=res.solve_s,
-                       postprocess_s=time.perf_counter() - t0, n_opinv=res.n_opinv)
-        return ModalResult(modes, int(nf + 3), self, timings, self.ndofs_total + 3, res.backend,
+        all_t = dict(self.timings)
+        all_t.update(timings or {})
+        all_t.update(postprocess_s=time.perf_counter() - t0)
+        return ModalResult(modes, int(nf + 3), self, all_t, self.ndofs_total + 3, solver,
                            self.total_mass() + self.lumped_tip.mass, "tip")
 
     def energy_shares(self, Phi: np.ndarray, qt: np.ndarray | None = None) -> list[dict[str, float]]:
@@ -145,7 +166,7 @@ class AugmentedModel(ElasticModel):
         parts: dict[str, np.ndarray] = {}
         for r, name in enumerate(self.region_names):
             dens = np.where(self.elem_region == r, self.elem_density, 0.0)
-            Mr = el.assemble_mass(self.mesh, dens)
+            Mr = el.assemble_mass(self.mesh, dens, element=self.element, basis=self.basis)
             parts[name] = np.einsum("ik,ik->k", Phi, Mr @ Phi)
         if self.point_masses:
             e = np.zeros(k)

@@ -34,10 +34,11 @@ from typing import Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, BilinearForm, ElementTetP2, ElementVector, FacetBasis, LinearForm
-from skfem.quadrature import get_quadrature
+from skfem import Basis, BilinearForm, ElementVector, FacetBasis, LinearForm, MeshHex2
 
 from probedyn.core.errors import GeometryError, MaterialError
+from probedyn.fem import assembly as asm
+from probedyn.fem.assembly import element_kind
 from probedyn.fem.materials import rotate_voigt
 
 STIFFNESS_INTORDER = 2
@@ -147,17 +148,20 @@ def _check_rotation(R: np.ndarray) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------
-# fast assembly
+# fast assembly (compiled kernels of probedyn.fem.assembly)
 # ---------------------------------------------------------------------------------------
 
-def scalar_basis(mesh, intorder: int):
-    """Scalar P2 basis on ``mesh`` (its DOF numbering defines the vector numbering)."""
-    return Basis(mesh, ElementTetP2(), intorder=intorder)
+def scalar_basis(mesh, intorder: int, element: str | None = None):
+    """Scalar quadratic basis on ``mesh`` (its DOF numbering defines the vector numbering);
+    ``element``: a key of :data:`probedyn.fem.assembly.ELEMENTS` (None: the mesh's default)."""
+    return Basis(mesh, element_kind(mesh, element).element(), intorder=intorder)
 
 
-def _chunks(n: int, size: int):
-    for a in range(0, n, size):
-        yield np.arange(a, min(a + size, n))
+def _pattern_of(mesh, element, basis):
+    kind = element_kind(mesh, element)
+    if basis is None:
+        basis = scalar_basis(mesh, 1, kind.key)
+    return kind, asm.pattern(mesh, kind, basis.element_dofs, basis.N)
 
 
 def assemble_stiffness(
@@ -165,96 +169,73 @@ def assemble_stiffness(
     elem_region: np.ndarray,
     materials: Sequence,
     orientations: Sequence,
-    chunk: int = 8192,
+    chunk: int = 4096,
+    element: str | None = None,
+    basis=None,
 ) -> sp.csr_matrix:
-    """Global stiffness (3N x 3N, interleaved DOFs) by batched element matrices.
+    """Global stiffness (3N x 3N, interleaved DOFs) by the compiled element kernels of
+    :mod:`probedyn.fem.assembly` (``K_e = sum_q w_q G_q^T C_q G_q`` added block by block into
+    a precomputed block-CSR pattern).  ``C`` is evaluated per element, or per quadrature point
+    in chunks where a region has an orientation field ``R(x)``."""
+    kind, pat = _pattern_of(mesh, element, basis)
+    varying = np.array([callable(R) for R in orientations], dtype=bool)
+    per_elem = np.empty((len(materials), 6, 6))
+    for i, (mat, R) in enumerate(zip(materials, orientations)):
+        if R is None:
+            per_elem[i] = mat.C
+        elif not callable(R):
+            per_elem[i] = rotate_voigt(mat.C, _check_rotation(np.asarray(R, dtype=float)))
 
-    Per element chunk: scalar P2 gradients ``g`` (nel, nq, 10, 3) -> strain-displacement
-    matrices ``B`` (nel, nq, 6, 30) -> ``K_e = sum_q w_q B^T (C_q B)`` -> COO triplets.
-    """
-    elem = ElementTetP2()
-    X, W = get_quadrature(elem.refdom, STIFFNESS_INTORDER)
-    nq = W.size
-    mapping = mesh._mapping()
-    # reference gradients of the 10 scalar functions: (10, 3, nq)
-    dref = np.stack([elem.lbasis(X, i)[1] for i in range(10)])
-    basis0 = scalar_basis(mesh, 1)  # for element_dofs only (cheap: 1-point rule)
-    edofs = basis0.element_dofs  # (10, nel)
-    nel = mesh.t.shape[1]
-    N = basis0.N
-    ldof = np.arange(30)
-    a_idx, c_idx = ldof // 3, ldof % 3
-    rows_all, cols_all, data_all = [], [], []
-    for sel in _chunks(nel, chunk):
-        invDF = mapping.invDF(X, tind=sel)  # (3, 3, nel, nq): d(ref)/d(x)
-        detDF = np.abs(mapping.detDF(X, tind=sel))  # (nel, nq)
-        # physical gradients g[e, q, a, j] = sum_k dref[a, k, q] invDF[k, j, e, q]
-        g = np.einsum("akq,kjeq->eqaj", dref, invDF, optimize=True)
-        B = np.zeros((sel.size, nq, 6, 30))
-        gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]  # (e, q, 10)
-        B[:, :, 0, 0::3] = gx
-        B[:, :, 1, 1::3] = gy
-        B[:, :, 2, 2::3] = gz
-        B[:, :, 3, 1::3] = gz
-        B[:, :, 3, 2::3] = gy
-        B[:, :, 4, 0::3] = gz
-        B[:, :, 4, 2::3] = gx
-        B[:, :, 5, 0::3] = gy
-        B[:, :, 5, 1::3] = gx
-        x_qp = mapping.F(X, tind=sel)  # (3, nel, nq)
-        C = stiffness_field(elem_region, materials, orientations, x_qp, elements=sel)
-        wq = detDF * W[None, :]  # (e, q)
-        CB = np.matmul(C, B) * wq[:, :, None, None]
-        Ke = np.einsum("eqIa,eqIb->eab", B, CB, optimize=True)
-        gd = (3 * edofs[a_idx][:, sel] + c_idx[:, None]).T  # (e, 30)
-        rows_all.append(np.repeat(gd, 30, axis=1).ravel().astype(np.int32))
-        cols_all.append(np.tile(gd, (1, 30)).ravel().astype(np.int32))
-        data_all.append(Ke.ravel())
-    n = 3 * N
-    K = sp.coo_matrix(
-        (np.concatenate(data_all), (np.concatenate(rows_all), np.concatenate(cols_all))), shape=(n, n)
-    ).tocsr()
-    K.sum_duplicates()
-    return K
+    def C_of(sel, x_of):
+        reg = elem_region[sel]
+        if varying[reg].any():
+            return stiffness_field(elem_region, materials, orientations, x_of(), elements=sel)
+        return per_elem[reg][:, None]
+
+    return asm.stiffness(mesh, kind, pat, C_of, chunk=chunk)
 
 
-def assemble_scalar_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
-    """Scalar P2 mass ``int rho N_a N_b`` (N x N) with a per-element density."""
-    basis = scalar_basis(mesh, MASS_INTORDER)
-    vals = np.stack([np.asarray(basis.basis[a][0]) for a in range(10)], axis=-1)  # (nel, nq, 10)
-    wq = basis.dx * elem_density[:, None]
-    Me = np.einsum("eqa,eqb,eq->eab", vals, vals, wq, optimize=True)
-    ed = basis.element_dofs.T  # (nel, 10)
-    rows = np.repeat(ed, 10, axis=1).ravel()
-    cols = np.tile(ed, (1, 10)).ravel()
-    Ms = sp.coo_matrix((Me.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr()
-    Ms.sum_duplicates()
-    return Ms
+def assemble_scalar_mass(mesh, elem_density: np.ndarray, element: str | None = None, basis=None) -> sp.csr_matrix:
+    """Scalar mass ``int rho N_a N_b`` (N x N) with a per-element density."""
+    kind, pat = _pattern_of(mesh, element, basis)
+    return asm.scalar_mass(mesh, kind, pat, elem_density)
 
 
-def assemble_mass(mesh, elem_density: np.ndarray) -> sp.csr_matrix:
+def assemble_mass(mesh, elem_density: np.ndarray, element: str | None = None, basis=None) -> sp.csr_matrix:
     """Vector mass ``kron(M_scalar, I3)`` in the interleaved numbering."""
-    return sp.kron(assemble_scalar_mass(mesh, elem_density), sp.identity(3), format="csr")
+    kind, pat = _pattern_of(mesh, element, basis)
+    return pat.vector_from_scalar(asm.scalar_mass(mesh, kind, pat, elem_density).data)
 
 
-def assemble_stiffness_skfem(mesh, elem_region, materials, orientations) -> sp.csr_matrix:
+def assemble_stiffness_skfem(mesh, elem_region, materials, orientations, element: str | None = None) -> sp.csr_matrix:
     """Reference assembly with scikit-fem's :data:`aniso_elasticity` form, permuted to the
     interleaved numbering (for tests; slow)."""
-    vb = Basis(mesh, ElementVector(ElementTetP2()), intorder=STIFFNESS_INTORDER)
+    kind = element_kind(mesh, element)
+    vb = Basis(mesh, ElementVector(kind.element()), intorder=kind.k_intorder)
     x_qp = np.asarray(vb.global_coordinates())
     C = stiffness_field(elem_region, materials, orientations, x_qp)
     K = aniso_elasticity.assemble(vb, C=np.moveaxis(C, (2, 3), (0, 1)))
-    perm = vector_dof_permutation(mesh, vb)
+    perm = vector_dof_permutation(mesh, vb, kind.key)
     return K[perm][:, perm].tocsr()
 
 
-def vector_dof_permutation(mesh, vector_basis) -> np.ndarray:
+def assemble_mass_skfem(mesh, elem_density, element: str | None = None) -> sp.csr_matrix:
+    """Reference vector mass with scikit-fem's :data:`mass_form` (interleaved numbering)."""
+    kind = element_kind(mesh, element)
+    vb = Basis(mesh, ElementVector(kind.element()), intorder=kind.m_intorder)
+    rho = np.repeat(np.asarray(elem_density, dtype=float)[:, None], vb.X.shape[1], axis=1)
+    M = mass_form.assemble(vb, rho=rho)
+    perm = vector_dof_permutation(mesh, vb, kind.key)
+    return M[perm][:, perm].tocsr()
+
+
+def vector_dof_permutation(mesh, vector_basis, element: str | None = None) -> np.ndarray:
     """``perm`` with ``perm[3*s + c]`` = scikit-fem vector DOF of component c at scalar node s."""
-    sb = scalar_basis(mesh, 1)
+    sb = scalar_basis(mesh, 1, element)
     perm = np.empty(3 * sb.N, dtype=np.int64)
-    ve = vector_basis.element_dofs  # (30, nel) local i -> (scalar i//3, comp i%3)
+    ve = vector_basis.element_dofs  # (3 nb, nel) local i -> (scalar i//3, comp i%3)
     se = sb.element_dofs
-    for i in range(30):
+    for i in range(ve.shape[0]):
         perm[3 * se[i // 3] + i % 3] = ve[i]
     return perm
 
@@ -274,42 +255,51 @@ def _scalar_probes(basis, x: np.ndarray) -> sp.csr_matrix:
     """Scalar interpolation matrix (m, N).  A point that coincides with a P2 node (within
     1e-9 of the mesh extent, e.g. a tip apex that is a mesh vertex) takes that node's value
     exactly (Lagrange property), which avoids the element finder's round-off failures on
-    vertices and edges; other points must lie inside the mesh."""
+    vertices and edges; other points must lie inside the mesh.  All other points go to one
+    call of the element finder (vectorised; per point it costs a search of the whole mesh)."""
+    from scipy.spatial import cKDTree
+
     locs = basis.doflocs
     ext = float(np.ptp(locs, axis=1).max())
-    rows, cols, data = [], [], []
-    for j in range(x.shape[1]):
-        d = np.linalg.norm(locs - x[:, j : j + 1], axis=0)
-        i = int(np.argmin(d))
-        if d[i] <= 1e-9 * ext:
-            rows.append(np.array([j]))
-            cols.append(np.array([i]))
-            data.append(np.array([1.0]))
-            continue
+    d, near = cKDTree(locs.T).query(x.T)
+    exact = d <= 1e-9 * ext
+    rows, cols, data = [np.nonzero(exact)[0]], [near[exact]], [np.ones(int(exact.sum()))]
+    rest = np.nonzero(~exact)[0]
+    if rest.size:
         try:
-            Pj = basis.probes(x[:, j : j + 1]).tocoo()
+            P = basis.probes(x[:, rest]).tocoo()
         except ValueError:
-            raise GeometryError(f"point {x[:, j].tolist()} lies outside the mesh") from None
-        rows.append(np.full(Pj.nnz, j))
-        cols.append(Pj.col)
-        data.append(Pj.data)
+            for j in rest:  # name the first point outside the mesh
+                try:
+                    basis.probes(x[:, j : j + 1])
+                except ValueError:
+                    raise GeometryError(f"point {x[:, j].tolist()} lies outside the mesh") from None
+            raise
+        rows.append(rest[P.row])
+        cols.append(P.col)
+        data.append(P.data)
     return sp.csr_matrix((np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
                          shape=(x.shape[1], basis.N))
 
 
-def face_average_operator(mesh, facets: np.ndarray) -> tuple[sp.csr_matrix, float]:
+def face_average_operator(mesh, facets: np.ndarray, element: str | None = None) -> tuple[sp.csr_matrix, float]:
     """(3, 3N) operator giving the area-averaged displacement over ``facets``, and the area.
 
     Its transpose applied to a force F gives the consistent nodal loads of the uniform
     traction F / area, so the pair (F, averaged displacement) is work-conjugate.
     """
-    fb = FacetBasis(mesh, ElementTetP2(), facets=np.asarray(facets), intorder=2)
+    kind = element_kind(mesh, element)
+    if isinstance(mesh, MeshHex2):
+        a = _hex_face_weights(mesh, kind, np.asarray(facets))
+    else:
+        # degree 2 on flat triangles; 2 x 2 Gauss on (bilinear, here flat) quadrilaterals is exact too
+        fb = FacetBasis(mesh, kind.element(), facets=np.asarray(facets), intorder=2)
 
-    @LinearForm
-    def one(v, w):
-        return v
+        @LinearForm
+        def one(v, w):
+            return v
 
-    a = one.assemble(fb)
+        a = one.assemble(fb)
     area = float(a.sum())
     if area <= 0:
         raise MaterialError("face_average_operator: empty face")
@@ -320,10 +310,47 @@ def face_average_operator(mesh, facets: np.ndarray) -> tuple[sp.csr_matrix, floa
     return sp.csr_matrix((data, (rows, cols)), shape=(3, 3 * a.size)), area
 
 
-def lumped_weights(mesh, elem_density: np.ndarray) -> np.ndarray:
+def _hex_face_weights(mesh, kind, facets: np.ndarray) -> np.ndarray:
+    """``int_face N_a dA`` for every scalar DOF, on the faces ``facets`` of a curved hexahedral
+    mesh, by 3 x 3 Gauss points on the element's own reference face (scikit-fem's FacetBasis
+    inverts the curved map by a clipped Newton iteration, which fails to converge on some
+    curved faces).  Surface element |dx/du x dx/dv| from the element map."""
+    basis = scalar_basis(mesh, 1, kind.key)
+    elem = kind.element()
+    nb = elem.doflocs.shape[0]
+    ref = mesh.elem().doflocs[:8] if mesh.elem().doflocs.shape[0] > 8 else mesh.elem().doflocs  # vertex reference coords
+    g1, w1 = np.polynomial.legendre.leggauss(3)
+    g1, w1 = 0.5 * (g1 + 1.0), 0.5 * w1
+    U, V = np.meshgrid(g1, g1, indexing="ij")
+    WQ = np.outer(w1, w1).ravel()
+    out = np.zeros(basis.N)
+    elems = mesh.f2t[0, facets]
+    mp = mesh._mapping()
+    groups: dict[tuple[int, float], list[int]] = {}
+    for k, (f, e) in enumerate(zip(facets, elems)):
+        loc = [int(np.nonzero(mesh.t[:, e] == v)[0][0]) for v in mesh.facets[:, f]]
+        r = ref[loc]
+        axis = int(np.nonzero(np.all(r == r[0], axis=0))[0][0])
+        groups.setdefault((axis, float(r[0, axis])), []).append(k)
+    for (axis, val), ks in groups.items():
+        others = [i for i in range(3) if i != axis]
+        X = np.zeros((3, WQ.size))
+        X[axis] = val
+        X[others[0]], X[others[1]] = U.ravel(), V.ravel()
+        es = elems[ks]
+        DF = np.asarray(mp.DF(X, tind=es))  # (3, 3, ne, nq): dx_i / dxi_j
+        n = np.cross(DF[:, others[0]], DF[:, others[1]], axis=0)
+        dA = np.linalg.norm(n, axis=0) * WQ[None, :]  # (ne, nq)
+        Nv = np.stack([elem.lbasis(X, i)[0] for i in range(nb)])  # (nb, nq)
+        contrib = dA @ Nv.T  # (ne, nb)
+        np.add.at(out, basis.element_dofs[:, es].T.ravel(), contrib.ravel())
+    return out
+
+
+def lumped_weights(mesh, elem_density: np.ndarray, element: str | None = None, basis=None) -> np.ndarray:
     """Positive nodal masses per scalar node (HRZ lumping: diagonal of the consistent mass
     scaled to the element mass), used to weight the mode classification."""
-    Ms = assemble_scalar_mass(mesh, elem_density)
+    Ms = assemble_scalar_mass(mesh, elem_density, element, basis)
     d = Ms.diagonal()
     return d * (Ms.sum() / d.sum())
 
@@ -331,5 +358,5 @@ def lumped_weights(mesh, elem_density: np.ndarray) -> np.ndarray:
 __all__: Sequence[str] = [
     "aniso_elasticity", "mass_form", "assemble_stiffness", "assemble_mass", "assemble_scalar_mass",
     "assemble_stiffness_skfem", "interpolation_operator", "face_average_operator", "element_regions",
-    "stiffness_field", "scalar_basis", "lumped_weights", "vector_dof_permutation",
+    "stiffness_field", "scalar_basis", "lumped_weights", "vector_dof_permutation", "assemble_mass_skfem",
 ]

@@ -30,11 +30,11 @@ import scipy.sparse as sp
 from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
+from probedyn.fem.assembly import element_kind, element_volumes
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
 from probedyn.fem.size import check_model
-from probedyn.meshes._gmsh import element_volumes
 
 Where = Union[str, Sequence[float], np.ndarray]
 
@@ -94,10 +94,16 @@ class ElasticModel:
         tip: Where = "tip",
         beam_axis: int = 0,
         name: str = "",
+        element: str | None = None,
     ) -> None:
         self.bundle = bundle
         self.mesh = bundle.mesh
         self.name = name
+        # the element kind: given, else the bundle's (its mesh builder chose it), else the
+        # mesh type's default (tet-p2 on tetrahedra, hex-s2 on hexahedra)
+        meta_el = (getattr(bundle, "meta", None) or {}).get("element")
+        self.element_kind = element_kind(self.mesh, element or meta_el)
+        self.element = self.element_kind.key
         self.region_names: list[str] = []
         self.materials: list[Material] = []
         self.orientations: list[Any] = []
@@ -129,7 +135,7 @@ class ElasticModel:
     def basis(self):
         """Scalar P2 basis (defines node numbering and positions ``basis.doflocs``)."""
         if self._basis is None:
-            self._basis = el.scalar_basis(self.mesh, 1)
+            self._basis = el.scalar_basis(self.mesh, 1, self.element)
         return self._basis
 
     @property
@@ -172,7 +178,7 @@ class ElasticModel:
             if where in self.bundle.points:
                 A = el.interpolation_operator(self.basis, np.asarray(self.bundle.points[where], dtype=float))
             elif where in (self.mesh.boundaries or {}):
-                A, _ = el.face_average_operator(self.mesh, self.mesh.boundaries[where])
+                A, _ = el.face_average_operator(self.mesh, self.mesh.boundaries[where], self.element)
             else:
                 known = sorted(set(self.bundle.points) | set(self.mesh.boundaries or {}))
                 raise GeometryError(f"unknown point or boundary '{where}' (known: {', '.join(known)})")
@@ -185,12 +191,13 @@ class ElasticModel:
     def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
         if self._K is None:
-            check_model(self.dofs, self.name or "model")  # announce a large model, refuse one too large
+            check_model(self.dofs, self.name or "model", element=self.element)  # announce a large model, refuse one too large
             t0 = time.perf_counter()
             with progress.stage(f"assembling K and M ({self.dofs} DOFs)"):
-                K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations)
+                K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations,
+                                          element=self.element, basis=self.basis)
                 t1 = time.perf_counter()
-                M = el.assemble_mass(self.mesh, self.elem_density)
+                M = el.assemble_mass(self.mesh, self.elem_density, element=self.element, basis=self.basis)
             t2 = time.perf_counter()
             self._Kel, self._Mel = K, M
             for pm in self.point_masses:
@@ -213,6 +220,20 @@ class ElasticModel:
                                 assemble_s=time.perf_counter() - t0)
         return self._K, self._M
 
+    def free_matrices(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """K and M restricted to the free DOFs (clamped ones eliminated), kept until the model's
+        matrices change; canonical CSR (sorted indices), so equal matrices have equal arrays."""
+        K, M = self.assemble()
+        if getattr(self, "_free_cache", None) is None or self._free_cache[0] is not K or self._free_cache[1] is not M:
+            free = self.free_dofs
+            Kf = K[free][:, free].tocsr()
+            Mf = M[free][:, free].tocsr()
+            for A in (Kf, Mf):
+                A.sum_duplicates()
+                A.sort_indices()
+            self._free_cache = (K, M, Kf, Mf)
+        return self._free_cache[2], self._free_cache[3]
+
     def total_mass(self) -> float:
         K, M = self.assemble()
         r = np.zeros(self.ndofs_total)
@@ -232,8 +253,7 @@ class ElasticModel:
         self.check_resolution(int(n_modes))
         K, M = self.assemble()
         free = self.free_dofs
-        Kf = K[free][:, free].tocsr()
-        Mf = M[free][:, free].tocsr()
+        Kf, Mf = self.free_matrices()
         if sigma is None and self.clamp:
             sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
         with progress.stage(f"solving for {int(n_modes)} modes ({self.dofs} DOFs)"):
@@ -251,11 +271,11 @@ class ElasticModel:
 
     def elements_along_axis(self) -> float:
         """Typical number of elements along ``beam_axis``: the body's extent along the axis over
-        the edge of a regular tetrahedron of the mean element volume."""
-        p, t = self.mesh.p, self.mesh.t
-        a, b, c, d = (p[:, t[i]] for i in range(4))
-        vol = np.abs(np.einsum("ij,ij->j", b - a, np.cross(c - a, d - a, axis=0))) / 6.0
-        h = (6.0 * np.sqrt(2.0) * vol.mean()) ** (1.0 / 3.0)
+        the edge of a regular tetrahedron (or of a cube, for hexahedra) of the mean element volume."""
+        p = self.mesh.p
+        vol = element_volumes(self.mesh)
+        shape = 6.0 * np.sqrt(2.0) if self.element.startswith("tet") else 1.0
+        h = (shape * vol.mean()) ** (1.0 / 3.0)
         extent = np.ptp(p[self.beam_axis])
         return float(extent / h)
 
@@ -277,7 +297,7 @@ class ElasticModel:
     def _postprocess(self, lam: np.ndarray, Phi: np.ndarray, M: sp.csr_matrix, free: np.ndarray) -> list[Mode]:
         k = Phi.shape[1]
         # classification
-        weights = el.lumped_weights(self.mesh, self.elem_density)
+        weights = el.lumped_weights(self.mesh, self.elem_density, self.element, self.basis)
         U = Phi.reshape(self.n_nodes, 3, k)
         fams, shares = classify_shapes(self.basis.doflocs, weights, U, axis=self.beam_axis)
         # tip displacement
@@ -330,7 +350,7 @@ class ElasticModel:
         totals = np.einsum("ik,ik->k", Phi, self.assemble()[1] @ Phi)
         for r, name in enumerate(self.region_names):
             dens = np.where(self.elem_region == r, self.elem_density, 0.0)
-            Mr = el.assemble_mass(self.mesh, dens)
+            Mr = el.assemble_mass(self.mesh, dens, element=self.element, basis=self.basis)
             e = np.einsum("ik,ik->k", Phi, Mr @ Phi)
             for i in range(k):
                 out[i][name] = float(e[i] / totals[i]) if totals[i] > 0 else float("nan")
@@ -355,7 +375,7 @@ class ElasticModel:
             f += self.attachment(where).T @ np.asarray(F, dtype=float).reshape(3)
         free = self.free_dofs
         with progress.stage(f"factorising K for a static solve ({self.dofs} DOFs)"):
-            fac = factorize(K[free][:, free], spd=True, solver=solver)
+            fac = factorize(self.free_matrices()[0], spd=True, solver=solver)
         try:
             u = np.zeros(self.ndofs_total)
             u[free] = fac.solve(f[free])
@@ -374,6 +394,11 @@ class ElasticModel:
     def node_displacement(self, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(positions (N, 3), displacements (N, 3)) at all P2 nodes (vertices and edge midpoints)."""
         return self.basis.doflocs.T.copy(), np.asarray(u, dtype=float).reshape(self.n_nodes, 3)
+
+    def points_operator(self, points: np.ndarray) -> sp.csr_matrix:
+        """(3 m, 3 N) operator giving the displacement at the points (3, m) (row 3 j + c:
+        component c at point j); one vectorised search of the mesh for all of them."""
+        return el.interpolation_operator(self.basis, np.asarray(points, dtype=float).reshape(3, -1))
 
     def displacement_at(self, u: np.ndarray, where: Where) -> np.ndarray:
         """Displacement (3,) [m] of the full vector ``u`` at an attachment."""
@@ -410,7 +435,7 @@ class ElasticModel:
                         for s in self.springs],
             "vertices": int(self.mesh.p.shape[1]),
             "elements": int(self.mesh.t.shape[1]),
-            "element": "P2 tetrahedra (ElementTetP2, straight-sided)",
+            "element": self.element_kind.title,
         }
 
 

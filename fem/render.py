@@ -165,13 +165,22 @@ def mode_vertex_field(result: Any, index: int) -> tuple[np.ndarray, np.ndarray, 
         u = np.asarray(model.vertex_displacement(shape))
     else:
         u = shape[model.basis.nodal_dofs].T
-    u = u.reshape(mesh.p.shape[1], 3) if u.shape != (mesh.p.shape[1], 3) else u
-    return mesh.p.T.copy(), mesh.t.T.copy(), u
+    nv = mesh.t.max() + 1  # vertices (a curved MeshHex2 also stores its higher-order geometry nodes)
+    u = u[:nv].reshape(nv, 3) if u.shape != (nv, 3) else u
+    return mesh.p[:, :nv].T.copy(), mesh.t.T.copy(), u
 
 
-def _grid(pv, points: np.ndarray, tets: np.ndarray):
-    cells = np.hstack([np.full((tets.shape[0], 1), 4, dtype=np.int64), tets.astype(np.int64)]).ravel()
-    celltypes = np.full(tets.shape[0], pv.CellType.TETRA, dtype=np.uint8)
+#: VTK hexahedron vertex order = scikit-fem MeshHex order permuted (skfem.io.meshio.HEX_MAPPING)
+_VTK_HEX = (0, 3, 6, 2, 1, 5, 7, 4)
+
+
+def _grid(pv, points: np.ndarray, cells_in: np.ndarray):
+    """Linear tetrahedra (E, 4) or hexahedra (E, 8, scikit-fem vertex order) as a pyvista grid."""
+    k = cells_in.shape[1]
+    conn = cells_in[:, list(_VTK_HEX)] if k == 8 else cells_in
+    cells = np.hstack([np.full((conn.shape[0], 1), k, dtype=np.int64), conn.astype(np.int64)]).ravel()
+    ctype = pv.CellType.HEXAHEDRON if k == 8 else pv.CellType.TETRA
+    celltypes = np.full(conn.shape[0], ctype, dtype=np.uint8)
     return pv.UnstructuredGrid(cells, celltypes, points)
 
 

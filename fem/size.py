@@ -11,6 +11,14 @@ peak memory of a modal solve   150 MB + 9.0-10.4 kB per DOF        -> 10 kB
 wall time (assembly + solve)   0.25-0.33 ms per DOF                -> 0.3 ms
 =============================  ==========================================
 
+Structured quadratic hexahedra (issue 15, ``hex-s2``: 20 nodes, a vertex couples to 81 nodes,
+so a matrix row holds ~2.5x the entries of a P2-tetrahedron row, and the thin beam refined in
+all three directions fills like a chunky body): measured on the cantilever, 49k-174k DOFs,
+peak memory 22-27 kB per DOF -> 26 kB, 0.35-0.65 ms per DOF -> 0.6 ms (``hex-q2``, 27 nodes: 23 kB
+and 0.34 ms per DOF at 61k DOFs; the hex-s2 coefficients are used).  The default hexahedral meshes are small (14k DOFs), so this
+only matters for refined ones.  A structured mesh's DOFs are counted exactly before meshing
+(``meshes.hexmeshes.cantilever_hex_dofs``).
+
 The factor's fill grows faster than linearly for chunky 3D bodies (nested dissection:
 ~n^(4/3)), so for them the estimate is a lower bound. :func:`check_model` announces a large
 model through :mod:`probedyn.core.progress` (the command line prints it) and refuses one that
@@ -28,6 +36,9 @@ DOFS_PER_TET = 5.3
 BASE_BYTES = 150e6
 BYTES_PER_DOF = 10e3
 SECONDS_PER_DOF = 0.3e-3
+#: (bytes per DOF, seconds per DOF) of a modal solve by element kind (module docstring)
+ELEMENT_COEFFICIENTS = {"tet-p2": (BYTES_PER_DOF, SECONDS_PER_DOF), "hex-s2": (26e3, 0.6e-3),
+                        "hex-q2": (26e3, 0.6e-3)}
 #: models from this size on are announced before they are built
 ANNOUNCE_DOFS = 100_000
 
@@ -39,9 +50,10 @@ def dofs_for_volume(volume: float, h: float) -> int:
     return int(DOFS_PER_TET * TETS_PER_H3 * volume / h**3)
 
 
-def estimate(n_dofs: float) -> tuple[float, float]:
+def estimate(n_dofs: float, element: str = "tet-p2") -> tuple[float, float]:
     """(peak bytes, seconds) of assembling and solving a modal problem with ``n_dofs`` DOFs."""
-    return BASE_BYTES + BYTES_PER_DOF * n_dofs, SECONDS_PER_DOF * n_dofs
+    b, s = ELEMENT_COEFFICIENTS.get(element, ELEMENT_COEFFICIENTS["tet-p2"])
+    return BASE_BYTES + b * n_dofs, s * n_dofs
 
 
 def _count(n: float) -> str:
@@ -52,18 +64,20 @@ def _count(n: float) -> str:
     return f"{n:.0f}"
 
 
-def describe(n_dofs: float, what: str = "model") -> str:
-    b, s = estimate(n_dofs)
+def describe(n_dofs: float, what: str = "model", element: str = "tet-p2") -> str:
+    b, s = estimate(n_dofs, element)
     t = f"{s / 60:.0f} min" if s >= 120 else f"{s:.0f} s"
-    return f"{what}: about {_count(n_dofs)} DOFs (P2), about {fmt_bytes(b)} and {t} to assemble and solve"
+    kind = "P2" if element == "tet-p2" else element
+    return f"{what}: about {_count(n_dofs)} DOFs ({kind}), about {fmt_bytes(b)} and {t} to assemble and solve"
 
 
-def check_model(n_dofs: float, what: str = "model", hint: str = "") -> None:
+def check_model(n_dofs: float, what: str = "model", hint: str = "", element: str = "tet-p2") -> None:
     """Announce a large model and refuse one that cannot fit in memory (see the module docstring)."""
-    b, _ = estimate(n_dofs)
+    b, _ = estimate(n_dofs, element)
+    per = ELEMENT_COEFFICIENTS.get(element, ELEMENT_COEFFICIENTS["tet-p2"])[0]
     check_memory(b, f"the FEM {what} (about {_count(n_dofs)} DOFs)",
-                 how=f"{BYTES_PER_DOF / 1e3:.0f} kB per DOF, measured",
+                 how=f"{per / 1e3:.0f} kB per DOF, measured",
                  hint=hint or "use a coarser mesh (fewer elements through the thickness, a larger element_size) "
                               "or a smaller probe")
     if n_dofs >= ANNOUNCE_DOFS:
-        progress.note(describe(n_dofs, what))
+        progress.note(describe(n_dofs, what, element))

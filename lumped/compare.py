@@ -34,6 +34,12 @@ def rayleigh_rows(probe: Any, values: dict[str, Any], result: Any) -> list[dict[
     tip_mass = float(values.get("tip_mass") or 0.0)
     rows = []
     count: dict[str, int] = {}
+    # cross-section average on a 3x3 Gauss grid (the centreline alone carries the 3D
+    # anticlastic / Poisson deformation of the section, which is not beam deflection)
+    g3 = np.array([-np.sqrt(0.6), 0.0, np.sqrt(0.6)]) / 2.0
+    w3 = np.array([5.0, 8.0, 5.0]) / 18.0
+    pts = [(xi, gy * b.w, gz * b.t) for gy in g3 for gz in g3 for xi in x]
+    A = None  # one interpolation operator for all samples and modes (built when a bending mode needs it)
     for m in result.modes:
         count[m.family] = count.get(m.family, 0) + 1
         if m.family not in ("flapwise", "lateral"):
@@ -41,14 +47,10 @@ def rayleigh_rows(probe: Any, values: dict[str, Any], result: Any) -> list[dict[
         comp = 2 if m.family == "flapwise" else 1
         EI = b.E * (b.w * b.t**3 if comp == 2 else b.t * b.w**3) / 12.0
         rhoA = b.rho * b.w * b.t
-        # cross-section average on a 3x3 Gauss grid (the centreline alone carries the 3D
-        # anticlastic / Poisson deformation of the section, which is not beam deflection)
-        g3 = np.array([-np.sqrt(0.6), 0.0, np.sqrt(0.6)]) / 2.0
-        w3 = np.array([5.0, 8.0, 5.0]) / 18.0
-        w = np.zeros_like(x)
-        for gy, wy in zip(g3, w3):
-            for gz, wz in zip(g3, w3):
-                w += wy * wz * np.array([model.displacement_at(m.shape, (xi, gy * b.w, gz * b.t))[comp] for xi in x])
+        if A is None:
+            A = model.points_operator(np.array(pts).T)
+        u = (A @ m.shape[: A.shape[1]]).reshape(3, 3, x.size, 3)[..., comp]  # (gy, gz, x)
+        w = np.einsum("i,j,ijx->x", w3, w3, u)
         if tip_mass > 0:
             # point mass at x = L: add m w(L)^2 to the kinetic integral via an equivalent
             # distributed term would bias the spline; evaluate the two parts separately instead

@@ -46,6 +46,7 @@ import numpy as np
 from scipy.linalg import eigh
 
 from probedyn.core.errors import ParameterError, SolverError
+from probedyn.fem.assembly import rigid_body_properties as mesh_rigid_body_properties
 from probedyn.fem.augmented import LumpedTip
 from probedyn.fem.model import ElasticModel
 from probedyn.lumped.smart_analytic import end_body_first_mode_at, end_body_frequencies, rigid_body_properties
@@ -61,6 +62,16 @@ AX = {"x": 0, "y": 1, "z": 2}
 def body_modes(model, n_modes: int = 8):
     """Modes of the FE model **without** its lumped tip (body + holder + point masses)."""
     return ElasticModel.modes(model, n_modes)
+
+
+def beamlike(mode) -> bool:
+    """A bending or axial mode of the body: its family, or (a bending pair tilted at 45 degrees
+    by an eccentric bore is classified "other", flapwise and lateral shares 0.5 each) bending
+    shares summing to more than one half."""
+    if mode.family in ("lateral", "flapwise", "axial"):
+        return True
+    sh = mode.family_shares or {}
+    return sh.get("flapwise", 0.0) + sh.get("lateral", 0.0) > 0.5
 
 
 def holder_displacements(model, result, attach: str) -> np.ndarray:
@@ -154,7 +165,7 @@ def reduce_from_fem(model, directions: Sequence[str], attach: str, *, mu: float 
     chosen: dict[str, int] = {}
     second: dict[str, float] = {}
     for i, mode in enumerate(res.modes):
-        if mode.family not in ("lateral", "flapwise", "axial"):
+        if not beamlike(mode):
             continue
         u2 = np.array([uh[i][AX[d]] ** 2 for d in dirs])
         if u2.sum() <= 0:
@@ -226,8 +237,8 @@ def fem_mode_groups(model, result, attach: str, groups: dict[str, Sequence[str]]
     for i, m in enumerate(result.modes):
         v = uh[i] ** 2 + np.asarray(m.tip_displacement, dtype=float) ** 2
         tip_share = m.kinetic_energy_share.get("tip", 0.0)
-        beamlike = m.family in ("lateral", "flapwise", "axial") or tip_share > 0.5
-        out.append(group_of(v, groups) if beamlike else None)
+        is_beam = beamlike(m) or tip_share > 0.5
+        out.append(group_of(v, groups) if is_beam else None)
     return out
 
 
@@ -273,11 +284,14 @@ def compare_lumped_fem(model, lumped: SmartLumpedModel, result, attach: str,
 
 
 def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence[str], n_modes: int = 4,
-                       body_regions: Sequence[str] = (), groups: dict[str, Sequence[str]] | None = None) -> list[dict[str, Any]]:
+                       body_regions: Sequence[str] = (), groups: dict[str, Sequence[str]] | None = None,
+                       solve=None) -> list[dict[str, Any]]:
     """FEM modes of the assembled probe for holder spring ``k`` in ``stiffnesses`` (applied in
     ``directions``; the other components keep their value). Per mode: frequency, direction,
     kinetic-energy share of the tip, of holder + tip (holder regions, point masses, tip), of
-    the body, and the strain-energy share of the holder spring."""
+    the body, and the strain-energy share of the holder spring. ``solve(model, n_modes)``
+    returns the modes of the model with its current holder spring (default ``model.modes``;
+    :func:`probedyn.probes.studies.study_localisation` passes a reduced-model solver)."""
     lt0 = model.lumped_tip
     if lt0 is None:
         raise ParameterError("the holder-stiffness sweep needs tip = 'lumped'")
@@ -288,7 +302,7 @@ def localisation_sweep(model, stiffnesses: Sequence[float], directions: Sequence
             for d in directions:
                 ks[AX[d]] = float(k)
             model.lumped_tip = LumpedTip(lt0.mass, tuple(ks), lt0.attach)
-            res = model.modes(n_modes)
+            res = model.modes(n_modes) if solve is None else solve(model, n_modes)
             dirs = fem_mode_groups(model, res, lt0.attach, groups or {"x": ("x",), "y": ("y",), "z": ("z",)})
             for m, d in zip(res.modes, dirs):
                 ke = m.kinetic_energy_share
@@ -313,6 +327,8 @@ def _holder_body(model, regions: Sequence[str], pm_mass: float = 0.0):
     if sel.size == 0:
         return pm_mass, None, np.zeros((3, 3))
     dens = model.elem_density[sel]
+    if mesh.t.shape[0] != 4:  # hexahedra: by quadrature
+        return mesh_rigid_body_properties(mesh, sel, dens)
     m, c, J = rigid_body_properties(mesh.p, mesh.t[:, sel], dens)
     return m, c, J
 

@@ -30,6 +30,7 @@ from typing import Iterator
 import meshio
 import numpy as np
 from skfem import MeshTet
+from skfem.quadrature import get_quadrature
 
 from probedyn.core.errors import GeometryError
 from probedyn.core.io import atomic_path
@@ -214,13 +215,17 @@ def _meshio_format(path: Path) -> str:
 
 
 def element_volumes(mesh) -> np.ndarray:
-    """Volumes [m^3] of the straight tetrahedra of a scikit-fem MeshTet."""
+    """Volumes [m^3] of the elements: straight tetrahedra (a MeshTet), or hexahedra (MeshHex,
+    trilinear; MeshHex2, curved: 3 x 3 x 3 Gauss points, exact for the trilinear Jacobian)."""
+    if mesh.t.shape[0] == 8:
+        X, W = get_quadrature(type(mesh).elem().refdom, 5)
+        return np.abs(mesh._mapping().detDF(X)) @ W
     p = mesh.p[:, mesh.t]  # (3, 4, nel)
     a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
     return np.abs(np.einsum("ie,ie->e", a, np.cross(b, c, axis=0))) / 6.0
 
 
 def region_volumes(mesh, names) -> dict[str, float]:
-    """Volume [m^3] of each named subdomain of a tet mesh (names the mesh lacks are left out)."""
+    """Volume [m^3] of each named subdomain of a mesh (names the mesh lacks are left out)."""
     vol = element_volumes(mesh)
     return {n: float(vol[mesh.subdomains[n]].sum()) for n in names if n in (mesh.subdomains or {})}

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
-from skfem import MeshTet
+from skfem import MeshHex, MeshHex2, MeshTet
 
 from probedyn.core.errors import DataFormatError, ParameterError
 from probedyn.core.io import atomic_path, to_jsonable
@@ -65,7 +65,9 @@ class MeshOptions:
 class MeshBundle:
     """A meshed geometry ready for :class:`probedyn.fem.model.ElasticModel`.
 
-    ``mesh``: :class:`skfem.MeshTet` (straight 4-node tets) with ``.subdomains``
+    ``mesh``: :class:`skfem.MeshTet` (straight 4-node tets), :class:`skfem.MeshHex`
+    (trilinear 8-node hexahedra) or :class:`skfem.MeshHex2` (curved 27-node hexahedra; both
+    from ``meshes/structured.py``) with ``.subdomains``
     {group name: element indices} and ``.boundaries`` {group name: facet indices};
     ``points``: named points {name: (3,) coordinates [m]}, e.g. ``"tip"``;
     ``key``: hash of the builder name and parameters; ``path``: cache file (or None);
@@ -79,6 +81,12 @@ class MeshBundle:
     meta: dict[str, Any] = field(default_factory=dict)
 
     @property
+    def element(self) -> str | None:
+        """The element kind the mesh was built for (``meta["element"]``; None = the mesh
+        type's default, see :mod:`probedyn.fem.assembly`)."""
+        return self.meta.get("element")
+
+    @property
     def n_vertices(self) -> int:
         return int(self.mesh.p.shape[1])
 
@@ -87,7 +95,7 @@ class MeshBundle:
         return int(self.mesh.t.shape[1])
 
     def element_volumes(self) -> np.ndarray:
-        """Volumes [m^3] of the tetrahedra."""
+        """Volumes [m^3] of the elements."""
         return element_volumes(self.mesh)
 
     def export(self, path: str | Path) -> Path:
@@ -97,7 +105,9 @@ class MeshBundle:
     # ---- persistence -------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
         path = Path(path)
-        arrays: dict[str, np.ndarray] = {"p": self.mesh.p, "t": self.mesh.t}
+        cell = "hex2" if isinstance(self.mesh, MeshHex2) else ("hex" if isinstance(self.mesh, MeshHex) else "tet")
+        arrays: dict[str, np.ndarray] = {"p": self.mesh.doflocs if cell == "hex2" else self.mesh.p, "t": self.mesh.t,
+                                         "cell": np.array(cell)}
         for name, idx in (self.mesh.subdomains or {}).items():
             arrays[f"sub::{name}"] = np.asarray(idx)
         for name, idx in (self.mesh.boundaries or {}).items():
@@ -124,7 +134,8 @@ class MeshBundle:
         bnd = {k[5:]: v for k, v in data.items() if k.startswith("bnd::")}
         pts = {k[4:]: v for k, v in data.items() if k.startswith("pt::")}
         info = json.loads(str(data["meta"])) if "meta" in data else {}
-        mesh = MeshTet(data["p"], data["t"], _boundaries=bnd or None, _subdomains=sub or None)
+        mesh_type = {"hex": MeshHex, "hex2": MeshHex2}.get(str(data["cell"]) if "cell" in data else "tet", MeshTet)
+        mesh = mesh_type(data["p"], data["t"], _boundaries=bnd or None, _subdomains=sub or None)
         return cls(mesh, pts, info.get("key", ""), path, info.get("meta", {}))
 
 

@@ -9,7 +9,8 @@ import pytest
 
 from probedyn.lumped import smart as S
 from probedyn.probes import studies as St
-from probedyn.lumped.smart_analytic import EccentricSection, end_body_frequencies, rigid_body_properties
+from probedyn.fem.assembly import rigid_body_properties as mesh_rigid_body_properties
+from probedyn.lumped.smart_analytic import EccentricSection, end_body_frequencies
 from probedyn.probes import get_probe
 
 
@@ -17,7 +18,7 @@ def _section_from_mesh(model, region, L):
     """Area and principal second moments of the meshed (polygonal) cross-section."""
     mesh = model.mesh
     sel = mesh.subdomains[region]
-    vol, c, J = rigid_body_properties(mesh.p, mesh.t[:, sel], np.ones(sel.size))
+    vol, c, J = mesh_rigid_body_properties(mesh, sel, np.ones(sel.size))  # tetrahedra or hexahedra
     Sxx = 0.5 * (J[0, 0] + J[1, 1] + J[2, 2]) * np.eye(3) - J  # int (x-c)(x-c)^T dV
     return vol / L, Sxx[1, 1] / L, Sxx[2, 2] / L
 

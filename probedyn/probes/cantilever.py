@@ -21,6 +21,8 @@ from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.lumped import beam as bm
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
+from probedyn.meshes.hexmeshes import (ELEMENT_CHOICES, HexDivisions, cantilever_hex_dofs, cantilever_hex_mesh,
+                                      refinement_for)
 from probedyn.probes import Probe, register_probe
 
 _PARAMS = ParamSet([
@@ -40,9 +42,16 @@ _PARAMS = ParamSet([
           choices=("none", "pyramid", "cone")),
     Param("tip_height", 10e-6, "m", "tip height (if tip_shape is not none)", lo=1e-7, hi=0.005, positive=True),
     Param("tip_half_angle", 0.35, "rad", "tip half-angle (0.35 rad = 20 deg)", lo=0.01, hi=1.5, positive=True),
-    Param("elements_through_thickness", 2, "", "element layers through the thickness (P2 tets)", lo=1, hi=40,
+    Param("elements_through_thickness", 3, "", "element layers through the thickness", lo=1, hi=40,
           kind=int),
-    Param("element_size", None, "m", "maximum element size; None = thickness / elements_through_thickness",
+    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+          lo=1e-5, hi=0.05, positive=True),
+    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
+          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
+          choices=ELEMENT_CHOICES),
+    Param("element_size", None, "m", "maximum element size (hexahedra: along the beam away from the clamp); "
+          "None = thickness / elements_through_thickness (hexahedra: the thickness, graded towards the clamp)",
           lo=1e-8, hi=0.01, positive=True),
 ])
 
@@ -70,7 +79,26 @@ class Cantilever(Probe):
         return get_material(values["material"]).with_overrides(
             values.get("youngs_modulus"), values.get("poisson_ratio"), values.get("density"))
 
+    def element(self, values: dict[str, Any]) -> str:
+        """The element kind of the mesh: hexahedra for the plain beam (``auto``: hex-s2, the
+        fastest to 0.1 %, docs/fem.md), P2 tetrahedra when a tip is meshed."""
+        el = values.get("element", "auto")
+        if values["tip_shape"] != "none":
+            if el.startswith("hex"):
+                raise GeometryError(f"element '{el}': hexahedral meshes are for the plain beam (tip_shape = none); "
+                                    f"a {values['tip_shape']} tip needs element = tet-p2 or auto")
+            return "tet-p2"
+        return "hex-s2" if el == "auto" else el
+
+    def _divisions(self, values: dict[str, Any]) -> HexDivisions:
+        return HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                            refine=refinement_for("cantilever", values.get("accuracy")))
+
     def mesh(self, values: dict[str, Any]):
+        el = self.element(values)
+        if el != "tet-p2":
+            return cantilever_hex_mesh(values["length"], values["width"], values["thickness"],
+                                       self._divisions(values), el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return cantilever_mesh(values["length"], values["width"], values["thickness"], values["tip_shape"],
                                values["tip_height"], values["tip_half_angle"], options=opts)
@@ -81,10 +109,15 @@ class Cantilever(Probe):
         from probedyn.meshes.cache import MeshOptions
 
         mat = self.material(values)
-        # before meshing: the model this mesh gives must fit (the beam's volume, the mesh size)
+        # before meshing: the model this mesh gives must fit (tetrahedra: estimated from the
+        # beam's volume and the mesh size; structured hexahedra: counted exactly)
+        el = self.element(values)
         L, w, t = values["length"], values["width"], values["thickness"]
-        h = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"])).size_for(min(w, t))
-        check_model(dofs_for_volume(L * w * t, h), "cantilever model")
+        if el == "tet-p2":
+            h = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"])).size_for(min(w, t))
+            check_model(dofs_for_volume(L * w * t, h), "cantilever model")
+        else:
+            check_model(cantilever_hex_dofs(L, w, t, self._divisions(values), el), "cantilever model", element=el)
         with progress.stage("meshing the cantilever"):
             bundle = self.mesh(values)
         regions = {"body": mat}

@@ -42,6 +42,7 @@ from probedyn.meshes._gmsh import region_volumes
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.duo_bimorph import DEFAULTS as GEOM
 from probedyn.meshes.duo_bimorph import duo_bimorph_mesh, named_points, validate
+from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, duo_bimorph_hex_mesh, refinement_for
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
 
@@ -87,8 +88,15 @@ _PARAMS = ParamSet([
           hi=20000.0, positive=True, source="Table 3.1"),
     Param("mu", 0.0, "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
           source="3.2"),
-    Param("elements_through_thickness", 1, "", "elements through one PZT layer (P2 tets)", lo=1, hi=20, kind=int),
-    Param("element_size", None, "m", "maximum element size; None = layer thickness / elements_through_thickness",
+    Param("elements_through_thickness", 1, "", "elements through one PZT layer", lo=1, hi=20, kind=int),
+    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+          lo=1e-5, hi=0.05, positive=True),
+    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
+          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
+          choices=ELEMENT_CHOICES),
+    Param("element_size", None, "m", "maximum element size (hexahedra: along the probe away from the clamp); "
+          "None = layer thickness / elements_through_thickness (hexahedra: the total thickness, graded towards the clamp)",
           lo=1e-8, hi=0.001, positive=True),
 ])
 
@@ -124,7 +132,21 @@ class DuoBimorph(SmartProbe):
         g["tip"] = "meshed" if v["tip"] == "meshed" else "none"
         return g
 
+    def element(self, values: dict[str, Any]) -> str:
+        """Hexahedra (``auto``: hex-s2) unless the tip cone is meshed (tetrahedra)."""
+        el = values.get("element", "auto")
+        if values["tip"] == "meshed":
+            if el.startswith("hex"):
+                raise GeometryError(f"element '{el}': the meshed tip cone needs element = tet-p2 or auto")
+            return "tet-p2"
+        return "hex-s2" if el == "auto" else el
+
     def mesh(self, values: dict[str, Any]):
+        el = self.element(values)
+        if el != "tet-p2":
+            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                               refine=refinement_for("duo-bimorph", values.get("accuracy")))
+            return duo_bimorph_hex_mesh(validate(self._geom(values)), div, el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return duo_bimorph_mesh(self._geom(values), options=opts)
 

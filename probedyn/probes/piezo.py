@@ -143,6 +143,8 @@ def build_piezo_model(probe, values: dict[str, Any], layout: str | None = None, 
     setup = piezo_setup(probe.name, poling)
     mat_name = piezo_material or values.get("material", "pzt-5h")
     mat = get_piezo_material(mat_name)
+    if values.get("element") == "auto":  # the coupled FEM assembles P2 tetrahedra (hexahedra: refused)
+        values = {**values, "element": "tet-p2"}
     mech = probe.build(values)
     regions = {}
     for rname, pol in setup.regions.items():

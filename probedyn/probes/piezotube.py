@@ -37,6 +37,7 @@ from probedyn.lumped.smart import piezotube_references
 from probedyn.lumped.smart_analytic import Piezotube as Tube
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.piezotube import DEFAULTS as GEOM
+from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, piezotube_hex_mesh, refinement_for
 from probedyn.meshes.piezotube import piezotube_mesh, validate
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
@@ -75,9 +76,16 @@ _PARAMS = ParamSet([
           hi=20000.0, positive=True, source="Table 3.2"),
     Param("mu", T32["mu"], "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
           source="Table 3.2"),
-    Param("elements_through_thickness", 1, "", "elements through the tube wall (structured P2 tets)", lo=1, hi=12,
+    Param("elements_through_thickness", 1, "", "elements through the tube wall", lo=1, hi=12,
           kind=int),
-    Param("element_size", None, "m", "circumferential/axial element size; None = 4 x wall / elements_through_thickness",
+    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+          lo=1e-5, hi=0.05, positive=True),
+    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
+          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
+          choices=ELEMENT_CHOICES),
+    Param("element_size", None, "m", "circumferential/axial element size; None = 4 x wall / elements_through_thickness "
+          "(hexahedra: 8 x wall)",
           lo=1e-7, hi=0.01, positive=True),
 ])
 
@@ -104,7 +112,17 @@ class Piezotube(SmartProbe):
         validate({k: v[k] for k in GEOM_KEYS})
         return v
 
+    def element(self, values: dict[str, Any]) -> str:
+        """Hexahedra with curved (quadratic) geometry for ``auto`` (hex-s2), else as given."""
+        el = values.get("element", "auto")
+        return "hex-s2" if el == "auto" else el
+
     def mesh(self, values: dict[str, Any]):
+        el = self.element(values)
+        if el != "tet-p2":
+            div = HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
+                               refine=refinement_for("piezotube", values.get("accuracy")))
+            return piezotube_hex_mesh(validate({k: values[k] for k in GEOM_KEYS}), div, el)
         opts = MeshOptions(values.get("element_size"), int(values["elements_through_thickness"]))
         return piezotube_mesh({k: values[k] for k in GEOM_KEYS}, options=opts)
 

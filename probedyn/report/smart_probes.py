@@ -153,7 +153,7 @@ def draw_modes(result, path: Path, what: str) -> str:
     except Exception as exc:  # no OpenGL: report it, keep the numbers
         return f"(mode panel not rendered: {str(exc).splitlines()[0]})"
     return (f"![First four modes: {what}]({Path(path).name})\n\n*First four modes of the {what} "
-            f"(FEM, P2 tetrahedra, {result.dofs} DOFs): the model of the analytic table below; colour: displacement "
+            f"(FEM, {result.model.element_kind.title}, {result.dofs} DOFs): the model of the analytic table below; colour: displacement "
             "magnitude normalised per mode, grey: undeformed.*")
 
 
@@ -189,7 +189,8 @@ def section(outdir: Path, quick: bool = False) -> str:
     make_dirs(outdir)
     ks = [1.0, 100.0] if quick else [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0]
     deltas = [0.0, 5e-6] if quick else [0.0, 1e-6, 2e-6, 3e-6, 4e-6, 5e-6]
-    parts = ["Source sections 3.2-3.5. FEM: P2 tetrahedra, PZT-5H transversely isotropic (poled through the thickness "
+    parts = ["Source sections 3.2-3.5. FEM: structured 20-node serendipity hexahedra (the default element, "
+             "`docs/fem.md`; meshed tip cones: P2 tetrahedra), PZT-5H transversely isotropic (poled through the thickness "
              "in the bimorph, radially in the tube); tip lumped as mass m on the holder springs k_t; holder mass from "
              "Table 3.1/3.2 (m_h) unless stated. Three models appear below and each table and figure names its own: "
              "**body + holder** (no tip), the **assembled probe** (body + holder + tip mass on k_t) and the "
@@ -201,7 +202,7 @@ def section(outdir: Path, quick: bool = False) -> str:
         parts.append(f"### {probe}")
         p, _ = get_probe(probe)
         v = p.resolve({**ov, "tip": "none"})
-        res = p.build(v).modes(6 if probe == "duo-bimorph" else 4)
+        res = S.solve_modes(p, v, 6 if probe == "duo-bimorph" else 4)  # memoised: the studies reuse this solve
         parts += ["", draw_modes(res, outdir / f"{probe}-modes.png", f"{probe} body + holder (no tip)"), ""]
         refs = _reference_orders(p.references(v, res))
         parts += [f"Analytic references for body + holder (no tip; holder mass {p.holder_mass(v):.3g} kg, "

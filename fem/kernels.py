@@ -1,0 +1,198 @@
+"""numba kernels of :mod:`probedyn.fem.assembly` (kept in their own module: numba's on-disk
+cache is per source file, so editing the drivers does not recompile these).
+
+* :func:`pattern` - node adjacency (block-CSR pattern) and the position of every element block;
+* :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
+* :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+# ---------------------------------------------------------------------------------------
+# sparsity pattern
+# ---------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def pattern(ed, n):  # pragma: no cover - compiled
+    """Node adjacency of ``ed`` (nel, nb) as CSR (indptr, indices sorted per row) and the
+    position ``pos[e, a, b]`` of block (ed[e, a], ed[e, b]) in ``indices``."""
+    nel, nb = ed.shape
+    # node -> elements
+    cnt = np.zeros(n + 1, np.int64)
+    for e in range(nel):
+        for a in range(nb):
+            cnt[ed[e, a] + 1] += 1
+    for i in range(n):
+        cnt[i + 1] += cnt[i]
+    n2e = np.empty(cnt[n], np.int64)
+    fill = cnt[:n].copy()
+    for e in range(nel):
+        for a in range(nb):
+            s = ed[e, a]
+            n2e[fill[s]] = e
+            fill[s] += 1
+    # rows: unique neighbours, sorted
+    mark = np.full(n, -1, np.int64)
+    indptr = np.zeros(n + 1, np.int64)
+    for s in range(n):
+        c = 0
+        for k in range(cnt[s], cnt[s + 1]):
+            e = n2e[k]
+            for b in range(nb):
+                t = ed[e, b]
+                if mark[t] != s:
+                    mark[t] = s
+                    c += 1
+        indptr[s + 1] = indptr[s] + c
+    indices = np.empty(indptr[n], np.int64)
+    mark[:] = -1
+    for s in range(n):
+        p = indptr[s]
+        for k in range(cnt[s], cnt[s + 1]):
+            e = n2e[k]
+            for b in range(nb):
+                t = ed[e, b]
+                if mark[t] != s:
+                    mark[t] = s
+                    indices[p] = t
+                    p += 1
+        indices[indptr[s]:indptr[s + 1]] = np.sort(indices[indptr[s]:indptr[s + 1]])
+    pos = np.empty((nel, nb, nb), np.int64)
+    for e in range(nel):
+        for a in range(nb):
+            s = ed[e, a]
+            lo = indptr[s]
+            hi = indptr[s + 1]
+            for b in range(nb):
+                t = ed[e, b]
+                # binary search of t in indices[lo:hi]
+                i0, i1 = lo, hi
+                while i1 - i0 > 1:
+                    mid = (i0 + i1) // 2
+                    if indices[mid] <= t:
+                        i0 = mid
+                    else:
+                        i1 = mid
+                pos[e, a, b] = i0
+    return indptr, indices, pos
+
+
+# ---------------------------------------------------------------------------------------
+# element kernels
+# ---------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def jacobian(X, dNg, q, J):  # pragma: no cover - compiled
+    """J[i, j] = dx_i / dxi_j at quadrature point q; returns det J and overwrites J with J^-1."""
+    for i in range(3):
+        for j in range(3):
+            s = 0.0
+            for v in range(X.shape[0]):
+                s += X[v, i] * dNg[v, j, q]
+            J[i, j] = s
+    a, b, c = J[0, 0], J[0, 1], J[0, 2]
+    d, e, f = J[1, 0], J[1, 1], J[1, 2]
+    g, h, k = J[2, 0], J[2, 1], J[2, 2]
+    A = e * k - f * h
+    B = -(d * k - f * g)
+    C = d * h - e * g
+    det = a * A + b * B + c * C
+    inv = 1.0 / det
+    J[0, 0] = A * inv
+    J[0, 1] = -(b * k - c * h) * inv
+    J[0, 2] = (b * f - c * e) * inv
+    J[1, 0] = B * inv
+    J[1, 1] = (a * k - c * g) * inv
+    J[1, 2] = -(a * f - c * d) * inv
+    J[2, 0] = C * inv
+    J[2, 1] = -(a * h - b * g) * inv
+    J[2, 2] = (a * e - b * d) * inv
+    return det
+
+
+@njit(cache=True)
+def stiffness_kernel(Xe, dNg, dN, W, C, pos, out):  # pragma: no cover - compiled
+    """Add the element stiffness blocks of elements Xe (ne, nvg, 3) into ``out`` (nnzb, 3, 3).
+
+    ``dNg`` (nvg, 3, nq) reference gradients of the geometry functions, ``dN`` (nb, 3, nq) of
+    the scalar element; ``C`` (ne, nqc, 6, 6), nqc = 1 (per element) or nq; ``pos`` (ne, nb, nb).
+    Voigt order [11, 22, 33, 23, 13, 12]: the strain of u = phi_a e_c is
+    G_a[:, c] with G_a = [[gx,0,0],[0,gy,0],[0,0,gz],[0,gz,gy],[gz,0,gx],[gy,gx,0]].
+    """
+    ne = Xe.shape[0]
+    nb = dN.shape[0]
+    nq = W.shape[0]
+    nqc = C.shape[1]
+    J = np.empty((3, 3))
+    g = np.empty((nb, 3))
+    D = np.empty((nb, 6, 3))  # C G_b
+    Ke = np.empty((nb, nb, 3, 3))
+    for e in range(ne):
+        Ke[:] = 0.0
+        for q in range(nq):
+            det = jacobian(Xe[e], dNg, q, J)
+            w = W[q] * abs(det)
+            for a in range(nb):
+                for i in range(3):
+                    s = 0.0
+                    for j in range(3):
+                        s += dN[a, j, q] * J[j, i]
+                    g[a, i] = s
+            qc = q if nqc > 1 else 0
+            Cq = C[e, qc]
+            for b in range(nb):
+                gx, gy, gz = g[b, 0], g[b, 1], g[b, 2]
+                for I in range(6):
+                    D[b, I, 0] = w * (Cq[I, 0] * gx + Cq[I, 4] * gz + Cq[I, 5] * gy)
+                    D[b, I, 1] = w * (Cq[I, 1] * gy + Cq[I, 3] * gz + Cq[I, 5] * gx)
+                    D[b, I, 2] = w * (Cq[I, 2] * gz + Cq[I, 3] * gy + Cq[I, 4] * gx)
+            for a in range(nb):
+                gx, gy, gz = g[a, 0], g[a, 1], g[a, 2]
+                for b in range(a, nb):
+                    for k in range(3):
+                        Ke[a, b, 0, k] += gx * D[b, 0, k] + gz * D[b, 4, k] + gy * D[b, 5, k]
+                        Ke[a, b, 1, k] += gy * D[b, 1, k] + gz * D[b, 3, k] + gx * D[b, 5, k]
+                        Ke[a, b, 2, k] += gz * D[b, 2, k] + gy * D[b, 3, k] + gx * D[b, 4, k]
+        for a in range(nb):
+            for b in range(a, nb):
+                p = pos[e, a, b]
+                for i in range(3):
+                    for k in range(3):
+                        out[p, i, k] += Ke[a, b, i, k]
+                if b != a:
+                    p = pos[e, b, a]
+                    for i in range(3):
+                        for k in range(3):
+                            out[p, i, k] += Ke[a, b, k, i]
+
+
+@njit(cache=True)
+def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
+    """Add the scalar element masses ``int rho N_a N_b`` into ``out`` (nnzb,)."""
+    ne = Xe.shape[0]
+    nb = N.shape[0]
+    nq = W.shape[0]
+    J = np.empty((3, 3))
+    Me = np.empty((nb, nb))
+    for e in range(ne):
+        Me[:] = 0.0
+        for q in range(nq):
+            det = jacobian(Xe[e], dNg, q, J)
+            w = W[q] * abs(det) * rho[e]
+            for a in range(nb):
+                wa = w * N[a, q]
+                for b in range(a, nb):
+                    Me[a, b] += wa * N[b, q]
+        for a in range(nb):
+            for b in range(a, nb):
+                out[pos[e, a, b]] += Me[a, b]
+                if b != a:
+                    out[pos[e, b, a]] += Me[a, b]
+
+
+
+__all__ = ["pattern", "jacobian", "stiffness_kernel", "mass_kernel"]
