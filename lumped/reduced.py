@@ -59,7 +59,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, ParameterError
-from probedyn.core.io import atomic_path, to_jsonable, write_json
+from probedyn.core.io import MAX_DATA_BYTES, atomic_path, read_bytes, read_text, to_jsonable, write_json
 from probedyn.core.presets import preset as get_preset
 from probedyn.lumped.ritz import RitzBasis
 
@@ -337,8 +337,11 @@ class ReducedProbe:
             with atomic_path(npz) as tmp:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **self.ritz.to_arrays(include_basis=include_basis))
+                # hashed from the temporary: in a command's output transaction the file reaches
+                # its final name only when the command ends
+                sha = hashlib.sha256(Path(tmp).read_bytes()).hexdigest()
             d["ritz_file"] = npz.name
-            d["ritz_sha256"] = hashlib.sha256(npz.read_bytes()).hexdigest()
+            d["ritz_sha256"] = sha
             d["ritz_meta"] = to_jsonable(self.ritz.meta)
         write_json(path, d)
         return path
@@ -347,9 +350,11 @@ class ReducedProbe:
     def load(cls, path: str | Path) -> "ReducedProbe":
         """Read a file written by :meth:`save` (the Ritz basis is checked against its hash)."""
         path = Path(path)
+        # a regular file of bounded size (no FIFO or device), UTF-8; then JSON
+        text = read_text(path, what="reduced-probe file", max_bytes=MAX_DATA_BYTES)
         try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
+            d = json.loads(text)
+        except ValueError as exc:
             raise DataFormatError(f"{path}: not a reduced-probe file ({exc})") from None
         if not isinstance(d, dict) or d.get("format") != FORMAT:
             raise DataFormatError(f"{path}: not a reduced-probe file (format {d.get('format') if isinstance(d, dict) else None!r})")
@@ -362,8 +367,8 @@ class ReducedProbe:
             C = np.asarray(d["static_compliance"], dtype=float)
             ritz = None
             if d.get("ritz_file"):
-                npz = path.with_name(d["ritz_file"])
-                blob = npz.read_bytes()
+                npz = path.with_name(d["ritz_file"])  # beside the JSON file (a name, not a path)
+                blob = read_bytes(npz, path.parent, what="Ritz file", max_bytes=MAX_DATA_BYTES)
                 if hashlib.sha256(blob).hexdigest() != d.get("ritz_sha256"):
                     raise DataFormatError(f"{npz}: Ritz file does not match the hash recorded in {path.name}")
                 with np.load(npz, allow_pickle=False) as z:

@@ -9,7 +9,7 @@ from typing import Any, Optional
 import typer
 
 from probedyn.commands._apps import app
-from probedyn.commands._common import JSON_OPT, SET_OPT, emit, format_table
+from probedyn.commands._common import JSON_OPT, SET_OPT, emit, format_table, out_file_option
 
 
 @app.command("reduced-probe")
@@ -21,7 +21,7 @@ def reduced_probe_cmd(
     mu: Optional[float] = typer.Option(None, "--mu", help="Environment damping of eq 3.2 [N s/m^2] (beam-like probes)."),
     point: Optional[str] = typer.Option(None, "--point", help="Named point or face (default: the tip apex / lumped tip)."),
     cache: bool = typer.Option(True, "--cache/--no-cache", help="Reuse / store the reduction under its content hash."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Write the reduced probe: FILE.json (+ FILE.ritz.npz)."),
+    out: Optional[Path] = out_file_option(help="Write the reduced probe: FILE.json (+ FILE.ritz.npz)."),
     as_json: bool = JSON_OPT,
 ) -> None:
     """Reduce a probe: per direction (scan, lateral, normal) the static stiffness at the point, the
