@@ -510,8 +510,9 @@ def _sweep_lock(out: Path):
             break
         os.close(fd)  # the previous holder removed the file between our open and lock: retry
     try:
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        with contextlib.suppress(OSError):  # the holder's pid is for the message only (a full disk: no pid)
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode())
         yield
     finally:
         with contextlib.suppress(OSError):

@@ -209,3 +209,10 @@ def write_summary() -> None:
     path = os.environ.get("PROBEDYN_FUZZ_SUMMARY")
     if path:
         Path(path).write_text(json.dumps({**summary(), "cases": TALLY}, indent=2) + "\n")
+
+
+# the cases of every fuzz module run in this session, written once more when the session ends
+# (test_zz_fuzz_summary writes them too, but before the modules that follow it alphabetically)
+import atexit  # noqa: E402
+
+atexit.register(lambda: TALLY and write_summary())
