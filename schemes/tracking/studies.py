@@ -77,6 +77,8 @@ def build_path(spec: str, probe: str, *, speed: float | None = None, duration: f
     if k in ("line", "circle", "square", "cylinder", "sphere", "cone"):
         kw = dict(REF_PATHS.get(probe, {}).get(k, {"size": 0.5e-6}))
         if size is not None:
+            if not (math.isfinite(size) and 0 < size <= 1e-3):
+                raise ParameterError(f"path size must be in (0, 1 mm] (metres), got {size:g} m")
             kw["size"] = size
         if k in ("circle", "square") and probe == "piezotube":
             kw.setdefault("plane", "yz")
