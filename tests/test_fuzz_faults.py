@@ -347,7 +347,9 @@ def test_usage_errors_with_typer_0_12_and_click_8_1(tmp_path_factory):
     cases = [([], "needs a command"), (["sweep"], "'probedyn sweep' needs a command"), (["nosuch"], "No such command"),
              (["modes"], "Missing argument"), (["modes", "cantilever", "--n-modes", "0"], "--n-modes"),
              (["modes", "cantilever", "--n-modes", "abc"], "--n-modes"), (["modes", "cantilever", "--bogus"], "--bogus"),
-             (["stickslip", "equilibria", "--u0", "x"], "--u0")]
+             (["stickslip", "equilibria", "--u0", "x"], "--u0"),
+             (["stickslip", "equilibria", "--u0", "nan"], "not a finite number"),
+             (["track", "duo-bimorph", "--path", "line", "--noise", "inf"], "not a finite number")]
     bad = []
     for argv, phrase in cases:
         o = subprocess.run(_cmd(argv), capture_output=True, text=True, env={**os.environ, **env}, timeout=60)
