@@ -90,6 +90,8 @@ TARGETS = [
            alt_argv=["diagnose", str(EX / "afm_cantilever_modes.toml"), "--out", "{out}"]),
     Target("report", ["report", "--quick", "--only", "diagnosis", "--out", "{out}"], ("report.md",),
            ["--only", "contact"]),
+    Target("track --out", ["track", "duo-bimorph", "--path", "line", "--out", "{out}"], ("track.json", "track.png"),
+           [], alt_argv=["track", "duo-bimorph", "--path", "circle", "--out", "{out}"]),
     Target("sweep", ["sweep", "run", "cells:slow", "--grid", "x=0:1:24", "--chunk-size", "1", "--threads",
                      "--no-progress", "--out", "{out}/a.nc"], ("a.nc",), ["--seed", "3"], keep="a.nc.parts"),
 ]
