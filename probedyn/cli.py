@@ -60,7 +60,8 @@ def _early_interrupt(signum: int, frame: Any) -> None:  # pragma: no cover - tim
 _AS_PROGRAM = __name__ == "__main__" or os.path.basename(sys.argv[0] if sys.argv else "") == "probedyn"
 if _AS_PROGRAM:
     for _s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
-        if _s is not None:
+        # a signal ignored by whoever started us stays ignored (``cmd &`` in a script, nohup)
+        if _s is not None and signal.getsignal(_s) is not signal.SIG_IGN:
             signal.signal(_s, _early_interrupt)
 
 from probedyn.commands import COMMAND_MODULES
@@ -137,6 +138,10 @@ class _SignalGuard:
             return
         for s in _SIGNALS:
             try:
+                if signal.getsignal(s) is signal.SIG_IGN:
+                    # ignored by whoever started us (a background job without job control
+                    # ignores SIGINT, nohup SIGHUP): the convention is to keep ignoring it
+                    continue
                 self._old[s] = signal.signal(s, self._handler)
             except (OSError, ValueError):  # pragma: no cover
                 pass

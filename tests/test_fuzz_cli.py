@@ -446,6 +446,17 @@ CASES += [Case("c6-extra-ffm-length-huge", 6, ["simulate", "ffm", "--length", "1
 
 
 @pytest.fixture(autouse=True)
+def _sigint_not_ignored():
+    """These tests deliver SIGINT: under a runner started with SIGINT ignored (``pytest &`` from a
+    script, nohup), which probedyn rightly keeps ignoring, give the test its default handler."""
+    old = signal.getsignal(signal.SIGINT)
+    if old is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+@pytest.fixture(autouse=True)
 def _cells_module(tmp_path, monkeypatch):
     """A tiny cell module for sweep cases, importable here and in child processes."""
     (tmp_path / "tests_fuzz_cells.py").write_text(
@@ -656,3 +667,25 @@ def test_zz_fuzz_summary(capsys):
         for r in s["bad"]:
             print(f"  {r['id']}: {r['category']} ({'pending ' + r['pending'] if r['pending'] else 'NOT pending'})")
     assert not [r for r in s["bad"] if not r["pending"]]
+
+
+def test_a_signal_ignored_by_the_parent_stays_ignored(tmp_path, monkeypatch):
+    """Started with SIGINT ignored (``probedyn ... &`` from a script, nohup for SIGHUP), probedyn keeps
+    ignoring it, as Unix programs do: Ctrl-C meant for the foreground job does not stop it."""
+    import probedyn.probes as probes
+
+    real = probes.get_probe
+
+    def interrupted(*a, **k):
+        signal.raise_signal(signal.SIGINT)
+        return real(*a, **k)
+
+    monkeypatch.setattr(probes, "get_probe", interrupted)
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        case = Case("c1-sigint-ignored-by-parent", 1, ["params", "cantilever", "--json"], expect="ok")
+        cat, detail, o = run_case(case, tmp_path)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGINT, old)
+    assert cat == "ok", detail
