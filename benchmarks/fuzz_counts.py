@@ -29,12 +29,20 @@ MODULES = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "tests").glob("test_f
 FAIL = ("traceback", "silent", "hang", "wrong")
 
 
+def _default_signals() -> None:  # the fuzz cases send SIGINT: not inherited as ignored (background runs)
+    import signal
+
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
+
+
 def run(selection: str) -> tuple[dict, float, str]:
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / "summary.json"
         t0 = time.perf_counter()
         r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-m", selection, *MODULES],
-                           cwd=ROOT, capture_output=True, text=True, env={**os.environ, "PROBEDYN_FUZZ_SUMMARY": str(path)})
+                           cwd=ROOT, capture_output=True, text=True, env={**os.environ, "PROBEDYN_FUZZ_SUMMARY": str(path)},
+                           preexec_fn=_default_signals)
         dt = time.perf_counter() - t0
         tail = (r.stdout.strip().splitlines() or [""])[-1]
         data = json.loads(path.read_text()) if path.exists() else {"cases": []}

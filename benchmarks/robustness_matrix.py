@@ -59,6 +59,11 @@ TARGETS = {
 }
 
 
+def _default_signals() -> None:  # in the child: a runner started in the background ignores SIGINT
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
+
+
 def _cmd(argv: list[str]) -> list[str]:
     return [sys.executable, "-m", "probedyn.cli", *argv]
 
@@ -99,7 +104,8 @@ def run(argv, cwd, env, timeout=900) -> subprocess.CompletedProcess:
 
 
 def signalled(argv, cwd, env, sig, delay) -> tuple[int, str, float | None]:
-    p = subprocess.Popen(_cmd(argv), cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    p = subprocess.Popen(_cmd(argv), cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                         preexec_fn=_default_signals)
     time.sleep(delay)
     if p.poll() is not None:
         _, err = p.communicate()

@@ -128,6 +128,10 @@ def limit_memory() -> None:  # runs in the child before exec
     import resource
 
     resource.setrlimit(resource.RLIMIT_DATA, (CHILD_DATA_LIMIT, CHILD_DATA_LIMIT))
+    # a runner started with SIGINT ignored (``pytest &`` from a script) would pass that on, and
+    # probedyn keeps an inherited SIG_IGN: the children under test start with the default actions
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
 
 
 def run_child(argv: list[str], env: dict[str, str] | None = None, timeout: float = 60.0,
