@@ -158,16 +158,26 @@ def test_interrupt_and_kill_keep_the_output_folder_consistent(target, work):
             replaced = [f for f in key if now.get(f) != before[f]]
             added = [f for f in now if f not in before]
             consistent = (not replaced and not added) or (len(replaced) == len(key) and set(target.files) <= set(now))
-            if not done and sig != signal.SIGKILL and now != before:
-                consistent = False  # interrupted with a chance to clean up: the previous set must be untouched
+            # an interrupt that arrives while the set is being committed is delivered once the new
+            # set is complete (exit 128+signal): previous set or complete new set, never a mix.
+            # SIGKILL in the middle of the commit leaves the journal: the next run completes it
+            rolled = False
+            if not consistent and sig == signal.SIGKILL:
+                r2 = _run(_fill(target.alternative(), out), work)
+                after = _snapshot(out, target.keep)
+                rolled = r2.returncode == 0 and set(target.files) <= set(after) and \
+                    all(after.get(f) != before.get(f) for f in key)
+                consistent = rolled
+                now = after
             if not consistent:
-                problems.append(f"{sig.name}@{frac}: folder {sorted(now)} differs from the previous set")
+                problems.append(f"{sig.name}@{frac}: folder {sorted(now)} mixes the previous and the new set")
             row = {"command": target.name, "fault": f"{sig.name} at {frac:.0%} of {full:.1f} s",
                    "exit": code, "seconds_to_exit": None if latency is None else round(latency, 2),
-                   "folder": "previous set" if now == before else ("new set" if consistent else "MIXED"),
+                   "folder": "previous set" if now == before else (
+                       ("new set (commit completed by the next run)" if rolled else "new set") if consistent else "MIXED"),
                    "temporaries": _temporaries(work)}
             TABLE.append(row)
-            if done:
+            if done or rolled:
                 before = now  # the run finished before the signal: the new set is the reference
             if sig == signal.SIGKILL and _temporaries(work):
                 # the next run (any probedyn writing there) removes them
