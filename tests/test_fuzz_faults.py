@@ -178,10 +178,16 @@ def test_interrupt_and_kill_keep_the_output_folder_consistent(target, work):
                    "temporaries": _temporaries(work)}
             TABLE.append(row)
             if done or rolled:
-                before = now  # the run finished before the signal: the new set is the reference
+                # the folder holds the new set now: back to the previous one (the first arguments),
+                # so that the next fault starts from a set that differs from the new one in every
+                # file (two runs with the same arguments may write some identical files)
+                r0 = _run(_fill(target.argv, out), work)
+                assert r0.returncode == 0, r0.stderr[-1000:]
+                before = _snapshot(out, target.keep)
             if sig == signal.SIGKILL and _temporaries(work):
-                # the next run (any probedyn writing there) removes them
-                r2 = _run(_fill(target.alternative(), out), work)
+                # the next run (any probedyn writing there) removes them; with the first arguments
+                # it also puts the previous set back
+                r2 = _run(_fill(target.argv, out), work)
                 assert r2.returncode == 0, r2.stderr[-1000:]
                 if _temporaries(work):
                     problems.append(f"SIGKILL@{frac}: temporaries survive the next run: {_temporaries(work)}")
