@@ -64,7 +64,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from probedyn.core.errors import DataFormatError, ParameterError
-from probedyn.core.io import to_jsonable, write_bytes, write_json
+from probedyn.core.io import MAX_DATA_BYTES, read_bytes, read_text, to_jsonable, write_bytes, write_json
 from probedyn.core.presets import preset as get_preset
 from probedyn.lumped.ritz import RitzBasis
 
@@ -355,7 +355,7 @@ class ReducedProbe:
     def save(self, path: str | Path, include_basis: bool = True, defer: bool = True) -> Path:
         """Write ``path`` (JSON) and, with a Ritz basis, ``<stem>.ritz.npz`` beside it.
 
-        Both go through :func:`probedyn.core.io.atomic_path`: inside an output transaction
+        Both go through :mod:`probedyn.core.io` (atomic): inside an output transaction
         (every CLI command runs in one) they appear when it commits; ``defer=False`` (a cache
         entry) writes them at once."""
         path = Path(path)
@@ -379,9 +379,11 @@ class ReducedProbe:
     def load(cls, path: str | Path) -> "ReducedProbe":
         """Read a file written by :meth:`save` (the Ritz basis is checked against its hash)."""
         path = Path(path)
+        # a regular file of bounded size (no FIFO or device), UTF-8; then JSON
+        text = read_text(path, what="reduced-probe file", max_bytes=MAX_DATA_BYTES)
         try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
+            d = json.loads(text)
+        except ValueError as exc:
             raise DataFormatError(f"{path}: not a reduced-probe file ({exc})") from None
         if not isinstance(d, dict) or d.get("format") != FORMAT:
             raise DataFormatError(f"{path}: not a reduced-probe file (format {d.get('format') if isinstance(d, dict) else None!r})")
@@ -394,8 +396,8 @@ class ReducedProbe:
             C = np.asarray(d["static_compliance"], dtype=float)
             ritz = None
             if d.get("ritz_file"):
-                npz = path.with_name(d["ritz_file"])
-                blob = npz.read_bytes()
+                npz = path.with_name(d["ritz_file"])  # beside the JSON file (a name, not a path)
+                blob = read_bytes(npz, path.parent, what="Ritz file", max_bytes=MAX_DATA_BYTES)
                 if hashlib.sha256(blob).hexdigest() != d.get("ritz_sha256"):
                     raise DataFormatError(f"{npz}: Ritz file does not match the hash recorded in {path.name}")
                 with np.load(npz, allow_pickle=False) as z:

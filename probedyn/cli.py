@@ -60,7 +60,8 @@ def _early_interrupt(signum: int, frame: Any) -> None:  # pragma: no cover - tim
 _AS_PROGRAM = __name__ == "__main__" or os.path.basename(sys.argv[0] if sys.argv else "") == "probedyn"
 if _AS_PROGRAM:
     for _s in (signal.SIGINT, signal.SIGTERM, getattr(signal, "SIGHUP", None)):
-        if _s is not None:
+        # a signal ignored by whoever started us stays ignored (``cmd &`` in a script, nohup)
+        if _s is not None and signal.getsignal(_s) is not signal.SIG_IGN:
             signal.signal(_s, _early_interrupt)
 
 from probedyn.commands import COMMAND_MODULES
@@ -137,6 +138,10 @@ class _SignalGuard:
             return
         for s in _SIGNALS:
             try:
+                if signal.getsignal(s) is signal.SIG_IGN:
+                    # ignored by whoever started us (a background job without job control
+                    # ignores SIGINT, nohup SIGHUP): the convention is to keep ignoring it
+                    continue
                 self._old[s] = signal.signal(s, self._handler)
             except (OSError, ValueError):  # pragma: no cover
                 pass
@@ -230,8 +235,9 @@ def _monotonic() -> float:
 # ------------------------------------------------------------------------------------------
 
 
-def _is(exc: BaseException, *names: str) -> bool:
-    return any(c.__name__ in names for c in type(exc).__mro__)
+def _is(obj: Any, *names: str) -> bool:
+    """Whether a class of ``obj``'s MRO has one of ``names`` (click's classes, whichever copy)."""
+    return any(c.__name__ in names for c in type(obj).__mro__)
 
 
 def _command_path(exc: BaseException) -> str:
@@ -262,15 +268,52 @@ def _usage_message(exc: BaseException) -> str:
 _CLICK_TREE: Any = None
 
 
-def _missing_command(argv: list[str]) -> str | None:
-    """The usage error for ``probedyn [GROUP...]`` without a command, the same for every click version
-    (click < 8.2 prints the help and exits 0 for ``no_args_is_help``; 8.2+ raises)."""
+def _finite(prm: Any) -> None:
+    """Make the option or argument ``prm`` refuse NaN and infinities: no probedyn option has a
+    meaning for them, and a NaN passes every ``x < lo or x > hi`` range check downstream (a
+    result computed from nonsense). Wraps the parameter's ``process_value`` (click 8 and typer's
+    bundled click alike); the error is click's own ``BadParameter`` (one usage line, exit 2)."""
+    import math
+
+    process = prm.process_value
+    base = next(c for c in type(prm).__mro__ if c.__name__ == "Parameter")
+    package = base.__module__.rsplit(".", 1)[0]
+    bad_parameter = importlib.import_module(package + ".exceptions").BadParameter
+
+    def checked(ctx: Any, value: Any) -> Any:
+        v = process(ctx, value)
+        items = v if isinstance(v, (list, tuple)) else (v,)
+        for x in items:
+            if isinstance(x, float) and not math.isfinite(x):
+                raise bad_parameter(f"{x!r} is not a finite number", ctx=ctx, param=prm)
+        return v
+
+    prm.process_value = checked
+
+
+def _harden(cmd: Any) -> None:
+    """Walk the click tree once: every option and argument refuses NaN/inf (:func:`_finite`)."""
+    for prm in getattr(cmd, "params", ()):
+        _finite(prm)
+    for sub in getattr(cmd, "commands", {}).values():
+        _harden(sub)
+
+
+def _tree() -> Any:
+    """The click command tree of ``app``, built once (the commands are all registered at import)."""
     global _CLICK_TREE
-    if _CLICK_TREE is None:  # the commands are all registered at import: build the tree once
+    if _CLICK_TREE is None:
         import typer
 
         _CLICK_TREE = typer.main.get_command(app)
-    cmd: Any = _CLICK_TREE
+        _harden(_CLICK_TREE)
+    return _CLICK_TREE
+
+
+def _missing_command(argv: list[str]) -> str | None:
+    """The usage error for ``probedyn [GROUP...]`` without a command, the same for every click version
+    (click < 8.2 prints the help and exits 0 for ``no_args_is_help``; 8.2+ raises)."""
+    cmd: Any = _tree()
     path = [PROG]
     tokens = list(argv)
     while hasattr(cmd, "commands"):
@@ -308,7 +351,7 @@ def _dispatch(argv: list[str] | None) -> tuple[int, str | None]:
     if missing:
         return EXIT_USAGE, f"error: {missing}"
     try:
-        rv = app(args=argv, standalone_mode=False, prog_name=PROG)
+        rv = _tree().main(args=argv, standalone_mode=False, prog_name=PROG)
     except ProbedynError as exc:
         return exc.exit_code, f"error: {exc}"
     except SystemExit as exc:  # a library or command that calls sys.exit

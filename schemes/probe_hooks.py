@@ -79,7 +79,21 @@ def stickslip_scaling(probe: ReducedProbe, U0: float, V: float = 0.0, x_s0: floa
         raise ParameterError(f"the {probe.source} probe has no scan-direction spring for the stick-slip model")
     t43 = preset("table-4.3")
     smp = {k: t43[k] for k in ("m2", "k2", "zeta2", "a")}
-    smp.update(dict(sample or {}))
+    for key, val in dict(sample or {}).items():
+        if key not in smp:
+            import difflib
+
+            close = difflib.get_close_matches(key, list(smp), n=1)
+            raise ParameterError(f"unknown sample parameter {key!r}" + (f" (did you mean {close[0]!r}?)" if close else "")
+                                 + f" (known: {', '.join(smp)})")
+        try:
+            smp[key] = float(val)
+        except (TypeError, ValueError):
+            raise ParameterError(f"sample parameter {key} must be a number, got {val!r}") from None
+    if not (math.isfinite(smp["zeta2"]) and smp["zeta2"] >= 0):
+        raise ParameterError(f"zeta2 must be >= 0, got {smp['zeta2']!r}")
+    if not math.isfinite(x_s0):
+        raise ParameterError(f"x_s0 must be finite, got {x_s0!r}")
     for name in ("m2", "k2", "a"):
         if not (math.isfinite(smp[name]) and smp[name] > 0):
             raise ParameterError(f"{name} must be positive, got {smp[name]!r}")

@@ -510,8 +510,9 @@ def _sweep_lock(out: Path):
             break
         os.close(fd)  # the previous holder removed the file between our open and lock: retry
     try:
-        os.ftruncate(fd, 0)
-        os.write(fd, f"{os.getpid()}\n".encode())
+        with contextlib.suppress(OSError):  # the holder's pid is for the message only (a full disk: no pid)
+            os.ftruncate(fd, 0)
+            os.write(fd, f"{os.getpid()}\n".encode())
         yield
     finally:
         with contextlib.suppress(OSError):
@@ -818,6 +819,15 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
                     unhealthy_since = now
                 elif now - unhealthy_since > worker_timeout:
                     raise SchedulerError(f"{problem} for {worker_timeout:g} s; {kept()}")
+    except BaseException as exc:
+        # the scheduler died while a finished chunk was being fetched: Dask's CommClosedError (an
+        # OSError without errno) or FutureCancelledError ("scheduler-connection-lost", an
+        # asyncio CancelledError, a BaseException); our own writes raise OutputError, not OSError
+        names = {c.__name__ for c in type(exc).__mro__}
+        if isinstance(exc, (OSError, TimeoutError)) or names & {"CancelledError", "CommClosedError"}:
+            raise SchedulerError(f"the connection to the Dask scheduler ({where}) dropped "
+                                 f"({type(exc).__name__}); {kept()}") from None
+        raise
     finally:
         bar.close()
 

@@ -128,6 +128,10 @@ def limit_memory() -> None:  # runs in the child before exec
     import resource
 
     resource.setrlimit(resource.RLIMIT_DATA, (CHILD_DATA_LIMIT, CHILD_DATA_LIMIT))
+    # a runner started with SIGINT ignored (``pytest &`` from a script) would pass that on, and
+    # probedyn keeps an inherited SIG_IGN: the children under test start with the default actions
+    for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(s, signal.SIG_DFL)
 
 
 def run_child(argv: list[str], env: dict[str, str] | None = None, timeout: float = 60.0,
@@ -209,3 +213,10 @@ def write_summary() -> None:
     path = os.environ.get("PROBEDYN_FUZZ_SUMMARY")
     if path:
         Path(path).write_text(json.dumps({**summary(), "cases": TALLY}, indent=2) + "\n")
+
+
+# the cases of every fuzz module run in this session, written once more when the session ends
+# (test_zz_fuzz_summary writes them too, but before the modules that follow it alphabetically)
+import atexit  # noqa: E402
+
+atexit.register(lambda: TALLY and write_summary())

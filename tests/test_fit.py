@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from probedyn.cli import main
-from probedyn.core.errors import DataFormatError
+from probedyn.core.errors import DataFormatError, SolverError
 from probedyn.schemes import ffm as F
 from probedyn.schemes import fit as FT
 
@@ -82,3 +82,45 @@ def test_time_column_is_converted_with_the_scan_speed(tmp_path):
                "".join(f"{i * 1e-3:.6e},{i * 1e-11:.3e}\n" for i in range(25)))
     tr = FT.read_trace(p)
     assert tr.base[-1] == pytest.approx(24e-3 * 2e-6)
+
+
+# ---- issue 16, class 6: a noiseless trace is informative; a trace that cannot inform fails -------------------
+
+@pytest.fixture(scope="module")
+def noiseless_80nm(tmp_path_factory):
+    """A noiseless 80 nm mica trace (Table 2.1, bristle), sampled at 400 uniform points."""
+    ffm = F.FFM.from_preset("mica")
+    r = F.line_scan(ffm, 80e-9)
+    b = np.linspace(0, 80e-9, 400)
+    path = tmp_path_factory.mktemp("fit0") / "t80.csv"
+    FT.write_trace(path, b, np.interp(b, r.base, r.lateral_force), speed=2e-6, k_x=ffm.cantilever["k_x"])
+    return path, {n: float(ffm.friction.values[n]) for n in ("F_s", "F_c")}, ffm.cantilever["k_x"], b[1] - b[0]
+
+
+def test_noiseless_trace_gives_the_true_values_with_finite_uncertainties(noiseless_80nm):
+    """Used to end with F_c > F_s and sigma = nan (a clamp F_c <= F_s made F_c blind). Without
+    noise the slips are located only to a sample spacing dx, so F_s = k_x x_slip is known to
+    k_x dx (uniform: sigma = k_x dx / sqrt(12)); the values must lie within k_x dx of the truth
+    and the reported sigma must be that resolution, finite, positive, never nan."""
+    path, true, k, dx = noiseless_80nm
+    r = FT.fit_trace(FT.read_trace(path), noise=None)
+    assert r["success"]
+    assert r["values"]["F_c"] < r["values"]["F_s"]
+    res = k * dx / np.sqrt(12)
+    assert r["sampling_resolution_n"] == pytest.approx(res, rel=0.01)
+    for n in ("F_s", "F_c"):
+        assert abs(r["values"][n] - true[n]) <= k * dx
+        assert np.isfinite(r["uncertainties"][n]) and res <= r["uncertainties"][n] < 3 * res
+    assert np.isfinite(r["correlation"]).all()
+
+
+def test_fit_without_information_fails_clearly(tmp_path):
+    """A trace that never slips (pre-sliding only: 10 nm of mica) cannot inform F_s or F_c."""
+    ffm = F.FFM.from_preset("mica")
+    r = F.line_scan(ffm, 10e-9)
+    b = np.linspace(0, 10e-9, 100)
+    p = tmp_path / "pre.csv"
+    FT.write_trace(p, b, np.interp(b, r.base, r.lateral_force), speed=2e-6, k_x=0.2)
+    with pytest.raises(SolverError, match=r"cannot inform F_s, F_c"):
+        FT.fit_trace(FT.read_trace(p), noise=None)
+    assert main(["fit-ffm", str(p)]) == 2

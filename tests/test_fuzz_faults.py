@@ -90,6 +90,8 @@ TARGETS = [
            alt_argv=["diagnose", str(EX / "afm_cantilever_modes.toml"), "--out", "{out}"]),
     Target("report", ["report", "--quick", "--only", "diagnosis", "--out", "{out}"], ("report.md",),
            ["--only", "contact"]),
+    Target("track --out", ["track", "duo-bimorph", "--path", "line", "--out", "{out}"], ("track.json", "track.png"),
+           [], alt_argv=["track", "duo-bimorph", "--path", "circle", "--out", "{out}"]),
     Target("sweep", ["sweep", "run", "cells:slow", "--grid", "x=0:1:24", "--chunk-size", "1", "--threads",
                      "--no-progress", "--out", "{out}/a.nc"], ("a.nc",), ["--seed", "3"], keep="a.nc.parts"),
 ]
@@ -156,20 +158,36 @@ def test_interrupt_and_kill_keep_the_output_folder_consistent(target, work):
             replaced = [f for f in key if now.get(f) != before[f]]
             added = [f for f in now if f not in before]
             consistent = (not replaced and not added) or (len(replaced) == len(key) and set(target.files) <= set(now))
-            if not done and sig != signal.SIGKILL and now != before:
-                consistent = False  # interrupted with a chance to clean up: the previous set must be untouched
+            # an interrupt that arrives while the set is being committed is delivered once the new
+            # set is complete (exit 128+signal): previous set or complete new set, never a mix.
+            # SIGKILL in the middle of the commit leaves the journal: the next run completes it
+            rolled = False
+            if not consistent and sig == signal.SIGKILL:
+                r2 = _run(_fill(target.alternative(), out), work)
+                after = _snapshot(out, target.keep)
+                rolled = r2.returncode == 0 and set(target.files) <= set(after) and \
+                    all(after.get(f) != before.get(f) for f in key)
+                consistent = rolled
+                now = after
             if not consistent:
-                problems.append(f"{sig.name}@{frac}: folder {sorted(now)} differs from the previous set")
+                problems.append(f"{sig.name}@{frac}: folder {sorted(now)} mixes the previous and the new set")
             row = {"command": target.name, "fault": f"{sig.name} at {frac:.0%} of {full:.1f} s",
                    "exit": code, "seconds_to_exit": None if latency is None else round(latency, 2),
-                   "folder": "previous set" if now == before else ("new set" if consistent else "MIXED"),
+                   "folder": "previous set" if now == before else (
+                       ("new set (commit completed by the next run)" if rolled else "new set") if consistent else "MIXED"),
                    "temporaries": _temporaries(work)}
             TABLE.append(row)
-            if done:
-                before = now  # the run finished before the signal: the new set is the reference
+            if done or rolled:
+                # the folder holds the new set now: back to the previous one (the first arguments),
+                # so that the next fault starts from a set that differs from the new one in every
+                # file (two runs with the same arguments may write some identical files)
+                r0 = _run(_fill(target.argv, out), work)
+                assert r0.returncode == 0, r0.stderr[-1000:]
+                before = _snapshot(out, target.keep)
             if sig == signal.SIGKILL and _temporaries(work):
-                # the next run (any probedyn writing there) removes them
-                r2 = _run(_fill(target.alternative(), out), work)
+                # the next run (any probedyn writing there) removes them; with the first arguments
+                # it also puts the previous set back
+                r2 = _run(_fill(target.argv, out), work)
                 assert r2.returncode == 0, r2.stderr[-1000:]
                 if _temporaries(work):
                     problems.append(f"SIGKILL@{frac}: temporaries survive the next run: {_temporaries(work)}")
@@ -183,16 +201,16 @@ def test_interrupt_and_kill_keep_the_output_folder_consistent(target, work):
 
 def test_sweep_interrupted_then_resumed_gives_the_uninterrupted_result(work):
     out = work / "a.nc"
-    argv = ["sweep", "run", "cells:slow", "--grid", "x=0:1:24", "--chunk-size", "1", "--threads", "--no-progress",
+    argv = ["sweep", "run", "cells:slow", "--grid", "x=0:1:48", "--chunk-size", "1", "--threads", "--no-progress",
             "--out", str(out)]
-    code, err, latency = _fault_run(argv, work, signal.SIGINT, 7.0)
+    code, err, latency = _fault_run(argv, work, signal.SIGINT, 4.0)
     assert code == 130 and err.strip().splitlines()[-1] == "probedyn: interrupted", err
     kept = len(list((work / "a.nc.parts").glob("chunk-*.npz")))
     assert kept > 0 and not out.exists() and not _temporaries(work)
     r = _run(argv + ["--json"], work)
     assert r.returncode == 0, r.stderr
     d = json.loads(r.stdout)
-    assert d["chunks_skipped"] == kept and d["chunks_run"] == 24 - kept
+    assert d["chunks_skipped"] == kept and d["chunks_run"] == 48 - kept
     TABLE.append({"command": "sweep", "fault": "SIGINT mid-run, then rerun", "exit": code,
                   "seconds_to_exit": round(latency, 2), "folder": f"{kept} chunks kept, resumed", "temporaries": []})
 
@@ -347,7 +365,9 @@ def test_usage_errors_with_typer_0_12_and_click_8_1(tmp_path_factory):
     cases = [([], "needs a command"), (["sweep"], "'probedyn sweep' needs a command"), (["nosuch"], "No such command"),
              (["modes"], "Missing argument"), (["modes", "cantilever", "--n-modes", "0"], "--n-modes"),
              (["modes", "cantilever", "--n-modes", "abc"], "--n-modes"), (["modes", "cantilever", "--bogus"], "--bogus"),
-             (["stickslip", "equilibria", "--u0", "x"], "--u0")]
+             (["stickslip", "equilibria", "--u0", "x"], "--u0"),
+             (["stickslip", "equilibria", "--u0", "nan"], "not a finite number"),
+             (["track", "duo-bimorph", "--path", "line", "--noise", "inf"], "not a finite number")]
     bad = []
     for argv, phrase in cases:
         o = subprocess.run(_cmd(argv), capture_output=True, text=True, env={**os.environ, **env}, timeout=60)

@@ -22,6 +22,17 @@ from probedyn.core.schema import Field, Table
 
 
 @pytest.fixture(autouse=True)
+def _sigint_not_ignored():
+    """These tests deliver SIGINT: under a runner started with SIGINT ignored (``pytest &`` from a
+    script, nohup), which probedyn rightly keeps ignoring, give the test its default handler."""
+    old = signal.getsignal(signal.SIGINT)
+    if old is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+@pytest.fixture(autouse=True)
 def _fresh_io_state():
     pio._cleaned.clear()
     pio._UMASK = None

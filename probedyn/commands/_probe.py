@@ -27,8 +27,18 @@ def load_probe(spec: Optional[str], sets: Optional[list[str]] = None, n_modes: i
 
             raise ParameterError("--probe-set needs --probe")
         return None
+    import math
+
+    from probedyn.core.errors import ParameterError
     from probedyn.core.params import parse_sets
     from probedyn.probes.reduce import resolve_probe
+
+    # checked whatever the probe (a table or saved probe has its own modes and damping: the
+    # options must still make sense, not be dropped silently when they do not)
+    if not 1 <= n_modes <= 50:
+        raise ParameterError(f"--probe-modes must lie in 1..50, got {n_modes}")
+    if Q is not None and not (math.isfinite(Q) and Q > 0):
+        raise ParameterError(f"--probe-q must be positive, got {Q:g}")
 
     return resolve_probe(spec, parse_sets(sets), n_modes=n_modes, Q=Q)
 

@@ -209,6 +209,10 @@ def landing(probe: str = PROBE_ARG, sets: Optional[List[str]] = SET_OPT, mass_so
     st = rel.setup_release(pr, M=mass, A=amplitude, omega=omega, D=height)
     L_ = ld.land(rel.simulate(st), tilt=tilt, law=law)
     res = L_.to_dict()
+    if out is not None:  # one run: its numbers (the figures are those of the --study)
+        from probedyn.core.io import write_json
+
+        write_json(Path(out) / "place_landing.json", res)
 
     def human(d):
         if d["outcome"] != "released":

@@ -9,7 +9,7 @@ from typing import Any, Optional
 import typer
 
 from probedyn.commands._apps import app
-from probedyn.commands._common import JSON_OPT, SET_OPT, emit, format_table
+from probedyn.commands._common import JSON_OPT, SET_OPT, emit, format_table, out_file_option
 
 
 @app.command("reduced-probe")
@@ -23,7 +23,7 @@ def reduced_probe_cmd(
     cache: bool = typer.Option(True, "--cache/--no-cache", help="Reuse / store the reduction under its content hash."),
     actuation: bool = typer.Option(False, "--actuation", help="Smart probes: reduce the body without its tip at the "
                                    "holder and fill the piezo FEM's modal force per volt (for probedyn track)."),
-    out: Optional[Path] = typer.Option(None, "--out", help="Write the reduced probe: FILE.json (+ FILE.ritz.npz)."),
+    out: Optional[Path] = out_file_option(help="Write the reduced probe: FILE.json (+ FILE.ritz.npz)."),
     as_json: bool = JSON_OPT,
 ) -> None:
     """Reduce a probe: per direction (scan, lateral, normal) the static stiffness at the point, the

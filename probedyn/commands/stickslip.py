@@ -61,14 +61,15 @@ SAMPLE_OPT = typer.Option(None, "--sample", help="With --probe: m2, k2, zeta2 or
 def cmd_equilibria(
     u0: Optional[float] = typer.Option(None, "--u0", help="Non-dimensional potential amplitude u0 = 4 pi^2 U0/(k a^2) "
                                                         "(or give --probe and --U0)."),
-    psi: float = PSI_OPT,
+    psi: Optional[float] = typer.Option(None, "--psi", help="Phase psi of eq 4.11 (rad) [default: 5.0; with --probe "
+                                                           "it comes from --x0]."),
     probe: Optional[str] = PROBE_OPT,
     probe_sets: Optional[list[str]] = PROBE_SET_OPT,
     probe_modes: int = PROBE_MODES_OPT,
     probe_q: float = PROBE_Q_OPT,
     U0: Optional[float] = typer.Option(None, "--U0", help="With --probe: substrate corrugation amplitude U0 of eq 4.1 [J]."),
-    x0: float = typer.Option(0.0, "--x0", help="With --probe: initial sample position in the potential [m] (psi = 2 pi x0/a)."),
-    speed: float = typer.Option(0.0, "--speed", help="With --probe: pushing speed V [m/s] (for v = (2 pi/a) sqrt(m/k) V)."),
+    x0: Optional[float] = typer.Option(None, "--x0", help="With --probe: initial sample position in the potential [m] (psi = 2 pi x0/a)."),
+    speed: Optional[float] = typer.Option(None, "--speed", help="With --probe: pushing speed V [m/s] (for v = (2 pi/a) sqrt(m/k) V)."),
     sample: Optional[list[str]] = typer.Option(None, "--sample", help="With --probe: m2, k2, zeta2 or a as NAME=VALUE "
                                                                       "(default Table 4.3). Repeatable."),
     as_json: bool = JSON_OPT,
@@ -85,11 +86,20 @@ def cmd_equilibria(
 
         if U0 is None or u0 is not None:
             raise ParameterError("with --probe give the corrugation --U0 [J] (u0 is then computed), not --u0")
+        if psi is not None:
+            raise ParameterError("with --probe psi comes from the sample position: give --x0 [m], not --psi")
         rp = load_probe(probe, probe_sets, probe_modes, probe_q)
-        scaling = stickslip_scaling(rp, U0, V=speed, x_s0=x0, sample=parse_sets(sample))
+        scaling = stickslip_scaling(rp, U0, V=speed or 0.0, x_s0=x0 or 0.0, sample=parse_sets(sample))
         u0, psi = scaling["u0"], scaling["psi"]
-    elif u0 is None:
-        raise ParameterError("give --u0, or --probe with --U0")
+    else:
+        given = [o for o, v in (("--U0", U0), ("--x0", x0), ("--speed", speed), ("--sample", sample),
+                                ("--probe-set", probe_sets)) if v]
+        given += [o for o, v in (("--U0", U0), ("--x0", x0), ("--speed", speed)) if v is not None and o not in given]
+        if given:
+            raise ParameterError(f"{', '.join(given)}: only with --probe (the probe's scaling of eqs 4.3-4.7)")
+        if u0 is None:
+            raise ParameterError("give --u0, or --probe with --U0")
+        psi = 5.0 if psi is None else psi
     res = equilibria(u0, psi).to_dict()
     if scaling is not None:
         res["scaling"] = scaling

@@ -555,14 +555,17 @@ def atomic_path(path: str | Path, defer: bool = True) -> Iterator[Path]:
         raise OutputError(f"cannot write {path}: a folder of that name is in the way")
     _prepare_folder(path.parent, path)
     tmp = path.parent / _tmp_name(path.name, path.suffix)
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
-        os.close(fd)
-    except OSError as exc:
-        raise as_output_error(exc, path) from None
-    _register(tmp)
     keep = False
     try:
+        # registered before it exists and created inside the try: an interrupt at any bytecode
+        # from here on removes it (it used to leave a temporary, and so the folder, when it
+        # came between the creation and the registration)
+        _register(tmp)
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_CLOEXEC, 0o666)
+            os.close(fd)
+        except OSError as exc:
+            raise as_output_error(exc, path) from None
         yield tmp
         try:
             os.chmod(tmp, file_mode())

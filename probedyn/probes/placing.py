@@ -66,6 +66,8 @@ def placing_probe(spec: str = "fem", overrides: Mapping[str, Any] | None = None,
             raise ParameterError("a reduced probe or a table cannot take parameter overrides; reduce the probe again")
         return placing_probe_from_reduced(resolve_probe(spec), mass_source=mass_source, n_modes=n_modes, zeta=zeta)
     spec = str(spec)
+    if not (isinstance(n_modes, int) and 1 <= n_modes <= RITZ_MODES):
+        raise ParameterError(f"retained modes must lie in 1..{RITZ_MODES} (the Ritz basis of nano-placing), got {n_modes}")
     if spec == "table-4.4":
         if overrides:
             raise ParameterError("the Table 4.4 probe has no parameters to override (use 'fem' or 'beam')")
@@ -79,6 +81,8 @@ def placing_probe(spec: str = "fem", overrides: Mapping[str, Any] | None = None,
         if unknown:
             raise ParameterError(f"unknown beam parameter(s) {', '.join(sorted(unknown))} "
                                  "(length, width, thickness, youngs_modulus, density, poisson_ratio)")
+        if ov:  # the same plausibility ranges as the cantilever probe's parameters (metres typed for micrometres...)
+            get_probe("cantilever")[0].resolve(ov)
         b = RectBeam(float(ov.get("length", g["length"])), float(ov.get("width", g["width"])),
                      float(ov.get("thickness", g["thickness"])), float(ov.get("youngs_modulus", SILICON_E)),
                      float(ov.get("poisson_ratio", SILICON_NU)), float(ov.get("density", SILICON_RHO)))

@@ -237,6 +237,8 @@ def release_maps(probe: PlacingProbe, n: int = 16, workers: int = 2, out_dir=Non
     * ``M_omega``: sample mass 1e-19-1e-9 kg x frequency 1e3-1e10 rad/s at ``A = 0.5 um`` (samples
       heavier than ``|F_po| / g = 4.8e-10 kg`` fall under their own weight);
     * ``D_omega``: release height 0.6-10 um x frequency around the threshold at ``A = 0.5 um``."""
+    if not (isinstance(workers, int) and workers >= 1):
+        raise ParameterError(f"workers must be a positive integer, got {workers}")
     specs = {
         "omega_A": ({"omega": np.geomspace(1e6, 1e10, n), "A": np.geomspace(1e-10, 2e-6, n)}, {"M": float(TABLE["M1"])}),
         "M_omega": ({"M": np.geomspace(1e-19, 1e-9, n), "omega": np.geomspace(1e3, 1e10, n)}, {"A": RELEASE_A}),

@@ -38,6 +38,7 @@ import numpy as np
 from numpy.polynomial import Polynomial
 from scipy.interpolate import make_interp_spline
 
+from probedyn.core.io import MAX_DATA_BYTES, read_text
 from probedyn.core.errors import DataFormatError, ParameterError
 
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -420,6 +421,8 @@ class CsvPath(Path):
         if big > 1e-3:
             raise DataFormatError(f"{source}: coordinates up to {big:g} m: a tip path is in metres and within 1 mm "
                                   "(micrometres typed as metres?)")
+        if t[-1] > 1e5:  # the limit of every path's duration (Timing)
+            raise DataFormatError(f"{source}: the path lasts {t[-1]:g} s, beyond 1e5 s (times in seconds?)")
         self.t_points, self.r_points, self.source = t, r, source
         self.duration = float(t[-1])
         self.spline = make_interp_spline(t, r, k=5, bc_type=([(1, np.zeros(3)), (2, np.zeros(3))],
@@ -446,14 +449,10 @@ def read_csv_path(path: str | FsPath) -> CsvPath:
     """Read ``t, x, y, z`` (s, m) from a CSV file; an optional header line naming the columns
     ``t,x,y,z`` is allowed, ``#`` starts a comment. One-line :class:`DataFormatError` on bad input."""
     p = FsPath(path)
-    if not p.is_file():
-        raise DataFormatError(f"{p}: no such path file")
     rows: list[list[float]] = []
     lines: list[int] = []
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (UnicodeDecodeError, OSError) as exc:
-        raise DataFormatError(f"{p}: cannot read as UTF-8 text ({exc.__class__.__name__})") from None
+    # a regular file of bounded size (no FIFO, device or folder), UTF-8 (bad bytes located, not echoed)
+    text = read_text(p, what="path file", max_bytes=MAX_DATA_BYTES)
     header_seen = False
     for lineno, row in enumerate(csv.reader(text.splitlines()), start=1):
         cells = [c.strip() for c in row]

@@ -72,16 +72,23 @@ def build_path(spec: str, probe: str, *, speed: float | None = None, duration: f
     """A reference path by name (defaults of ``REF_PATHS``; ``circle``/``line``/``square`` for the
     duo-bimorph in the (y, z) plane) or a CSV file ``t,x,y,z``."""
     k = spec.strip().lower()
+    if speed is not None and duration is not None:
+        raise ParameterError("give the path's speed or its duration, not both (the speed sets the duration)")
     if k in ("line", "circle", "square", "cylinder", "sphere", "cone"):
         kw = dict(REF_PATHS.get(probe, {}).get(k, {"size": 0.5e-6}))
         if size is not None:
+            if not (math.isfinite(size) and 0 < size <= 1e-3):
+                raise ParameterError(f"path size must be in (0, 1 mm] (metres), got {size:g} m")
             kw["size"] = size
         if k in ("circle", "square") and probe == "piezotube":
             kw.setdefault("plane", "yz")
         if k in ("cylinder", "sphere", "cone") and probe == "duo-bimorph":
             raise ParameterError(f"a {k} is a 3D path; the duo-bimorph moves its tip in the (y, z) plane only")
-        return make_path(k, speed=speed, duration=duration or 1.0, ramp=ramp, **kw)
+        return make_path(k, speed=speed, duration=1.0 if duration is None else duration, ramp=ramp, **kw)
     if k.endswith(".csv") or "/" in spec or "\\" in spec:
+        given = [n for n, v in (("speed", speed), ("duration", duration), ("size", size)) if v is not None]
+        if given:
+            raise ParameterError(f"a CSV path has its own times and coordinates: {', '.join(given)} cannot be applied")
         return read_csv_path(spec)
     raise ParameterError(f"unknown path {spec!r} (line, circle, square, cylinder, sphere, cone, or a CSV file t,x,y,z)")
 
@@ -111,11 +118,13 @@ def track(factory: PlantFactory, probe: str, path_spec: str, control: str = "com
         raise ParameterError(f"the {law.name} law is unstable on the full model (growth rate {st['max_real_per_s']:.3g} 1/s "
                              f"at {st['least_damped_hz']:.4g} Hz): see docs/tracking.md (no time-scale separation)")
     surf = None
+    if not disturbance and disturbance_scale != 1.0:
+        raise ParameterError("a disturbance scale applies to a disturbance: give --disturbance kbr too")
     if disturbance:
         if disturbance.strip().lower() != "kbr":
             raise ParameterError(f"unknown disturbance {disturbance!r} (known: kbr)")
         surf = kbr(disturbance_scale)
-    noise = SensorNoise(noise_rms) if noise_rms > 0 else None
+    noise = SensorNoise(noise_rms) if noise_rms != 0 else None  # SensorNoise checks the range
     res = simulate(plant, law, path, surface=surf, v_max=vm, noise=noise)
     m = res.metrics()
     summary = {"probe": probe, "path": path.describe(), "control": law.name, "stability": st,
