@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from probedyn.core.errors import GeometryError
+from probedyn.core.params import Param
 from probedyn.meshes.cache import MeshBundle, cached_mesh
 from probedyn.meshes.duo_bimorph import named_points
 from probedyn.meshes.piezotube import N_SECT, QUARTERS
@@ -30,6 +31,20 @@ from probedyn.meshes.structured import box_grid, ring_grid, subdivide, with_face
 
 #: values of the probes' ``element`` parameter
 ELEMENT_CHOICES = ("auto", "tet-p2", "hex-s2", "hex-q2")
+
+
+def element_params(size_doc: str, size_lo: float, size_hi: float) -> list:
+    """The mesh parameters every meshed probe declares: ``accuracy``, ``element`` and
+    ``element_size`` (its description and bounds per probe)."""
+    return [
+        Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
+              "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
+              lo=1e-5, hi=0.05, positive=True),
+        Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
+              "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)",
+              kind=str, choices=ELEMENT_CHOICES),
+        Param("element_size", None, "m", size_doc, lo=size_lo, hi=size_hi, positive=True),
+    ]
 
 #: default divisions (docs/fem.md, "Accuracy per second": the cheapest meshes found with every
 #: reported frequency within the target of the converged value)

@@ -21,7 +21,7 @@ from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.lumped import beam as bm
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.cantilever import cantilever_mesh, tip_apex, validate_geometry
-from probedyn.meshes.hexmeshes import (ELEMENT_CHOICES, HexDivisions, cantilever_hex_dofs, cantilever_hex_mesh,
+from probedyn.meshes.hexmeshes import (HexDivisions, cantilever_hex_dofs, cantilever_hex_mesh, element_params,
                                       refinement_for)
 from probedyn.probes import Probe, register_probe
 
@@ -44,15 +44,9 @@ _PARAMS = ParamSet([
     Param("tip_half_angle", 0.35, "rad", "tip half-angle (0.35 rad = 20 deg)", lo=0.01, hi=1.5, positive=True),
     Param("elements_through_thickness", 3, "", "element layers through the thickness", lo=1, hi=40,
           kind=int),
-    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
-          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
-          lo=1e-5, hi=0.05, positive=True),
-    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
-          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
-          choices=ELEMENT_CHOICES),
-    Param("element_size", None, "m", "maximum element size (hexahedra: along the beam away from the clamp); "
-          "None = thickness / elements_through_thickness (hexahedra: the thickness, graded towards the clamp)",
-          lo=1e-8, hi=0.01, positive=True),
+    *element_params("maximum element size (hexahedra: along the beam away from the clamp); "
+                    "None = thickness / elements_through_thickness (hexahedra: the thickness, graded towards the clamp)",
+                    1e-8, 0.01),
 ])
 
 

@@ -42,7 +42,7 @@ from probedyn.meshes._gmsh import region_volumes
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.duo_bimorph import DEFAULTS as GEOM
 from probedyn.meshes.duo_bimorph import duo_bimorph_mesh, named_points, validate
-from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, duo_bimorph_hex_mesh, refinement_for
+from probedyn.meshes.hexmeshes import HexDivisions, duo_bimorph_hex_mesh, element_params, refinement_for
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
 
@@ -89,15 +89,9 @@ _PARAMS = ParamSet([
     Param("mu", 0.0, "N s/m^2", "environment damping factor mu of eq 3.2 (lumped models)", lo=0.0, hi=1e3,
           source="3.2"),
     Param("elements_through_thickness", 1, "", "elements through one PZT layer", lo=1, hi=20, kind=int),
-    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
-          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
-          lo=1e-5, hi=0.05, positive=True),
-    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
-          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
-          choices=ELEMENT_CHOICES),
-    Param("element_size", None, "m", "maximum element size (hexahedra: along the probe away from the clamp); "
-          "None = layer thickness / elements_through_thickness (hexahedra: the total thickness, graded towards the clamp)",
-          lo=1e-8, hi=0.001, positive=True),
+    *element_params("maximum element size (hexahedra: along the probe away from the clamp); "
+                    "None = layer thickness / elements_through_thickness (hexahedra: the total thickness, graded towards the clamp)",
+                    1e-8, 0.001),
 ])
 
 GEOM_KEYS = ("length", "width", "thickness", "electrode_gap", "holder", "holder_length", "holder_width",

@@ -37,7 +37,7 @@ from probedyn.lumped.smart import piezotube_references
 from probedyn.lumped.smart_analytic import Piezotube as Tube
 from probedyn.meshes.cache import MeshOptions
 from probedyn.meshes.piezotube import DEFAULTS as GEOM
-from probedyn.meshes.hexmeshes import ELEMENT_CHOICES, HexDivisions, piezotube_hex_mesh, refinement_for
+from probedyn.meshes.hexmeshes import HexDivisions, element_params, piezotube_hex_mesh, refinement_for
 from probedyn.meshes.piezotube import piezotube_mesh, validate
 from probedyn.probes import register_probe
 from probedyn.probes._smart import SmartProbe
@@ -78,15 +78,9 @@ _PARAMS = ParamSet([
           source="Table 3.2"),
     Param("elements_through_thickness", 1, "", "elements through the tube wall", lo=1, hi=12,
           kind=int),
-    Param("accuracy", None, "", "requested relative accuracy of the frequencies (hexahedra): the default mesh "
-          "refined by the measured error and convergence order of docs/fem.md; None = the default mesh",
-          lo=1e-5, hi=0.05, positive=True),
-    Param("element", "auto", "", "finite element: auto = the fastest to 0.1 % (docs/fem.md), tet-p2 = P2 "
-          "tetrahedra (gmsh), hex-s2 = 20-node serendipity or hex-q2 = 27-node hexahedra (structured)", kind=str,
-          choices=ELEMENT_CHOICES),
-    Param("element_size", None, "m", "circumferential/axial element size; None = 4 x wall / elements_through_thickness "
-          "(hexahedra: 8 x wall)",
-          lo=1e-7, hi=0.01, positive=True),
+    *element_params("circumferential/axial element size; None = 4 x wall / elements_through_thickness "
+                    "(hexahedra: 8 x wall)",
+                    1e-7, 0.01),
 ])
 
 GEOM_KEYS = ("Re", "Ri", "length", "delta_y", "delta_z", "holder", "holder_length", "holder_wall",
