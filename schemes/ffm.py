@@ -189,8 +189,9 @@ def _rhs(kern, p, m, c, k, V, X0, t, y, f):
 
 
 @njit(cache=True)
-def _lu_solve(A, b):
-    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting)."""
+def lu_solve_small(A, b):
+    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting); compiled,
+    for the Rosenbrock kernels of the FFM models."""
     n = A.shape[0]
     M = A.copy()
     x = b.copy()
@@ -255,13 +256,13 @@ def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
             for b in range(n):
                 W[a, b] = -h * d * J[a, b]
             W[a, a] += 1.0
-        k1 = _lu_solve(W, f0 + h * d * Tt)
+        k1 = lu_solve_small(W, f0 + h * d * Tt)
         ym = y + 0.5 * h * k1
         _rhs(kern, p, m, c, k, V, X0, t + 0.5 * h, ym, f1)
-        k2 = _lu_solve(W, f1 - k1) + k1
+        k2 = lu_solve_small(W, f1 - k1) + k1
         yn = y + h * k2
         _rhs(kern, p, m, c, k, V, X0, t + h, yn, f2)
-        k3 = _lu_solve(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
+        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
         err = 0.0
         for a in range(n):
             sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))

@@ -37,39 +37,7 @@ from numba import njit
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.lumped.reduced import ReducedProbe
-
-
-@njit(cache=True)
-def _lu_solve(A, b):
-    n = A.shape[0]
-    M = A.copy()
-    x = b.copy()
-    for i in range(n):
-        piv = i
-        best = abs(M[i, i])
-        for r in range(i + 1, n):
-            if abs(M[r, i]) > best:
-                best = abs(M[r, i])
-                piv = r
-        if piv != i:
-            for cc in range(n):
-                tmp = M[i, cc]
-                M[i, cc] = M[piv, cc]
-                M[piv, cc] = tmp
-            tmp = x[i]
-            x[i] = x[piv]
-            x[piv] = tmp
-        for r in range(i + 1, n):
-            fct = M[r, i] / M[i, i]
-            for cc in range(i, n):
-                M[r, cc] -= fct * M[i, cc]
-            x[r] -= fct * x[i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for cc in range(i + 1, n):
-            s -= M[i, cc] * x[cc]
-        x[i] = s / M[i, i]
-    return x
+from probedyn.schemes.ffm import lu_solve_small
 
 
 @njit(cache=True)
@@ -154,13 +122,13 @@ def _ros23(kern, p, m, c, k, sh, V, T, y0, rtol, atol, h0, hmax, max_steps):
             for b in range(ns):
                 W[a, b] = -h * d * J[a, b]
             W[a, a] += 1.0
-        k1 = _lu_solve(W, f0 + h * d * Tt)
+        k1 = lu_solve_small(W, f0 + h * d * Tt)
         ym = y + 0.5 * h * k1
         _rhs(kern, p, m, c, k, sh, V, t + 0.5 * h, ym, f1)
-        k2 = _lu_solve(W, f1 - k1) + k1
+        k2 = lu_solve_small(W, f1 - k1) + k1
         yn = y + h * k2
         _rhs(kern, p, m, c, k, sh, V, t + h, yn, f2)
-        k3 = _lu_solve(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
+        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
         err = 0.0
         for a in range(ns):
             sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
