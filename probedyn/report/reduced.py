@@ -10,6 +10,7 @@ within 3.5 % of the default mesh, the rest within 0.5 %), two geometries, the sl
 
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -181,11 +182,13 @@ def section(outdir: Path, quick: bool) -> str:
             "its frequency sqrt(k_s/m_eff) is 8 % below the mode's, which matters as soon as the slip takes a visible "
             "part of the stick-slip cycle - on the fast scan (200 µm/s, slips 25 % of the cycle) its period is 12 % and "
             "its amplitude 25 % off, against < 2 % for the mode with its residual."]
-    # ---- pushing boundary vs geometry, mesh-independent apex stiffness (full mode: minutes)
-    if quick:
-        out += ["", "*Full mode only:* the pushing stick-slip -> sliding speed predicted from the reduced stiffness "
-                "and confirmed by bisection for three geometries, and the apex stiffness under a spread (patch) load "
-                "with its mesh convergence (docs/reduced-probes.md sections 11, 12)."]
+    # ---- pushing boundary vs geometry, mesh-independent apex stiffness (minutes: only on request)
+    if quick or os.environ.get("PROBEDYN_REPORT_LONG") != "1":
+        out += ["", "*Long studies (about four minutes on two cores), run with `PROBEDYN_REPORT_LONG=1 ./dev report`:* "
+                "the pushing stick-slip -> sliding speed predicted from the reduced stiffness and confirmed by "
+                "bisection for three geometries, and the apex stiffness under a spread (patch) load with its mesh "
+                "convergence (docs/reduced-probes.md sections 11, 12; slow tests "
+                "`test_pushing_boundary_moves_with_the_geometry_as_predicted`, `test_apex_patch_stiffness_converges`)."]
     else:
         pb = st.pushing_boundary_study()
         prow = [dict(g=r["label"], dofs=r["dofs"], kt=r["tip"]["k_tx"], ks=r["prediction"]["k_series"],
