@@ -9,7 +9,7 @@ import scipy.sparse as sp
 from skfem import Basis, ElementTetP2
 from skfem.quadrature import get_quadrature
 
-from probedyn.fem.elasticity import stiffness_field
+from probedyn.fem.elasticity import stiffness_field, strain_operator
 
 STIFFNESS_INTORDER = 2
 MASS_INTORDER = 4
@@ -54,17 +54,7 @@ def assemble_stiffness_numpy(
         detDF = np.abs(mapping.detDF(X, tind=sel))  # (nel, nq)
         # physical gradients g[e, q, a, j] = sum_k dref[a, k, q] invDF[k, j, e, q]
         g = np.einsum("akq,kjeq->eqaj", dref, invDF, optimize=True)
-        B = np.zeros((sel.size, nq, 6, 30))
-        gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]  # (e, q, 10)
-        B[:, :, 0, 0::3] = gx
-        B[:, :, 1, 1::3] = gy
-        B[:, :, 2, 2::3] = gz
-        B[:, :, 3, 1::3] = gz
-        B[:, :, 3, 2::3] = gy
-        B[:, :, 4, 0::3] = gz
-        B[:, :, 4, 2::3] = gx
-        B[:, :, 5, 0::3] = gy
-        B[:, :, 5, 1::3] = gx
+        B = strain_operator(g)  # (e, q, 6, 30)
         x_qp = mapping.F(X, tind=sel)  # (3, nel, nq)
         C = stiffness_field(elem_region, materials, orientations, x_qp, elements=sel)
         wq = detDF * W[None, :]  # (e, q)

@@ -110,6 +110,25 @@ def element_regions(mesh, regions: Sequence[str]) -> np.ndarray:
     return reg
 
 
+
+def strain_operator(g: np.ndarray) -> np.ndarray:
+    """Voigt strain-displacement operator ``B`` (..., 6, 3 n) from physical shape-function gradients
+    ``g`` (..., n, 3): strains (xx, yy, zz, yz, xz, xy) with engineering shears, element DOFs
+    ordered (node, component)."""
+    n = g.shape[-2]
+    B = np.zeros(g.shape[:-2] + (6, 3 * n))
+    gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]
+    B[..., 0, 0::3] = gx
+    B[..., 1, 1::3] = gy
+    B[..., 2, 2::3] = gz
+    B[..., 3, 1::3] = gz
+    B[..., 3, 2::3] = gy
+    B[..., 4, 0::3] = gz
+    B[..., 4, 2::3] = gx
+    B[..., 5, 0::3] = gy
+    B[..., 5, 1::3] = gx
+    return B
+
 def stiffness_field(
     elem_region: np.ndarray,
     materials: Sequence,

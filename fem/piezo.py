@@ -148,17 +148,7 @@ def assemble_piezo_blocks(mesh, elem_piezo: np.ndarray, materials: Sequence[Piez
         invDF = mapping.invDF(X, tind=sel)
         detDF = np.abs(mapping.detDF(X, tind=sel))
         g = np.einsum("akq,kjeq->eqaj", dref, invDF, optimize=True)  # (e, q, 10, 3)
-        B = np.zeros((sel.size, nq, 6, 30))
-        gx, gy, gz = g[..., 0], g[..., 1], g[..., 2]
-        B[:, :, 0, 0::3] = gx
-        B[:, :, 1, 1::3] = gy
-        B[:, :, 2, 2::3] = gz
-        B[:, :, 3, 1::3] = gz
-        B[:, :, 3, 2::3] = gy
-        B[:, :, 4, 0::3] = gz
-        B[:, :, 4, 2::3] = gx
-        B[:, :, 5, 0::3] = gy
-        B[:, :, 5, 1::3] = gx
+        B = el.strain_operator(g)  # (e, q, 6, 30)
         Bp = np.swapaxes(g, 2, 3)  # (e, q, 3, 10): grad phi = Bp @ phi_e
         x_qp = mapping.F(X, tind=sel)
         E = np.empty((sel.size, nq, 3, 6))
