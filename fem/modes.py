@@ -138,6 +138,37 @@ class ModalResult:
 
 # ---------------------------------------------------------------------------------------
 
+
+#: columns of the rigid-section fit (a_x, a_y, a_z, theta_x, theta_y, theta_z) per family
+FAMILY_COLUMNS = {"flapwise": [2, 4], "lateral": [1, 5], "torsion": [3], "axial": [0]}
+
+
+def section_slices(X: np.ndarray, weights: np.ndarray, n_slices: int = 24):
+    """Slices of the body along ``X[0]`` (the beam axis first): yields ``(idx, sw, A)`` per slice
+    with at least 4 nodes -- node indices, sqrt of their weights and the weighted rigid-section
+    kinematic matrix ``A`` (3 m, 6) of ``u = a + theta x d`` (d from the slice's mass centre), so
+    that ``lstsq(A, sw * u)`` is the mass-weighted rigid motion of the section."""
+    s = X[0]
+    edges = np.linspace(s.min(), s.max() + 1e-12 * (np.ptp(s) + 1), n_slices + 1)
+    sl = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, n_slices - 1)
+    for j in range(n_slices):
+        idx = np.nonzero(sl == j)[0]
+        if idx.size < 4:
+            continue
+        w = weights[idx]
+        r = X[:, idx]
+        d = r - ((r * w).sum(axis=1) / w.sum())[:, None]  # (3, m)
+        m = idx.size
+        G = np.zeros((m, 3, 6))
+        G[:, 0, 0] = G[:, 1, 1] = G[:, 2, 2] = 1.0
+        # theta x d = [ty dz - tz dy, tz dx - tx dz, tx dy - ty dx]
+        G[:, 0, 4], G[:, 0, 5] = d[2], -d[1]
+        G[:, 1, 3], G[:, 1, 5] = -d[2], d[0]
+        G[:, 2, 3], G[:, 2, 4] = d[1], -d[0]
+        sw = np.sqrt(w)
+        yield idx, sw, (G * sw[:, None, None]).reshape(3 * m, 6)
+
+
 def classify_shapes(
     coords: np.ndarray,
     weights: np.ndarray,
@@ -157,31 +188,12 @@ def classify_shapes(
     perm = [axis, (axis + 1) % 3, (axis + 2) % 3]
     X = coords[perm]  # (3, n): beam-axis, width, thickness
     Ub = U[:, perm, :]
-    s = X[0]
-    edges = np.linspace(s.min(), s.max() + 1e-12 * (np.ptp(s) + 1), n_slices + 1)
-    sl = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, n_slices - 1)
     k = U.shape[2]
     parts = np.zeros((k, 5))  # flap, lat, tors, axial, residual
     total = np.einsum("n,nik->k", weights, Ub**2)
-    for j in range(n_slices):
-        idx = np.nonzero(sl == j)[0]
-        if idx.size < 4:
-            continue
-        w = weights[idx]
-        r = X[:, idx]
-        rc = (r * w).sum(axis=1) / w.sum()
-        d = r - rc[:, None]  # (3, m)
-        # rigid motion u = a + theta x d: build (3m, 6) kinematic matrix per node
+    for idx, sw, A in section_slices(X, weights, n_slices):
         m = idx.size
-        G = np.zeros((m, 3, 6))
-        G[:, 0, 0] = G[:, 1, 1] = G[:, 2, 2] = 1.0
-        # theta x d = [ty dz - tz dy, tz dx - tx dz, tx dy - ty dx]
-        G[:, 0, 4], G[:, 0, 5] = d[2], -d[1]
-        G[:, 1, 3], G[:, 1, 5] = -d[2], d[0]
-        G[:, 2, 3], G[:, 2, 4] = d[1], -d[0]
-        Gw = G * np.sqrt(w)[:, None, None]
-        A = Gw.reshape(3 * m, 6)
-        b = (Ub[idx] * np.sqrt(w)[:, None, None]).reshape(3 * m, k)
+        b = (Ub[idx] * sw[:, None, None]).reshape(3 * m, k)
         coef, *_ = np.linalg.lstsq(A, b, rcond=None)  # (6, k)
         # kinetic-energy-like contributions of each kinematic group
         def energy(cols):
@@ -189,10 +201,10 @@ def classify_shapes(
             c[cols] = coef[cols]
             return ((A @ c) ** 2).sum(axis=0)
 
-        e_flap = energy([2, 4])  # a_z, theta_y
-        e_lat = energy([1, 5])  # a_y, theta_z
-        e_tor = energy([3])
-        e_ax = energy([0])
+        e_flap = energy(FAMILY_COLUMNS["flapwise"])  # a_z, theta_y
+        e_lat = energy(FAMILY_COLUMNS["lateral"])  # a_y, theta_z
+        e_tor = energy(FAMILY_COLUMNS["torsion"])
+        e_ax = energy(FAMILY_COLUMNS["axial"])
         e_fit = ((A @ coef) ** 2).sum(axis=0)
         e_all = (b**2).sum(axis=0)
         parts[:, 0] += e_flap

@@ -61,6 +61,7 @@ from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, 
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
                                          reduced_stiffness_split, stretch_sensitivity)
 from probedyn.diagnose.hydrodynamics import sader_gamma
+from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.materials import Material
 from probedyn.fem.model import ElasticModel, PointMass
@@ -652,29 +653,12 @@ def _family_forms(model: ElasticModel, P: np.ndarray, n_slices: int = 24) -> dic
     Xp = coords[perm]
     r = P.shape[1]
     U = P.reshape(model.n_nodes, 3, r)[:, perm, :]
-    s = Xp[0]
-    edges = np.linspace(s.min(), s.max() + 1e-12 * (np.ptp(s) + 1), n_slices + 1)
-    sl = np.clip(np.searchsorted(edges, s, side="right") - 1, 0, n_slices - 1)
-    groups = {"flapwise": [2, 4], "lateral": [1, 5], "torsion": [3], "axial": [0]}
+    groups = FAMILY_COLUMNS
     forms = {f: np.zeros((r, r)) for f in groups}
     wU = U * weights[:, None, None]
     forms["total"] = np.einsum("nir,nis->rs", U, wU)
-    for j in range(n_slices):
-        idx = np.nonzero(sl == j)[0]
-        if idx.size < 4:
-            continue
-        w = weights[idx]
-        rr = Xp[:, idx]
-        rc = (rr * w).sum(axis=1) / w.sum()
-        d = rr - rc[:, None]
-        m = idx.size
-        G = np.zeros((m, 3, 6))
-        G[:, 0, 0] = G[:, 1, 1] = G[:, 2, 2] = 1.0
-        G[:, 0, 4], G[:, 0, 5] = d[2], -d[1]
-        G[:, 1, 3], G[:, 1, 5] = -d[2], d[0]
-        G[:, 2, 3], G[:, 2, 4] = d[1], -d[0]
-        A = (G * np.sqrt(w)[:, None, None]).reshape(3 * m, 6)
-        b = (U[idx] * np.sqrt(w)[:, None, None]).reshape(3 * m, r)
+    for idx, sw, A in section_slices(Xp, weights, n_slices):
+        b = (U[idx] * sw[:, None, None]).reshape(3 * idx.size, r)
         coef = np.linalg.lstsq(A, b, rcond=None)[0]  # (6, r)
         for f, cols in groups.items():
             Ac = A[:, cols] @ coef[cols]
