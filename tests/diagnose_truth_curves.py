@@ -114,3 +114,72 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
              "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in}
     return outdir / f"{name}.toml", truth
+
+
+# ------------------------------------------------------------------------------------------
+# Thermal spectra of the probe's FEM modes
+# ------------------------------------------------------------------------------------------
+
+K_B = 1.380649e-23
+
+
+def fem_thermal_modes(overrides: dict, n_modes: int = 8) -> list[dict]:
+    """Flapwise modes of the probe's FEM (``overrides`` of the registered cantilever): frequency and
+    the modal stiffness at the tip along the thickness (what a deflection detector at the tip
+    sees: ``k_n = omega_n^2 / phi_n(tip)^2`` for mass-normalised modes)."""
+    from probedyn.probes import get_probe
+
+    probe, _ = get_probe("cantilever")
+    model = probe.build(probe.resolve(overrides))
+    res = model.modes(n_modes)
+    return [{"f": md.frequency_hz, "k": md.effective_stiffness_tip["z"]} for md in res.modes
+            if md.family == "flapwise" and math.isfinite(md.effective_stiffness_tip.get("z", math.inf))]
+
+
+def thermal_psd(freq: np.ndarray, modes: list[dict], Qs: list[float], T: float) -> np.ndarray:
+    """One-sided displacement PSD [m^2/Hz] of the thermally driven modes (equipartition: the
+    area of mode n is k_B T / k_n; SHO line of quality factor Q_n)."""
+    S = np.zeros_like(freq)
+    for md, Q in zip(modes, Qs):
+        f0, k = md["f"], md["k"]
+        A = 2 * K_B * T / (math.pi * k * f0 * Q)
+        S += A / ((1 - (freq / f0) ** 2) ** 2 + (freq / (f0 * Q)) ** 2)
+    return S
+
+
+def make_fem_spectrum_case(outdir: Path, seed: int, overrides: dict, *, spur_rel: float | None = 0.3,
+                           Q: float = 300.0, averages: int = 32, T: float = 295.0, n_peaks: int = 2,
+                           truth_overrides: dict | None = None) -> tuple[Path, dict]:
+    """Thermal PSD of the first ``n_peaks`` flapwise FEM modes in vacuum (Q given: internal
+    damping), a white + 1/f detector background, an optional electronic spur (a sinusoid: all
+    its power in one bin) at ``spur_rel`` x f1, and the periodogram statistics of ``averages``
+    averages (each bin: the true PSD times chi^2 with 2 x averages degrees of freedom / (2 x
+    averages), i.e. a Gamma(averages, 1/averages) factor -- not Gaussian). The FEM of the truth
+    is ``truth_overrides`` (e.g. a finer mesh) or ``overrides``."""
+    rng = np.random.default_rng(seed)
+    modes = fem_thermal_modes(truth_overrides or overrides)[:n_peaks]
+    f_hi = 1.3 * modes[-1]["f"]
+    df = modes[0]["f"] / Q / 6.0  # the narrowest line spans 6 bins
+    freq = np.arange(0.1 * modes[0]["f"], f_hi, df)
+    Qs = [Q] * len(modes)
+    S = thermal_psd(freq, modes, Qs, T)
+    peak1 = 2 * K_B * T * Q / (math.pi * modes[0]["k"] * modes[0]["f"])
+    white = 1e-3 * peak1 / Q  # the line stands ~ Q x 1000 above the floor
+    S = S + white * (1 + modes[0]["f"] / freq)
+    truth = {"modes": modes, "Q": Qs, "white": white}
+    if spur_rel is not None:
+        j = int(np.argmin(abs(freq - spur_rel * modes[0]["f"])))
+        S[j] += 0.3 * peak1  # a sinusoid: its power in one bin
+        truth["spur_Hz"] = float(freq[j])
+    S = S * rng.gamma(averages, 1.0 / averages, size=len(S))
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"fem_spectrum_{seed}"
+    np.savetxt(outdir / f"{name}.csv", np.column_stack([freq, S]), delimiter=",", header="frequency_Hz,value",
+               comments="", fmt="%.10g")
+    probe = "".join(f"{k} = {v!r}\n" for k, v in overrides.items())
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "spectrum"\ndata = "{name}.csv"\nquantity = "psd"\naverages = {averages}\n\n'
+        f'[probe]\nname = "cantilever"\n{probe}\n[medium]\nname = "vacuum"\ntemperature = {T!r}\n\n'
+        f'[noise]\nfrequency_rel = 1e-6\n')
+    return outdir / f"{name}.toml", truth

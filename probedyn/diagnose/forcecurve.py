@@ -201,7 +201,9 @@ def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n
     out = {}
     for branch, edge in (("loading", D0), ("unloading", D_min)):
         keep = Dc >= edge
-        Dt = np.linspace(min(d_lo / du, edge) - 1.0, edge, n_tail, endpoint=False)
+        # the tail ends exactly at the branch's edge (the fold: where the loading branch jumps into
+        # contact), so the jump is placed at the right piezo position and not one tail spacing early
+        Dt = np.linspace(min(d_lo / du, edge) - 1.0, edge, n_tail)
         Pt, _ = model.nd_tail(Dt)
         delta = np.concatenate([Dt, Dc[keep]]) * du
         P = np.concatenate([Pt, Pc[keep]]) * Pu

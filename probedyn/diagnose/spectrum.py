@@ -72,7 +72,16 @@ def detect_peaks(freq: np.ndarray, psd: np.ndarray, s_log: float, max_peaks: int
     for i, p in zip(idx2, props2["prominences"]):
         if not any(abs(int(i) - j) <= 2 * k + 1 for j in cand):
             cand[int(i)] = float(p)
-    best = sorted(cand, key=lambda i: -cand[i])[:max_peaks]
+    # the smoothed search locates a one-bin line (a spur) up to k bins off: every candidate is moved
+    # to the largest raw value within the smoothing window, so the line fit is centred on it (a fit
+    # started beside a spur would take the background for the line and wander to another peak)
+    snapped: dict[int, float] = {}
+    for i in sorted(cand, key=lambda i: -cand[i]):
+        lo, hi = max(i - 2 * k - 1, 0), min(i + 2 * k + 2, len(logp))
+        j = lo + int(np.argmax(logp[lo:hi]))
+        if j not in snapped:
+            snapped[j] = cand[i]
+    best = sorted(snapped, key=lambda i: -snapped[i])[:max_peaks]
     return sorted(best)
 
 
