@@ -433,8 +433,8 @@ class ForceCurveProblem:
                 sel = d.segment == s_
                 x, y, _ = lines[branch]
                 P[sel] = np.interp(delta[sel], x, y)
-                g = np.gradient(y, x)
-                dP[sel] = np.interp(delta[sel], x, g)
+                h = 1e-11  # central difference on the polyline (it has a repeated abscissa at a jump)
+                dP[sel] = (np.interp(delta[sel] + h, x, y) - np.interp(delta[sel] - h, x, y)) / (2 * h)
         # effective variance: the force noise enters delta through F / k, so the misfit's standard
         # deviation is sigma (1 + P'(delta) / k) on a stable branch (P' > -k)
         r = (Fx - P) / (self.sigma * np.maximum(1.0 + dP / d.k, 0.1))
