@@ -149,7 +149,8 @@ def thermal_psd(freq: np.ndarray, modes: list[dict], Qs: list[float], T: float) 
 
 def make_fem_spectrum_case(outdir: Path, seed: int, overrides: dict, *, spur_rel: float | None = 0.3,
                            Q: float = 300.0, averages: int = 32, T: float = 295.0, n_peaks: int = 2,
-                           truth_overrides: dict | None = None) -> tuple[Path, dict]:
+                           truth_overrides: dict | None = None, modes: list[dict] | None = None,
+                           calibration: float = 1.0, freq_scale: float = 1.0) -> tuple[Path, dict]:
     """Thermal PSD of the first ``n_peaks`` flapwise FEM modes in vacuum (Q given: internal
     damping), a white + 1/f detector background, an optional electronic spur (a sinusoid: all
     its power in one bin) at ``spur_rel`` x f1, and the periodogram statistics of ``averages``
@@ -157,7 +158,9 @@ def make_fem_spectrum_case(outdir: Path, seed: int, overrides: dict, *, spur_rel
     averages), i.e. a Gamma(averages, 1/averages) factor -- not Gaussian). The FEM of the truth
     is ``truth_overrides`` (e.g. a finer mesh) or ``overrides``."""
     rng = np.random.default_rng(seed)
-    modes = fem_thermal_modes(truth_overrides or overrides)[:n_peaks]
+    modes = modes or fem_thermal_modes(truth_overrides or overrides)
+    # a hidden frequency shift (e.g. an added mass or a thinner lever: all modes by one factor here)
+    modes = [{"f": m["f"] * freq_scale, "k": m["k"]} for m in modes[:n_peaks]]
     f_hi = 1.3 * modes[-1]["f"]
     df = modes[0]["f"] / Q / 6.0  # the narrowest line spans 6 bins
     freq = np.arange(0.1 * modes[0]["f"], f_hi, df)
@@ -171,6 +174,9 @@ def make_fem_spectrum_case(outdir: Path, seed: int, overrides: dict, *, spur_rel
         j = int(np.argmin(abs(freq - spur_rel * modes[0]["f"])))
         S[j] += 0.3 * peak1  # a sinusoid: its power in one bin
         truth["spur_Hz"] = float(freq[j])
+    S = calibration * S  # a detector sensitivity error scales the whole PSD (thermal lines and floor)
+    truth["calibration"] = calibration
+    truth["freq_scale"] = freq_scale
     S = S * rng.gamma(averages, 1.0 / averages, size=len(S))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
