@@ -86,3 +86,15 @@ def test_interrupt_kills_workers_and_leaves_nothing(tmp_path, monkeypatch):
     assert _files(out) == ["old.md"]
     assert not [p for p in out.iterdir() if re.search(r"probedyn-tmp", p.name)]
     assert not multiprocessing.active_children()
+
+
+def test_real_sections_serial_and_parallel_same_markdown(tmp_path):
+    """Two cheap real sections (quick mode): the same Markdown and the same figure files
+    whether they run in this process or on two workers."""
+    only = ["Piezoelectric actuation", "Measured data"]
+    a = R.build_report(tmp_path / "serial", quick=True, only=only, jobs=1)
+    b = R.build_report(tmp_path / "parallel", quick=True, only=only, jobs=2)
+    assert _body(a.read_text()) == _body(b.read_text())
+    assert "## Piezoelectric actuation" in _body(b.read_text()) and "## Measured data" in _body(b.read_text())
+    assert _files(tmp_path / "serial") == _files(tmp_path / "parallel")
+    assert len(_files(tmp_path / "parallel")) > 2  # the figures came back from the workers
