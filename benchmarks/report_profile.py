@@ -51,6 +51,22 @@ def _top(prof: cProfile.Profile, n: int) -> dict[str, list[dict]]:
     return {"cumulative": by_cum[:n], "own": by_own[:n], "probedyn_cumulative": own_probedyn[:n]}
 
 
+def _parse_report(path: Path) -> dict:
+    """Per-section wall/CPU times and the total from the end of a report.md."""
+    import re
+
+    rows, total = [], None
+    text = path.read_text()
+    for line in text.split("## Run times", 1)[1].splitlines():
+        m = re.match(r"\|\s*(.+?)\s*\|\s*([0-9.]+)\s*\|\s*([0-9.]+)\s*\|", line)
+        if m:
+            rows.append({"section": m.group(1), "wall_s": float(m.group(2)), "cpu_s": float(m.group(3))})
+        t = re.search(r"([0-9.]+) s wall in all", line)
+        if t:
+            total = float(t.group(1))
+    return {"sections": rows, "sections_wall_s": total, "sum_cpu_s": round(sum(r["cpu_s"] for r in rows), 1)}
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--json", type=Path, default=Path(__file__).parent / "results" / "report-times-s4.json")
@@ -60,9 +76,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--profile", action="store_true", help="cProfile each section (top functions)")
     ap.add_argument("--top", type=int, default=25)
     ap.add_argument("--outdir", type=Path, default=None, help="figures folder (default: a temporary one)")
+    ap.add_argument("--from-report", type=Path, default=None,
+                    help="record the run-times table of a finished report.md (e.g. a timed ./dev report "
+                         "from a fresh clone) under --label instead of running the sections")
+    ap.add_argument("--note", default="", help="free text stored with the run (load, cache state, ...)")
     args = ap.parse_args(argv)
 
     data = json.loads(args.json.read_text()) if args.json.exists() else {}
+    if args.from_report:
+        data[args.label] = {"note": args.note, "source": str(args.from_report), **_parse_report(args.from_report)}
+        args.json.write_text(json.dumps(data, indent=1) + "\n")
+        return 0
     run = {
         "note": "one process, sections in report order; machine shared (2 cores, other jobs running)",
         "cache": os.environ.get("PROBEDYN_CACHE", "~/.cache/probedyn (default)"),
