@@ -131,8 +131,10 @@ def _watch_parent(parent: int) -> None:
 
 
 def _worker_init(parent: int) -> None:
-    # Ctrl-C goes to the whole process group: the report process handles it and kills us
+    # Ctrl-C goes to the whole process group: the report process handles it and kills us (the
+    # worker was started with SIGINT blocked, see _sigint_held: ignore it, then unblock)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     for s in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(s, signal.SIG_DFL)
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True, name="report-parent-watch").start()
@@ -166,6 +168,35 @@ def _stop(ex: cf.ProcessPoolExecutor) -> None:
     for p in procs:
         with contextlib.suppress(Exception):
             p.join(timeout=5.0)
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold Ctrl-C while the workers are started (the first submits fork and exec them).
+
+    SIGINT is blocked in this thread, and a child inherits the mask through fork and exec: a
+    worker is immune to Ctrl-C from birth until its initializer ignores the signal (a Ctrl-C
+    during its imports would print a KeyboardInterrupt traceback). A Ctrl-C that arrives
+    meanwhile (another thread, e.g. the command line's watchdog, takes it) is recorded instead of
+    interrupting this thread half-way through starting a worker, and handed to the previous
+    handler once the workers are started: it is delayed by milliseconds, never lost.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    pending: list[int] = []
+    old_handler = signal.signal(signal.SIGINT, lambda signum, frame: pending.append(signum))
+    old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)  # a pending SIGINT is recorded here
+        signal.signal(signal.SIGINT, old_handler)
+    if pending:
+        if callable(old_handler):
+            old_handler(signal.SIGINT, None)
+        elif old_handler == signal.SIG_DFL:
+            signal.raise_signal(signal.SIGINT)
 
 
 @contextlib.contextmanager
@@ -203,7 +234,8 @@ def run_parallel(sections: Sequence[tuple[str, str]], outdir: Path, quick: bool,
             ex = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                                         initializer=_worker_init, initargs=(os.getpid(),))
             try:
-                futs = {ex.submit(_worker_run, sections[i][1], str(stage), quick): i for i in order}
+                with _sigint_held():  # the workers are started by the first submits
+                    futs = {ex.submit(_worker_run, sections[i][1], str(stage), quick): i for i in order}
                 for fut in cf.as_completed(futs):
                     i = futs[fut]
                     title = sections[i][0]
