@@ -48,21 +48,22 @@ from typing import Iterator, Sequence
 from probedyn.core import io
 from probedyn.core.errors import ProbedynError, ResourceError
 
-#: CPU seconds of each section in the full (not quick) report, measured on main c8a02dc
-#: (benchmarks/results/report-times-s4.json, "before_cold"); only the ORDER matters: the
-#: parallel runner starts the longest first. Sections not listed count as 5 s.
+#: CPU seconds of each section in the full (not quick) report, measured in the workers of a
+#: fresh-clone run (benchmarks/results/report-times-s4.json, "after_fresh_clone_cold_parallel");
+#: only the ORDER matters: the parallel runner starts the longest first. Sections not listed
+#: count as 5 s.
 EXPECTED_CPU_S: dict[str, float] = {
-    "The plain cantilever": 14.9,
-    "The smart probes: duo-bimorph and piezotube": 34.3,
-    "Piezoelectric actuation of the smart probes": 3.4,
-    "Path tracking and probe control": 3.1,
-    "Nano-friction and FFM line scans": 12.5,
-    "Tip-sample contact and adhesion-friction coupling": 10.2,
-    "Nano-pushing": 40.3,
-    "Two-mass stick-slip dynamics": 36.7,
-    "Schemes on probes reduced from their FEM": 34.5,
-    "Vibrational nano-placing": 15.2,
-    "Measured data: diagnosis": 3.7,
+    "The plain cantilever": 4.3,
+    "The smart probes: duo-bimorph and piezotube": 36.8,
+    "Piezoelectric actuation of the smart probes": 3.2,
+    "Path tracking and probe control": 5.1,
+    "Nano-friction and FFM line scans": 12.2,
+    "Tip-sample contact and adhesion-friction coupling": 10.5,
+    "Nano-pushing": 24.2,
+    "Two-mass stick-slip dynamics": 36.6,
+    "Schemes on probes reduced from their FEM": 32.9,
+    "Vibrational nano-placing": 15.4,
+    "Measured data: diagnosis": 3.4,
 }
 
 #: environment of the workers: one thread each for the numeric libraries
