@@ -107,6 +107,23 @@ def run(maxh: float, order: int, n_modes: int, pinvit: bool, threads: int) -> di
     return out
 
 
+def count(maxh: float, order: int) -> dict:
+    """Mesh only: the number of free DOFs of ``VectorH1(order)`` on Netgen's mesh for ``maxh``
+    (to find the maxh matching probedyn's DOFs before the timed runs)."""
+    from netgen.occ import X, Box, OCCGeometry, Pnt
+    from ngsolve import Mesh, VectorH1
+
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    box = Box(Pnt(0, -W / 2, -T / 2), Pnt(L, W / 2, T / 2))
+    box.faces.Min(X).name = "clamp"
+    mesh = Mesh(OCCGeometry(box).GenerateMesh(maxh=maxh))
+    fes = VectorH1(mesh, order=order, dirichlet="clamp")
+    free = sum(1 for f in fes.FreeDofs() if f)
+    return {"maxh": maxh, "order": order, "ne": int(mesh.ne), "dofs": int(free), "mesh_s": time.perf_counter() - t0,
+            "mesh_cpu_s": time.process_time() - c0}
+
+
 def maxh_for(dofs: float, order: int) -> float:
     """Netgen maxh giving about ``dofs`` unknowns (calibrated: 24.2k DOFs at maxh = 5 um, P2)."""
     per_vol = 24.2e3 / (5e-6) ** -3 * (order / 2) ** 3
@@ -121,7 +138,11 @@ def main() -> None:
     ap.add_argument("--modes", type=int, default=10)
     ap.add_argument("--pinvit", action="store_true")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--count", action="store_true", help="mesh only: print the DOFs for --maxh")
     a = ap.parse_args()
+    if a.count:
+        print(json.dumps(count(a.maxh, a.order)))
+        return
     maxh = a.maxh if a.maxh else maxh_for(a.dofs or 24e3, a.order)
     print(json.dumps(run(maxh, a.order, a.modes, a.pinvit, a.threads)))
 

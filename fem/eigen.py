@@ -67,6 +67,7 @@ PARDISO_OPTIONS: dict[str, int] = {
     "single": 0,          # iparm[27]: 1 = single-precision factors
     "refinement": 0,      # iparm[7]: max iterative refinement steps (0 = automatic)
     "ooc": 0,             # iparm[59]: 0 in-core, 2 out-of-core
+    "vbsr": -80,          # iparm[36]: 0 CSR; -t = variable block rows (VBSR): rows of >= t % equal pattern merged
 }
 
 
@@ -215,6 +216,7 @@ class _Pardiso:
         ip[24] = int(opts["parallel_solve"])
         ip[27] = int(opts["single"])
         ip[34] = 0  # one-based indexing
+        ip[36] = int(opts.get("vbsr", 0))
         ip[59] = int(opts["ooc"])
         self.mtype = int(mtype)
         self.n = U.shape[0]
@@ -266,7 +268,23 @@ class _Pardiso:
 
 
 def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
-    U = sp.triu(A, format="csr")
+    """PARDISO factorisation of ``A``.  With ``opts["single"]`` the factor is single precision
+    (``iparm[27] = 1``: matrix, right-hand sides and factor all float32) of the symmetrically
+    diagonally scaled ``D A D`` (``D = diag(A)^-1/2``, which lowers the condition number ~10x
+    for the elastic K), and every solve is refined in double precision: ``x += D S^-1 D (b - A x)``
+    until the correction is below 1e-12 of x, stops falling by 2x (the round-off floor of the
+    double residual) or ``opts["refinement"]`` sweeps (default 40).  A
+    float32 solve alone is NOT accurate for these matrices: cond(K) ~ 1.5e9 already at 12k DOFs
+    (cantilever, P2), so cond * eps32 >> 1 and its error is ~0.1-0.4 (SuperLU in float32 gives the
+    same; benchmarks/modal.py); each refinement sweep contracts the error by about that factor."""
+    single = bool(opts["single"])
+    d = None
+    if single:
+        d = 1.0 / np.sqrt(np.abs(A.diagonal()))
+        As = sp.csr_matrix(sp.diags(d) @ A @ sp.diags(d))
+        U = sp.triu(As, format="csr")
+    else:
+        U = sp.triu(A, format="csr")
     U.sort_indices()
     ps = _Pardiso(U, mtype, opts)
     t0 = time.perf_counter()
@@ -282,18 +300,34 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
         ps.free()
         raise SolverError("zero or negative pivot in SPD factorisation")
     n = A.shape[0]
+    info = {"analysis_s": t1 - t0, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
+            "mflops": int(ps.iparm[18]), "options": dict(opts)}
 
     def solve(b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=float)
         shape = b.shape
         # PARDISO reads a block of right-hand sides column by column: Fortran order
         bb = np.asfortranarray(b.reshape(n, -1))
-        x = ps.call(33, bb)
+        if not single:
+            x = ps.call(33, bb)
+            return np.ascontiguousarray(x).reshape(shape)
+        dd = d[:, None]
+        x = dd * ps.call(33, dd * bb)
+        max_sweeps = int(opts["refinement"]) or 40
+        sweeps, last = 0, np.inf
+        for sweeps in range(1, max_sweeps + 1):
+            dx = dd * ps.call(33, dd * np.asfortranarray(bb - A @ x))
+            x += dx
+            step = float(np.abs(dx).max() / max(np.abs(x).max(), 1e-300))
+            # converged, or at the round-off floor of the double residual (no longer 2x smaller)
+            if step <= 1e-12 or step > 0.5 * last:
+                break
+            last = step
+        info["refinement_sweeps"] = sweeps
         return np.ascontiguousarray(x).reshape(shape)
 
-    info = {"analysis_s": t1 - t0, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
-            "mflops": int(ps.iparm[18]), "options": dict(opts)}
-    return Factorization(solve, f"pardiso(mtype={mtype})", 0.0, ps.free, info)
+    return Factorization(solve, f"pardiso(mtype={mtype}{', single+refinement' if single else ''})", 0.0, ps.free,
+                         info)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -324,76 +358,102 @@ def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10) -> tup
 
 
 def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac: Factorization,
-                block: int | None = None, steps: int = 4, rtol: float = 1e-8, max_cycles: int = 10,
+                block: int | None = None, steps: int = 5, rtol: float = 1e-8, max_cycles: int = 10,
                 seed: int = 12345) -> tuple[np.ndarray, np.ndarray, int, dict]:
     """The ``n_modes`` eigenpairs of ``K x = lambda M x`` nearest ``sigma`` (from above for a
     shift below the spectrum) by block shift-invert Lanczos with ``fac`` = factorisation of
     ``K - sigma M`` (module docstring).
 
-    ``block`` right-hand sides per solve (default ``n_modes + max(4, n_modes // 2)``), ``steps``
-    Krylov blocks per cycle; the basis Q, ``M Q`` and ``K Q`` are kept, so each new vector costs
-    one solve, one product with M and one with K.  Convergence: the shift-invert residual of
-    every wanted Ritz pair, ``||OP x - theta x||_M / theta`` (``OP = (K - sigma M)^-1 M``,
-    ``theta = 1 / (lambda - sigma)``, x M-normalised), below ``rtol``; the eigenvalue error is of
-    the order of its square (times theta over the gap).  The vectors ``OP x`` of that test
-    continue the Krylov space of the next cycle (thick restart from the Ritz vectors), so no
-    solve is wasted.  Returns (eigenvalues ascending, M-orthonormal vectors, number of vectors
-    solved, info)."""
+    ``block`` right-hand sides per solve (default ``n_modes + max(2, n_modes // 4)``; at least
+    ``n_modes + 1``), at most ``steps + 1`` Krylov blocks before a thick restart from the ``block``
+    best Ritz vectors.  For every block ``Q_j`` of the M-orthonormal basis the code keeps ``M Q_j``,
+    ``K Q_j`` and its image ``OP Q_j`` (``OP = (K - sigma M)^-1 M``, one block solve): so after each
+    solve the Rayleigh-Ritz pairs of ``(K, M)`` on the basis and their shift-invert residuals
+    ``||OP x - theta x||_M / theta`` (``theta = x^T M OP x``, x M-normalised) are known exactly
+    without a further solve, the iteration stops at the first solve after which every wanted pair
+    is below ``rtol`` (eigenvalue error of the order of its square times theta over the gap), and
+    the next Krylov block is ``OP`` of the last one, M-orthogonalised against the basis (two passes
+    of classical Gram-Schmidt).  Returns (eigenvalues ascending, M-orthonormal vectors, number of
+    vectors solved, info)."""
     n = K.shape[0]
-    b = int(block or n_modes + max(4, n_modes // 2))
+    b = int(block or n_modes + max(2, n_modes // 4))
     b = max(n_modes + 1, min(b, n // 3))
+    max_blocks = max(2, int(steps) + 1)
+    cap = max_blocks * b
+    # the basis Q and M Q, K Q, OP Q in preallocated column buffers; the projections Q^T K Q and
+    # Q^T M Q are extended block by block (each step costs O(n m b), not O(n m^2))
+    Qb, MQb, KQb, OQb = (np.empty((n, cap), order="F") for _ in range(4))
+    A_r, B_r = np.zeros((cap, cap)), np.zeros((cap, cap))
     rng = np.random.default_rng(seed)
-    W = fac.solve(M @ rng.standard_normal((n, b)))
-    V, MV = _m_orthonormalize(W, M @ W)
-    W = fac.solve(MV)
-    n_solved = 2 * b
-    KV = K @ V
-    info: dict[str, Any] = {"block": b, "steps": steps, "cycles": 0}
+    W = fac.solve(M @ rng.standard_normal((n, b)))  # one smoothing solve: a start rich in low modes
+    W, MW = _m_orthonormalize(W, M @ W)
+    m = 0
+    n_solved = b
+    info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0}
+
+    def append(W: np.ndarray, MW: np.ndarray, KW: np.ndarray | None = None, OW: np.ndarray | None = None) -> int:
+        nonlocal m, n_solved
+        k = W.shape[1]
+        sl = slice(m, m + k)
+        Qb[:, sl], MQb[:, sl] = W, MW
+        KQb[:, sl] = K @ W if KW is None else KW
+        if OW is None:
+            OQb[:, sl] = fac.solve(MW)
+            n_solved += k
+        else:
+            OQb[:, sl] = OW
+        A_r[: m + k, sl] = Qb[:, : m + k].T @ KQb[:, sl]
+        B_r[: m + k, sl] = Qb[:, : m + k].T @ MQb[:, sl]
+        A_r[sl, :m], B_r[sl, :m] = A_r[:m, sl].T, B_r[:m, sl].T
+        m += k
+        return k
+
+    append(W, MW)
     prev = None
-    for cycle in range(max_cycles):
-        Q, MQ, KQ = [V], [MV], [KV]
-        for step in range(steps):
-            if step > 0:
-                W = fac.solve(MQ[-1])
-                n_solved += W.shape[1]
-            Qa, MQa = np.hstack(Q), np.hstack(MQ)
-            for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
-                W = W - Qa @ (MQa.T @ W)
-            W, MW = _m_orthonormalize(W, M @ W)
-            if W.shape[1] == 0:
-                break
-            Q.append(W)
-            MQ.append(MW)
-            KQ.append(K @ W)
-        Qa, MQa, KQa = np.hstack(Q), np.hstack(MQ), np.hstack(KQ)
-        A_r = Qa.T @ KQa
-        B_r = Qa.T @ MQa
-        w, Y = sla.eigh(0.5 * (A_r + A_r.T), 0.5 * (B_r + B_r.T))
+    for _it in range(max_cycles * max_blocks):
+        Ar, Br = A_r[:m, :m], B_r[:m, :m]
+        w, Y = sla.eigh(0.5 * (Ar + Ar.T), 0.5 * (Br + Br.T))
         order = np.argsort(np.abs(w - sigma))
-        w, Y = w[order][:b], Y[:, order][:, :b]
-        X, MX, KX = Qa @ Y, MQa @ Y, KQa @ Y
-        W = fac.solve(MX)  # OP x: the residual test and the next cycle's first Krylov block
-        n_solved += b
+        w, Y = w[order], Y[:, order]
+        Yw = Y[:, :n_modes]
+        X, MX, OX = Qb[:, :m] @ Yw, MQb[:, :m] @ Yw, OQb[:, :m] @ Yw
         # theta = x^T M OP x (not 1 / (lambda - sigma): for rigid-body modes lambda is round-off
         # and lambda - sigma would not be accurate, while OP x is)
-        theta = np.einsum("ij,ij->j", MX, W)
-        R = W[:, :n_modes] - X[:, :n_modes] * theta[:n_modes]
-        res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, M @ R))) / np.abs(theta[:n_modes])
-        info["cycles"] = cycle + 1
+        theta = np.einsum("ij,ij->j", MX, OX)
+        R = OX - X * theta
+        res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, M @ R))) / np.abs(theta)
         info["residuals"] = res
         if np.all(res < rtol):
             break
-        # round-off floor: a residual that no longer falls (by 2x per cycle) is as good as it gets
+        # round-off floor: a residual that no longer falls (by 2x per solve) is as good as it gets
         # in double precision; below FLOOR_OK the eigenvalues are still accurate to ~1e-10
         if prev is not None and res.max() > 0.5 * prev and res.max() < FLOOR_OK:
             info["floor"] = True
             break
         prev = float(res.max())
-        V, MV, KV = X, MX, KX
+        if m + b > cap:  # thick restart from the b best Ritz vectors (their images known: no solve)
+            if info["cycles"] >= max_cycles:
+                raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
+                                  f"{max_cycles} cycles)")
+            Yb = Y[:, :b]
+            keep = [Qb[:, :m] @ Yb, MQb[:, :m] @ Yb, KQb[:, :m] @ Yb, OQb[:, :m] @ Yb]
+            m = 0
+            append(*keep)
+            info["cycles"] += 1
+            info["restarts"] += 1
+        W = OQb[:, m - b: m] if m >= b else OQb[:, :m]
+        Qa, MQa = Qb[:, :m], MQb[:, :m]
+        for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
+            W = W - Qa @ (MQa.T @ W)
+        W, MW = _m_orthonormalize(W, M @ W)
+        if W.shape[1] == 0:  # invariant subspace: nothing new to add
+            break
+        append(W, MW)
     else:
-        raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
-                          f"{max_cycles} cycles)")
-    return w[:n_modes], X[:, :n_modes], n_solved, info
+        raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e})")
+    w = w[:n_modes]
+    o = np.argsort(w)
+    return w[o], X[:, o], n_solved, info
 
 
 def shift_invert_eigsh(
