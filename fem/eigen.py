@@ -7,12 +7,12 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
 * ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
-  block of 16 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
+  block of 12 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
   (``OP = (K - sigma M)^-1 M``), M-orthonormalised block by block (two passes of classical
-  Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it and stops when
-  every wanted pair's residual ``||K x - lambda M x|| / ||K x||`` is below ``rtol``
-  (eigenvalue error ~ residual^2: 1e-9 residuals give frequencies to ~1e-12); otherwise it
-  restarts from the best Ritz vectors.
+  Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it after every block
+  solve and stops as soon as every wanted pair's shift-invert residual (exact, from the kept
+  images ``OP Q``: no extra solve) is below ``rtol`` (eigenvalue error ~ residual^2); after
+  ``steps + 1`` blocks it restarts from the best Ritz vectors.
 * ``method="arpack"``: ARPACK (``scipy.sparse.linalg.eigsh(..., OPinv=...)``) in shift-invert
   mode, one right-hand side per step (the reference; the benchmark compares the two).
 
@@ -26,8 +26,10 @@ matrix copy or hash.  Settings (:data:`PARDISO_OPTIONS`, each measured in benchm
 265k and 540k DOFs, docs/fem.md): ordering ``iparm[1]`` (0 minimum degree, 2 METIS, 3 parallel
 METIS), ``iparm[23]`` parallel factorisation algorithm (0 classic, 1 two-level), ``iparm[24]``
 forward/backward substitution (0 sequential, 2 parallel), ``iparm[27]`` single-precision
-factors (with ``iparm[7]`` iterative-refinement steps against the double matrix), ``iparm[59]``
-in-core (0) or out-of-core (2).
+factors (float32 matrix and factor; each solve then refined against the double matrix in
+double precision until its backward error is at the double level, :func:`_pardiso`),
+``iparm[36]`` matrix format (0 CSR, -80 VBSR: rows of >= 80 % equal pattern merged into
+blocks, the default), ``iparm[59]`` in-core (0) or out-of-core (2).
 
 Factorisation reuse: inside ``with reuse_factorizations():`` a matrix already factorised in that
 block (same shape, pattern and values: a BLAKE2 digest of its CSR arrays) is not factorised
