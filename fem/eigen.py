@@ -7,7 +7,7 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
 * ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
-  block of 12 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
+  block of 6-15 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
   (``OP = (K - sigma M)^-1 M``), M-orthonormalised block by block (two passes of classical
   Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it after every block
   solve and stops as soon as every wanted pair's shift-invert residual (exact, from the kept
@@ -352,27 +352,32 @@ class EigenResult:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10,
+                      max_cols: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormal basis of span(W) given ``MW = M W`` (directions whose relative Gram
     eigenvalue is below ``drop`` are dropped); returns (W', M W')."""
     G = W.T @ MW
     G = 0.5 * (G + G.T)
     g, V = np.linalg.eigh(G)
     keep = g > drop * max(float(g.max()), 1e-300)
+    if max_cols is not None and keep.sum() > max_cols:  # the max_cols strongest directions
+        keep &= g >= np.sort(g)[-max_cols]
     C = V[:, keep] / np.sqrt(g[keep])
     return W @ C, MW @ C
 
 
 def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac: Factorization,
-                block: int | None = None, steps: int = 5, rtol: float = 1e-8, max_cycles: int = 10,
+                block: int | None = None, steps: int | None = None, rtol: float = 1e-8, max_cycles: int = 10,
                 seed: int = 12345) -> tuple[np.ndarray, np.ndarray, int, dict]:
     """The ``n_modes`` eigenpairs of ``K x = lambda M x`` nearest ``sigma`` (from above for a
     shift below the spectrum) by block shift-invert Lanczos with ``fac`` = factorisation of
     ``K - sigma M`` (module docstring).
 
-    ``block`` right-hand sides per solve (default ``n_modes + max(2, n_modes // 4)``; at least
-    ``n_modes + 1``), at most ``steps + 1`` Krylov blocks before a thick restart from the ``block``
-    best Ritz vectors.  For every block ``Q_j`` of the M-orthonormal basis the code keeps ``M Q_j``,
+    ``block`` right-hand sides per solve (default ``max(4, n_modes // 2 + 1)``: 6 for 10 modes,
+    which needed 54 vectors and 0.9x the CPU time of a block of 12 with 84 vectors at 68.5k DOFs;
+    blocks of at least the largest eigenvalue multiplicity wanted), ``steps + 1`` blocks (default
+    about ``6 (n_modes + 2) / block``, 6 to 12) before a thick restart from the
+    ``max(block, n_modes + 2)`` best Ritz vectors.  For every block ``Q_j`` of the M-orthonormal basis the code keeps ``M Q_j``,
     ``K Q_j`` and its image ``OP Q_j`` (``OP = (K - sigma M)^-1 M``, one block solve): so after each
     solve the Rayleigh-Ritz pairs of ``(K, M)`` on the basis and their shift-invert residuals
     ``||OP x - theta x||_M / theta`` (``theta = x^T M OP x``, x M-normalised) are known exactly
@@ -382,10 +387,11 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     of classical Gram-Schmidt).  Returns (eigenvalues ascending, M-orthonormal vectors, number of
     vectors solved, info)."""
     n = K.shape[0]
-    b = int(block or n_modes + max(2, n_modes // 4))
-    b = max(n_modes + 1, min(b, n // 3))
-    max_blocks = max(2, int(steps) + 1)
-    cap = max_blocks * b
+    b = int(block or max(4, n_modes // 2 + 1))
+    b = max(1, min(b, n // 3))
+    keep_r = max(b, n_modes + 2)  # Ritz vectors kept at a thick restart
+    max_blocks = max(2, int(steps) + 1) if steps else max(6, min(12, -(-6 * (n_modes + 2) // b)))
+    cap = max(max_blocks * b, keep_r + 2 * b, n_modes + 2 * b)
     # the basis Q and M Q, K Q, OP Q in preallocated column buffers; the projections Q^T K Q and
     # Q^T M Q are extended block by block (each step costs O(n m b), not O(n m^2))
     Qb, MQb, KQb, OQb = (np.empty((n, cap), order="F") for _ in range(4))
@@ -417,6 +423,16 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     append(W, MW)
     prev = None
     for _it in range(max_cycles * max_blocks):
+        if m < n_modes + 1:  # too few basis vectors for the wanted pairs yet (block < n_modes)
+            W = OQb[:, m - b: m]
+            Qa, MQa = Qb[:, :m], MQb[:, :m]
+            for _pass in range(2):
+                W = W - Qa @ (MQa.T @ W)
+            W, MW = _m_orthonormalize(W, M @ W)
+            if W.shape[1] == 0:
+                raise SolverError("block eigen-solver: Krylov space exhausted before n_modes vectors")
+            append(W, MW)
+            continue
         Ar, Br = A_r[:m, :m], B_r[:m, :m]
         w, Y = sla.eigh(0.5 * (Ar + Ar.T), 0.5 * (Br + Br.T))
         order = np.argsort(np.abs(w - sigma))
@@ -441,17 +457,19 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
             if info["cycles"] >= max_cycles:
                 raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
                                   f"{max_cycles} cycles)")
-            Yb = Y[:, :b]
+            Yb = Y[:, :keep_r]
             keep = [Qb[:, :m] @ Yb, MQb[:, :m] @ Yb, KQb[:, :m] @ Yb, OQb[:, :m] @ Yb]
             m = 0
             append(*keep)
             info["cycles"] += 1
             info["restarts"] += 1
-        W = OQb[:, m - b: m] if m >= b else OQb[:, :m]
+            W = OQb[:, :m]  # the kept vectors' residual directions span (about) one block
+        else:
+            W = OQb[:, m - b: m]
         Qa, MQa = Qb[:, :m], MQb[:, :m]
         for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
             W = W - Qa @ (MQa.T @ W)
-        W, MW = _m_orthonormalize(W, M @ W)
+        W, MW = _m_orthonormalize(W, M @ W, max_cols=b)
         if W.shape[1] == 0:  # invariant subspace: nothing new to add
             break
         append(W, MW)
