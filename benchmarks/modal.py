@@ -213,7 +213,11 @@ def hex_default() -> dict:
 
 def run_sub(args: list[str], python: str | None = None, script: str | None = None) -> dict:
     cmd = [python or sys.executable, script or __file__, *args]
+    import tempfile
+
     env = dict(os.environ, OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"))
+    # a fresh cache for every run: a repeated size must mesh again, not read the previous run's mesh
+    env["PROBEDYN_CACHE"] = tempfile.mkdtemp(prefix="probedyn-bench-")
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if p.returncode != 0:
         raise SystemExit(f"benchmark step {args} failed:\n{p.stderr[-2000:]}")
