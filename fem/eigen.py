@@ -356,6 +356,8 @@ def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10,
                       max_cols: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormal basis of span(W) given ``MW = M W`` (directions whose relative Gram
     eigenvalue is below ``drop`` are dropped); returns (W', M W')."""
+    if W.shape[1] == 0:
+        return W, MW
     G = W.T @ MW
     G = 0.5 * (G + G.T)
     g, V = np.linalg.eigh(G)
@@ -403,9 +405,12 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     n_solved = b
     info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0}
 
+    last = 0  # first column of the last block appended
+
     def append(W: np.ndarray, MW: np.ndarray, KW: np.ndarray | None = None, OW: np.ndarray | None = None) -> int:
-        nonlocal m, n_solved
+        nonlocal m, n_solved, last
         k = W.shape[1]
+        last = m
         sl = slice(m, m + k)
         Qb[:, sl], MQb[:, sl] = W, MW
         KQb[:, sl] = K @ W if KW is None else KW
@@ -424,7 +429,7 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     prev = None
     for _it in range(max_cycles * max_blocks):
         if m < n_modes + 1:  # too few basis vectors for the wanted pairs yet (block < n_modes)
-            W = OQb[:, m - b: m]
+            W = OQb[:, last:m]
             Qa, MQa = Qb[:, :m], MQb[:, :m]
             for _pass in range(2):
                 W = W - Qa @ (MQa.T @ W)
@@ -465,7 +470,7 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
             info["restarts"] += 1
             W = OQb[:, :m]  # the kept vectors' residual directions span (about) one block
         else:
-            W = OQb[:, m - b: m]
+            W = OQb[:, last:m]
         Qa, MQa = Qb[:, :m], MQb[:, :m]
         for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
             W = W - Qa @ (MQa.T @ W)
