@@ -26,8 +26,18 @@ the time for the first ten modes within 0.1 % of converged in both codes.
 Usage::
 
     .venv/bin/python benchmarks/modal.py --quick                      # two small sizes
-    .venv/bin/python benchmarks/modal.py --sizes 3,5,6.5 --ngsolve /work/ngsolve-venv/bin/python \\
-        --out benchmarks/results/modal.txt                              # 68k, 265k, 540k DOFs
+    # session 4 (benchmarks/results/modal-s4*.txt): matched DOFs, two runs per code, min taken
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-265k.txt
+    .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-510k.txt
+
+The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
+/work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
+smooth in maxh (``ngsolve_peer.py --count --maxh H`` meshes only and prints the DOFs; measured
+values in ``ngsolve_peer.MEASURED_P2``): maxh 2.045 um gives 268,128 DOFs for probedyn's
+264,588 (t/5), and 1.35 um 509,886 (1.34 um jumps to 1,089,375), so the "540k" size is
+matched at 509k with probedyn's t/6.35 (508,824).
 
 265k DOFs need ~3 GiB, 540k ~7 GiB per process (check ``free -g``); the times depend on the
 load of the machine: compare the ratios of one run.
@@ -60,11 +70,11 @@ PARDISO_VARIANTS = [
     ("VBSR, ordering 0 (minimum degree)", {"ordering": 0}),
     ("CSR, two-level parallel factorisation (iparm[23]=1)", {"vbsr": 0, "factor_algorithm": 1}),
     ("VBSR, parallel forward/backward (iparm[24]=2)", {"parallel_solve": 2}),
-    ("float32 factor of DKD (iparm[27]=1) + refinement in double", {"single": 1}),
+    ("float32 factor (iparm[27]=1) + refinement in double", {"single": 1}),
     ("CSR, out-of-core (iparm[59]=2)", {"vbsr": 0, "ooc": 2}),
 ]
 #: above 400k DOFs only these (each factorisation takes minutes on the shared machine)
-LARGE_VARIANTS = ("CSR (iparm[36]=0) [previous default]", "float32 factor of DKD (iparm[27]=1) + refinement in double")
+LARGE_VARIANTS = ("CSR (iparm[36]=0) [previous default]", "float32 factor (iparm[27]=1) + refinement in double")
 
 
 def clock() -> tuple[float, float]:

@@ -17,6 +17,7 @@ Usage (one size per call; prints one JSON line)::
 
     /work/ngsolve-venv/bin/python benchmarks/ngsolve_peer.py --dofs 265000 [--order 2] [--modes 10]
     /work/ngsolve-venv/bin/python benchmarks/ngsolve_peer.py --maxh 5e-6 --order 3
+    /work/ngsolve-venv/bin/python benchmarks/ngsolve_peer.py --count --maxh 2.045e-6   # mesh only: DOFs
 """
 
 from __future__ import annotations
