@@ -279,7 +279,9 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
     ``opts["refinement"]`` sweeps (default 40).  A
     float32 solve alone is NOT accurate for these matrices: cond(K) ~ 1.5e9 already at 12k DOFs
     (cantilever, P2), so cond * eps32 >> 1 and its error is ~0.1-0.4 (SuperLU in float32 gives the
-    same; benchmarks/modal.py); each refinement sweep contracts the error by about that factor."""
+    same; benchmarks/modal.py); each refinement sweep contracts the error by about that factor
+    on small models (7.5k-12k DOFs: 10-15 sweeps) and the refinement stalls (SolverError) on
+    the 265k and 509k P2 cantilevers (benchmarks/results/modal-s4.txt)."""
     single = bool(opts["single"])
     U = sp.triu(A, format="csr")
     U.sort_indices()
