@@ -267,6 +267,9 @@ class Fitter:
         for i, combo in enumerate(_start_sets(new)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
             if only_starts is None or i in only_starts:
                 starts.append({**ref.values, **combo})
+        extra = getattr(self.problem, "nested_starts", None)  # data-derived starts a problem may offer
+        if extra is not None and only_starts is None:
+            starts += [dict(x) for x in extra(dict(ref.values), tuple(ref.causes), new, mask)]
         f = self.fit(causes, starts, mask)
         if only_starts is not None and f.start != "0":
             f.start = str(only_starts[int(f.start) - 1])

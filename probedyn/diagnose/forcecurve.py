@@ -85,6 +85,14 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
     Es = _num(meta, "sample", "E", side, default=0.0, lo=0.0, hi=2e12, unit="Pa") or None
     nus = _num(meta, "sample", "nu", side, default=0.3, lo=-0.99, hi=0.5)
     sig, stated = _noise(meta, side, "force", 0.0, 1e-15, 1e-4, "N")
+    if not stated and "deflection" in meta.get("noise", {}):
+        # the deflection noise in the unit of the deflection column (m, or V with the sensitivity)
+        if have[0] == "force_N":
+            raise DataFormatError(f"{side}: [noise] deflection needs a deflection column (the data give force_N: "
+                                  "state [noise] force in N)")
+        unit = "V" if have[0] == "deflection_V" else "m"
+        sd, stated = _noise(meta, side, "deflection", 0.0, 1e-15, 1e2 if unit == "V" else 1e-6, unit)
+        sig = k * sd * (sens if unit == "V" else 1.0)
     if not stated:  # from the point-to-point scatter of the far (non-contact) quarter of the approach
         za = np.argsort(z[seg == 0])[: max(10, (seg == 0).sum() // 4)]
         fa = F[seg == 0][za]
@@ -94,8 +102,14 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
     if Es is not None:
         known.add("modulus")
     common = dict(common, known=frozenset(known))
+    t = None
+    if "time_s" in d:
+        t = d["time_s"]
+        if np.any(np.isnan(t)) or np.any(np.diff(t) <= 0):
+            bad = int(np.nonzero(np.isnan(t[1:]) | ~(np.diff(t) > 0))[0][0]) + 1
+            raise col_error(d, "time_s", bad, "times must be given on every row and increase")
     return ForceData(**common, z=z, force=F, segment=seg, k=k, sensitivity=sens, tip_radius=R, E_tip=Et, nu_tip=nut,
-                     E_sample=Es, nu_sample=nus, sigma_force=sig, noise_stated=stated)
+                     E_sample=Es, nu_sample=nus, sigma_force=sig, noise_stated=stated, time=t)
 
 
 # ------------------------------------------------------------------------------------------
@@ -116,6 +130,7 @@ class ForceState:
     R: float  # tip radius [m]
     b0: float = 0.0
     b1: float = 0.0  # baseline tilt [N/m]
+    drift: float = 0.0  # force drift over the recording [N] (linear in time)
     contact: str | None = None  # registry contact model with adhesion (None: Hertz)
     W: float = 0.0  # work of adhesion [J/m^2]
     lam: float | None = None  # Maugis transition parameter (md)
@@ -186,7 +201,9 @@ def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n
     out = {}
     for branch, edge in (("loading", D0), ("unloading", D_min)):
         keep = Dc >= edge
-        Dt = np.linspace(min(d_lo / du, edge) - 1.0, edge, n_tail, endpoint=False)
+        # the tail ends exactly at the branch's edge (the fold: where the loading branch jumps into
+        # contact), so the jump is placed at the right piezo position and not one tail spacing early
+        Dt = np.linspace(min(d_lo / du, edge) - 1.0, edge, n_tail)
         Pt, _ = model.nd_tail(Dt)
         delta = np.concatenate([Dt, Dc[keep]]) * du
         P = np.concatenate([Pt, Pc[keep]]) * Pu
@@ -201,7 +218,8 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float) -> np.nda
     polylines (contact-radius parametrisation) and refined by Newton steps in A on the exact
     normalised curve (or in the penetration on the tail)."""
     zmin, zmax = float(z_rel.min()), float(z_rel.max())
-    lines = registry_polylines(model, min(zmin, 0.0) - 0.05 * span, max(zmax, 0.0) + 0.05 * span)
+    lines = registry_polylines(model, min(zmin, 0.0) - 0.05 * span, max(zmax, 0.0) + 0.05 * span, n_contact=500,
+                               n_tail=300)  # a bracket only: Newton refines on the exact curve
     sc = model.scales
     du, Pu = sc.d_unit, sc.P_unit
     F = np.empty(len(z_rel))
@@ -323,6 +341,11 @@ class ForceCurveProblem:
         self.groups = g
         self.group_labels = [f"{'approach' if i < 4 else 'retract'} points {i % 4 + 1}::4" for i in range(8)]
         self.cv_warm = True  # interleaved groups: folds start from the null and the full-data optimum
+        # recording time normalised to [-1/2, 1/2] (the row order where no time column is given:
+        # uniform sampling), for a drift of the deflection signal in time
+        t = d.time if d.time is not None else np.arange(self.n, dtype=float)
+        self.tau = (t - 0.5 * (t.min() + t.max())) / max(float(np.ptp(t)), 1e-300)
+        self.separation = False  # residuals in the force-separation domain (starting values only)
         # starting values: contact point where the approach force first exceeds 20 noise levels above
         # its far baseline (fitted as a line over the far half)
         app = d.segment == 0
@@ -331,6 +354,7 @@ class ForceCurveProblem:
         za, fa = za[o], fa[o]
         far = slice(0, max(5, len(za) // 3))
         b1, b0 = np.polyfit(za[far], fa[far], 1)
+        self.far_line = (float(b0), float(b1))  # baseline of the far third of the approach (no interaction)
         excess = fa - (b0 + b1 * za)
         thr = 20 * self.sigma
         above = np.nonzero(excess > thr)[0]
@@ -381,10 +405,99 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         F = self._curve(st, d.z - st.z_c, d.segment, d.k)
-        F = F + st.b0 + st.b1 * d.z
+        F = F + st.b0 + st.b1 * d.z + st.drift * self.tau
         for tf in st.transforms:
             F = tf(self, F)
         return F
+
+    def _separation_residuals(self, values, causes) -> np.ndarray:
+        """Residuals in the force-separation domain: the measured force minus the baseline, against
+        the contact law on the segment's branch at the measured penetration
+        ``delta = z - z_c - F / k``. No folds (the jumps of the lever are absent in this domain), so
+        the misfit is smooth in the contact point and the law's parameters; used only to find
+        starting values of nested fits (the noise of F enters delta through F / k)."""
+        d = self.data
+        st = self.state(values, causes)
+        Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
+        delta = d.z - st.z_c - Fx / d.k
+        Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
+        P = np.empty(self.n)
+        dP = np.empty(self.n)
+        if model is None:
+            P[:] = Pl(delta)
+            dP[:] = 2.0 * st.E_star * math.sqrt(st.R) * np.sqrt(np.maximum(delta, 0.0))
+        else:
+            lines = registry_polylines(model, float(delta.min()) - 0.05 * self.span, float(delta.max()) + 0.05 * self.span,
+                                       n_contact=600, n_tail=200)
+            for s_, branch in ((0, "loading"), (1, "unloading")):
+                sel = d.segment == s_
+                x, y, _ = lines[branch]
+                P[sel] = np.interp(delta[sel], x, y)
+                h = 1e-11  # central difference on the polyline (it has a repeated abscissa at a jump)
+                dP[sel] = (np.interp(delta[sel] + h, x, y) - np.interp(delta[sel] - h, x, y)) / (2 * h)
+        # effective variance: the force noise enters delta through F / k, so the misfit's standard
+        # deviation is sigma (1 + P'(delta) / k) on a stable branch (P' > -k)
+        r = (Fx - P) / (self.sigma * np.maximum(1.0 + dP / d.k, 0.1))
+        # robust (soft-l1) misfit: near a fold the noise can move a point's measured penetration
+        # across the end of its branch, where the law jumps; such points must not steer the start
+        return np.sign(r) * np.sqrt(2.0 * (np.sqrt(1.0 + r * r) - 1.0))
+
+    def nested_starts(self, ref_values: dict, ref_causes: tuple, new: tuple, mask=None) -> list[dict]:
+        """Data-derived starting values for fitting ``new`` causes on top of a fit (``ref_values`` of
+        the model with ``ref_causes``)
+        (called by the engine besides the null start and the declared starts): a fit in the
+        force-separation domain (:meth:`_separation_residuals`, smooth where the lever curve
+        jumps) from the works of adhesion that give the measured pull-off force under the DMT
+        (2 pi W R) and the JKR (3/2 pi W R) limits and Maugis' lambda at 0.3 and 3. Only the
+        training points (``mask``) are used."""
+        from probedyn.diagnose.engine import Fitter  # the engine imports no problem module
+
+        laws = [c for c in new if any(p.name == "W" for p in c.params)]
+        if not laws:
+            return []
+        d = self.data
+        m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
+        r_ref = self.residuals(ref_values, tuple(ref_causes))[m]
+        n_m = int(m.sum())
+        if float(np.sum(r_ref**2)) < n_m + 3.0 * math.sqrt(2.0 * n_m):
+            return []  # the reference already fits within the noise: no minimum to escape from
+        ret = m & (d.segment == 1)
+        if not ret.any():
+            return []
+        exc = d.force[ret] - ref_values["b0"] - ref_values["b1"] * d.z[ret]
+        F_po = max(-float(np.min(exc)), 3.0 * self.sigma)
+        R = d.tip_radius * ref_values.get("r_ratio", 1.0)
+        W_hi = min(p.hi for c in laws for p in c.params if p.name == "W")
+        starts = []
+        # the contact point near the approach's deepest attraction (the snap-in lands in contact),
+        # below the far baseline; and the reference fit's own (biased by the adhesion)
+        app = m & (d.segment == 0)
+        exa = d.force[app] - self.far_line[0] - self.far_line[1] * d.z[app]
+        zc_min = float(d.z[app][int(np.argmin(exa))])
+        zc_lo, zc_hi = self.base_params[0].lo, self.base_params[0].hi
+        far = {**ref_values, "b0": self.far_line[0], "b1": self.far_line[1]}
+        bases = [ref_values, {**far, "z_c": min(max(zc_min, zc_lo), zc_hi)}]
+        for c_po in (2.0, 1.5):
+            W0 = min(F_po / (c_po * math.pi * R), 0.9 * W_hi)
+            lams = (0.3, 3.0) if any(p.name == "lam" for c in laws for p in c.params) else (None,)
+            for lam in lams:
+                for base in bases:
+                    st = dict(base, W=W0)
+                    if lam is not None:
+                        st["lam"] = lam
+                    starts.append(st)
+        F = Fitter(self)
+        out = []
+        self.separation = True
+        try:  # every start's optimum is offered (the separation-domain misfit ranks them only roughly)
+            for st in starts:
+                try:
+                    out.append(dict(F.fit(tuple(ref_causes) + tuple(new), [st], mask).values))
+                except ProbedynError:
+                    continue
+        finally:
+            self.separation = False
+        return out
 
     def _curve(self, st: ForceState, z_rel, segment, k):
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
@@ -394,6 +507,8 @@ class ForceCurveProblem:
 
     def residuals(self, values, causes=()) -> np.ndarray:
         try:
+            if self.separation:
+                return self._separation_residuals(values, causes)
             m = self.predict(values, causes)
         except (ProbedynError, FloatingPointError, ValueError):
             return np.full(self.n, 1e6)

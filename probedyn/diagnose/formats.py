@@ -240,6 +240,7 @@ class ForceData(Measurement):
     nu_sample: float = 0.3
     sigma_force: float | None = None
     noise_stated: bool = True
+    time: np.ndarray | None = None  # recording time [s] (column time_s); None: the row order at uniform sampling
 
 
 # ------------------------------------------------------------------------------------------
