@@ -61,8 +61,11 @@ from __future__ import annotations
 
 import itertools
 import math
+import multiprocessing
+import os
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -135,11 +138,47 @@ class Fit:
 
 
 class Fitter:
-    """Least-squares fits of a problem's baseline and its nested extensions."""
+    """Least-squares fits of a problem's baseline and its nested extensions.
+
+    Independent fits (the candidate causes, the cross-validation folds) go through
+    :meth:`map_nested`: in a pool of ``problem.workers`` forked processes when the problem asks
+    for one (friction: every evaluation is an integration), else one after the other. The
+    results are the same either way (each fit is deterministic)."""
 
     def __init__(self, problem) -> None:
         self.problem = problem
         self.nfev = 0
+        self._pool = None
+
+    def _workers(self) -> int:
+        w = int(getattr(self.problem, "workers", 1) or 1)
+        return max(1, min(w, os.cpu_count() or 1))
+
+    def open_pool(self) -> None:
+        """Fork the worker processes now (they inherit the problem as it is at this moment)."""
+        global _POOL_FITTER
+        if self._pool is None and self._workers() > 1 and "fork" in multiprocessing.get_all_start_methods():
+            _POOL_FITTER = self
+            self._pool = ProcessPoolExecutor(self._workers(), mp_context=multiprocessing.get_context("fork"))
+
+    def close_pool(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def map_nested(self, jobs: list[tuple]) -> list["Fit"]:
+        """``jobs``: ``(ref, new_causes, mask)`` (a nested fit) or ``(None, causes, mask)`` (the
+        baseline from its starts when ``causes`` is empty). Returns the fits in order."""
+        if self._pool is None or len(jobs) < 2:
+            return [_run_job(self, j) for j in jobs]
+        by_key = {c.key: c for c in self.problem.causes}
+        packed = [(ref, tuple(c.key for c in new), mask) for ref, new, mask in jobs]
+        out = []
+        for fit, nfev in self._pool.map(_pool_job, packed):
+            self.nfev += nfev
+            fit.causes = tuple(by_key.get(c.key, c) for c in fit.causes)  # the parent's cause objects
+            out.append(fit)
+        return out
 
     def residuals(self, values: dict[str, float], causes) -> np.ndarray:
         self.nfev += 1
@@ -162,12 +201,29 @@ class Fitter:
             if hasattr(self.problem, "train_mask"):
                 self.problem.train_mask = None
 
-    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free) -> Fit:
+    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free, rounds: int = 3) -> Fit:
         """Least squares from every start. A problem with a nuisance that is profiled rather than
         fitted (``problem.nuisance(values, causes)``, e.g. the lattice registry of friction scans)
         holds it fixed during each least-squares run and re-profiles it between runs (at most three
-        rounds; a re-profiled nuisance is kept only if it lowers chi^2)."""
+        rounds; a re-profiled nuisance is kept only if it lowers chi^2).
+
+        Screening (a problem declaring ``screen_nfev``, e.g. friction, where one evaluation is an
+        integration): with several starts, each start first gets ``screen_nfev`` evaluations (one
+        round), and only the best of them is run to convergence; the null start is among the
+        screened ones, so the nested-fit guarantee is unchanged."""
         prob = self.problem
+        screen = getattr(prob, "screen_nfev", None)
+        if screen and len(starts) > 1 and free and max_nfev is None:
+            scored = [self._fit(causes, [st], mask, fixed, screen, plist, free, rounds=1) for st in starts]
+            for si, f in enumerate(scored):
+                f.start = str(si)
+            f_s = min(scored, key=lambda f: f.chi2)
+            st = dict(f_s.values)
+            if f_s.nuisance is not None:
+                st["__nuisance__"] = f_s.nuisance
+            g = self._fit(causes, [st], mask, fixed, None, plist, free, rounds)
+            g.start = f_s.start
+            return g if g.chi2 <= f_s.chi2 else f_s
         has_nu = hasattr(prob, "nuisance")
         diff_step = getattr(prob, "diff_step", 1e-5)
         cap = max_nfev or getattr(prob, "nfev_per_param", 100) * (len(free) + 1)
@@ -199,7 +255,7 @@ class Fitter:
                 return r if _m is None else r[_m]
 
             res = None
-            for _round in range(3 if has_nu else 1):
+            for _round in range(rounds if has_nu else 1):
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", OptimizeWarning)
@@ -286,6 +342,28 @@ class Fitter:
         return f
 
 
+_POOL_FITTER: "Fitter | None" = None
+
+
+def _run_job(F: Fitter, job: tuple) -> "Fit":
+    ref, new, mask = job
+    if ref is None and not new:
+        return F.baseline(mask)
+    return F.nested(ref, tuple(new), mask)
+
+
+def _pool_job(packed: tuple) -> tuple["Fit", int]:
+    """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
+    F = _POOL_FITTER
+    ref, keys, mask = packed
+    by_key = {c.key: c for c in F.problem.causes}
+    if ref is not None:
+        ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
+    n0 = F.nfev
+    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask))
+    return fit, F.nfev - n0
+
+
 def _start_sets(causes) -> list[dict[str, float]]:
     """Declared (data-independent) starting points of the new causes' parameters besides the null
     start: a cause's own ``start_sets`` if it declares them, else the combinations of its
@@ -338,6 +416,16 @@ class CrossValidation:
         if hit is None:
             hit = []
             warm = getattr(self.F.problem, "cv_warm", False) and key in self.full_fits
+            if not warm:  # independent fold fits (in the worker pool when there is one)
+                masks = []
+                for fold in self.folds:
+                    mask = np.ones(self.n, bool)
+                    mask[fold] = False
+                    masks.append(mask)
+                refs = self.fold_fits(causes[:-1]) if causes else [None] * len(masks)
+                hit = self.F.map_nested([(r, causes[-1:] if causes else (), m) for r, m in zip(refs, masks)])
+                self._ref[key] = hit
+                return hit
             for fold in self.folds:
                 mask = np.ones(self.n, bool)
                 mask[fold] = False
@@ -531,8 +619,16 @@ def _check_baseline_identifiable(base: Fit) -> None:
 def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None,
              margin: float = EVIDENCE_MARGIN) -> dict[str, Any]:
     """Run the diagnosis on a problem object; return the JSON-able result (see module docstring)."""
-    t0 = time.perf_counter()
     F = Fitter(problem)
+    try:
+        return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin)
+    finally:
+        F.close_pool()
+
+
+def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float
+              ) -> dict[str, Any]:
+    t0 = time.perf_counter()
     n = len(problem.groups)
     folds = folds_of(problem.groups)
     use_cv = len(folds) >= 3
@@ -546,8 +642,9 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
     cv = CrossValidation(F, folds, n) if use_cv else None
     # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
-    for c in causes:
-        fit = F.nested(base, (c,))
+    F.open_pool()
+    fits = F.map_nested([(base, (c,), None) for c in causes])
+    for c, fit in zip(causes, fits):
         k = len(c.params)
         dchi2 = max(base.chi2 - fit.chi2, 0.0)
         thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
