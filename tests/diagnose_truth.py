@@ -561,7 +561,8 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
     k, m, Q = LEVER_FFM["k_x"], LEVER_FFM["m_x"], LEVER_FFM["Q_x"]
     eta = rng.uniform(3.0, 6.0)
     N1 = 5e-9
-    u0 = eta * k * a * a / (4 * math.pi**2) / N1  # U0 per unit load at the first load
+    # U0 per unit (total) load: eta is that of the first scan's corrugation, with or without adhesion
+    u0 = eta * k * a * a / (4 * math.pi**2) / (N1 + params.get("n_adh", 0.0))
     # thermal noise always; at T_COLD thermal activation stays within the noise, so it is the hidden effect only
     # where T = 300 K
     T = params.get("T", T_COLD)

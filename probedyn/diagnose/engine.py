@@ -167,12 +167,12 @@ class Fitter:
             self._pool = None
 
     def map_nested(self, jobs: list[tuple]) -> list["Fit"]:
-        """``jobs``: ``(ref, new_causes, mask)`` (a nested fit) or ``(None, causes, mask)`` (the
-        baseline from its starts when ``causes`` is empty). Returns the fits in order."""
+        """``jobs``: ``(ref, new_causes, mask[, warm])`` (a nested fit) or ``(None, (), mask[, warm])``
+        (the baseline), see :func:`_run_job`. Returns the fits in order."""
         if self._pool is None or len(jobs) < 2:
             return [_run_job(self, j) for j in jobs]
         by_key = {c.key: c for c in self.problem.causes}
-        packed = [(ref, tuple(c.key for c in new), mask) for ref, new, mask in jobs]
+        packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None) for j in jobs]
         out = []
         for fit, nfev in self._pool.map(_pool_job, packed):
             self.nfev += nfev
@@ -346,21 +346,31 @@ _POOL_FITTER: "Fitter | None" = None
 
 
 def _run_job(F: Fitter, job: tuple) -> "Fit":
-    ref, new, mask = job
+    """``(ref, new, mask[, warm])``: the baseline (``ref`` None, no ``new``) or a nested fit; with
+    ``warm`` (full-data optimum values) the baseline starts there only, and a nested fit from the
+    null start and from ``warm``'s values of the new parameters (the rest from ``ref``)."""
+    ref, new, mask = job[:3]
+    warm = job[3] if len(job) > 3 else None
+    new = tuple(new)
     if ref is None and not new:
-        return F.baseline(mask)
-    return F.nested(ref, tuple(new), mask)
+        return F.fit((), [dict(warm)], mask) if warm is not None else F.baseline(mask)
+    if warm is None:
+        return F.nested(ref, new, mask)
+    newp = [p.name for c in new for p in c.params]
+    f0 = F.nested(ref, new, mask, only_starts=[])
+    f1 = F.fit(tuple(ref.causes) + new, [{**ref.values, **{q: warm[q] for q in newp}}], mask)
+    return f1 if f1.chi2 < f0.chi2 else f0
 
 
 def _pool_job(packed: tuple) -> tuple["Fit", int]:
     """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
     F = _POOL_FITTER
-    ref, keys, mask = packed
+    ref, keys, mask, warm = packed
     by_key = {c.key: c for c in F.problem.causes}
     if ref is not None:
         ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
     n0 = F.nfev
-    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask))
+    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm))
     return fit, F.nfev - n0
 
 
@@ -411,39 +421,22 @@ class CrossValidation:
         self.full_fits: dict[tuple, Fit] = {}
 
     def fold_fits(self, causes: tuple) -> list[Fit]:
+        """The fits of ``causes`` on every fold's training data, nested in the folds' fits of
+        ``causes[:-1]``: from the declared (data-free) starts, or, for a problem with ``cv_warm``
+        (interleaved groups), from the null start and the full-data optimum of the new cause only.
+        Independent over the folds (in the worker pool when there is one)."""
         key = tuple(c.key for c in causes)
         hit = self._ref.get(key)
         if hit is None:
-            hit = []
             warm = getattr(self.F.problem, "cv_warm", False) and key in self.full_fits
-            if not warm:  # independent fold fits (in the worker pool when there is one)
-                masks = []
-                for fold in self.folds:
-                    mask = np.ones(self.n, bool)
-                    mask[fold] = False
-                    masks.append(mask)
-                refs = self.fold_fits(causes[:-1]) if causes else [None] * len(masks)
-                hit = self.F.map_nested([(r, causes[-1:] if causes else (), m) for r, m in zip(refs, masks)])
-                self._ref[key] = hit
-                return hit
+            wv = dict(self.full_fits[key].values) if warm else None
+            masks = []
             for fold in self.folds:
                 mask = np.ones(self.n, bool)
                 mask[fold] = False
-                if not causes:
-                    if warm:
-                        hit.append(self.F.fit((), [dict(self.full_fits[key].values)], mask))
-                    else:
-                        hit.append(self.F.baseline(mask))
-                else:
-                    ref = self.fold_fits(causes[:-1])[len(hit)]
-                    if warm:  # interleaved groups: start at the null and at the full-data optimum only
-                        full = self.full_fits[key].values
-                        newp = [p.name for p in causes[-1].params]
-                        f0 = self.F.nested(ref, causes[-1:], mask, only_starts=[])
-                        f1 = self.F.fit(causes, [{**ref.values, **{q: full[q] for q in newp}}], mask)
-                        hit.append(f1 if f1.chi2 < f0.chi2 else f0)
-                    else:
-                        hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
+                masks.append(mask)
+            refs = self.fold_fits(causes[:-1]) if causes else [None] * len(masks)
+            hit = self.F.map_nested([(r, causes[-1:] if causes else (), m, wv) for r, m in zip(refs, masks)])
             self._ref[key] = hit
         return hit
 

@@ -225,16 +225,24 @@ def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: 
     return max(Xc - Xs, 0.0), tab
 
 
+def _centre(scan: FrictionScan) -> float:
+    """The support position the lattice registry refers to: the middle of the scan. (Referred to
+    one end, a change of the lattice period moves every slip of the scan and the registry with it;
+    the least-squares fit of the period at a fixed registry then converges only slowly.)"""
+    return 0.5 * (float(scan.position.min()) + float(scan.position.max()))
+
+
 def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
                   train: int = 0) -> np.ndarray:
     """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
     the scan's samples, for lattice registry ``phis[train]``."""
     X = scan.position
+    Xc = _centre(scan)
     if st.bow:
         x0, x1 = X.min(), X.max()
         X = X + st.bow * (X - x0) * (x1 - X) / max(x1 - x0, 1e-30)
     w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
-    Xl = X * w - phis[train]
+    Xl = (X - Xc) * w - phis[train]  # the registry is the lattice's offset at the scan's centre
     V = scan.speed * w
     N = max(scan.load + st.n_adh, 0.0)
     U0 = st.u0 * N
@@ -548,7 +556,7 @@ class FrictionProblem:
             sel = seg[steady & mask[seg]]
             if len(sel) < 8:
                 continue
-            e = np.exp(-1j * kx * s.position[sel]) * np.hanning(len(sel))
+            e = np.exp(-1j * kx * (s.position[sel] - _centre(s))) * np.hanning(len(sel))
             acc += np.sum(m0[sel] * e) * np.conj(np.sum(target[sel] * e))
         if acc == 0:
             return 0.0
