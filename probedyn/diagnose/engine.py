@@ -320,7 +320,7 @@ class Fitter:
         newp = [p for c in new for p in c.params]
         start0 = {**ref.values, **{p.name: p.null for p in newp}}
         starts = [dict(start0, __nuisance__=ref.nuisance) if ref.nuisance is not None else start0]
-        for i, combo in enumerate(_start_sets(new)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
+        for i, combo in enumerate(_start_sets(new, ref.values)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
             if only_starts is None or i in only_starts:
                 starts.append({**ref.values, **combo})
         f = self.fit(causes, starts, mask)
@@ -374,13 +374,16 @@ def _pool_job(packed: tuple) -> tuple["Fit", int]:
     return fit, F.nfev - n0
 
 
-def _start_sets(causes) -> list[dict[str, float]]:
+def _start_sets(causes, ref_values: dict[str, float] | None = None) -> list[dict[str, float]]:
     """Declared (data-independent) starting points of the new causes' parameters besides the null
     start: a cause's own ``start_sets`` if it declares them, else the combinations of its
     parameters' starts (and nulls), those with the fewest parameters at their null first."""
     out: list[dict[str, float]] = []
     for c in causes:
-        sets = c.start_sets() if hasattr(c, "start_sets") else None
+        # a cause may declare its starts relative to the model it extends (``start_sets_from(ref_values)``:
+        # e.g. a compensating change of a baseline parameter that the cause's effect trades off against)
+        sets = (c.start_sets_from(dict(ref_values or {})) if hasattr(c, "start_sets_from")
+                else c.start_sets() if hasattr(c, "start_sets") else None)
         if sets is None:
             ps = list(c.params)
             alts = [[p.null, *p.starts] for p in ps]

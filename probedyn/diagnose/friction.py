@@ -518,7 +518,7 @@ class FrictionProblem:
         # need steps of 1e-3 of the parameter scale; fewer evaluations and starts per fit
         self.diff_step = 1e-3
         self.nfev_per_param = 20
-        self.max_starts = 2
+        self.max_starts = 4
         # every start of a fit gets SCREEN_NFEV evaluations, the best one is run to convergence; the
         # candidate causes and the cross-validation folds are fitted in WORKERS processes
         self.screen_nfev = SCREEN_NFEV
