@@ -358,7 +358,11 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
         return F.nested(ref, new, mask)
     newp = [p.name for c in new for p in c.params]
     f0 = F.nested(ref, new, mask, only_starts=[])
-    f1 = F.fit(tuple(ref.causes) + new, [{**ref.values, **{q: warm[q] for q in newp}}], mask)
+    # ``cv_warm_all`` (a rugged chi^2 surface, e.g. stick-slip patterns): the second start is the full-data
+    # optimum of every parameter, not only of the new ones (the fold's own optimum is still fitted on its
+    # training data; the held-out data only chose the basin)
+    w = dict(warm) if getattr(F.problem, "cv_warm_all", False) else {**ref.values, **{q: warm[q] for q in newp}}
+    f1 = F.fit(tuple(ref.causes) + new, [w], mask)
     return f1 if f1.chi2 < f0.chi2 else f0
 
 
