@@ -11,11 +11,18 @@ the registry's ``load_params``). Each sample is the model's lateral spring force
 sample's interval (``"interval-mean"``, an integrating detector), as the sidecar declares.
 
 Calibrated: ``u0`` [J/N] and the lattice period ``a`` (within 25 % of the periodogram's
-estimate); per scan the lattice registry (where the lattice sits relative to the support
-coordinate) is a nuisance profiled out by aligning the fundamental of model and data (their
-cross spectrum at 1/a over the steady parts of trace and retrace), then re-integrating at
-that registry. Cross-validation groups are the trace and the retrace of each scan (the
-registry of a held-out half is estimated from the other half only).
+estimate); per scan the lattice registry (where the lattice sits relative to the scan's centre)
+is a nuisance profiled out by aligning the fundamental of model and data (their cross spectrum
+at 1/a over the steady parts of trace and retrace), then re-integrating at that registry.
+Cross-validation groups are the trace and the retrace of each scan (the registry of a held-out
+half is estimated from the other half only). The model enters the data on its steady stick-slip
+cycle (a pre-roll in the scan direction); the data before their own first slip, which depend on
+the unrecorded history, are not used.
+
+Cost (one evaluation = one FFM integration per scan): every start of a multi-start fit is
+screened with ``SCREEN_NFEV`` evaluations and only the best continued; candidate causes and
+cross-validation folds are fitted in ``WORKERS`` forked processes; the folds start from the null
+and from the full-data optimum (the chi^2 surface of stick-slip traces is rugged).
 """
 
 from __future__ import annotations
