@@ -61,8 +61,11 @@ from __future__ import annotations
 
 import itertools
 import math
+import multiprocessing
+import os
 import time
 import warnings
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -135,11 +138,47 @@ class Fit:
 
 
 class Fitter:
-    """Least-squares fits of a problem's baseline and its nested extensions."""
+    """Least-squares fits of a problem's baseline and its nested extensions.
+
+    Independent fits (the candidate causes, the cross-validation folds) go through
+    :meth:`map_nested`: in a pool of ``problem.workers`` forked processes when the problem asks
+    for one (friction: every evaluation is an integration), else one after the other. The
+    results are the same either way (each fit is deterministic)."""
 
     def __init__(self, problem) -> None:
         self.problem = problem
         self.nfev = 0
+        self._pool = None
+
+    def _workers(self) -> int:
+        w = int(getattr(self.problem, "workers", 1) or 1)
+        return max(1, min(w, os.cpu_count() or 1))
+
+    def open_pool(self) -> None:
+        """Fork the worker processes now (they inherit the problem as it is at this moment)."""
+        global _POOL_FITTER
+        if self._pool is None and self._workers() > 1 and "fork" in multiprocessing.get_all_start_methods():
+            _POOL_FITTER = self
+            self._pool = ProcessPoolExecutor(self._workers(), mp_context=multiprocessing.get_context("fork"))
+
+    def close_pool(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+    def map_nested(self, jobs: list[tuple]) -> list["Fit"]:
+        """``jobs``: ``(ref, new_causes, mask[, warm])`` (a nested fit) or ``(None, (), mask[, warm])``
+        (the baseline), see :func:`_run_job`. Returns the fits in order."""
+        if self._pool is None or len(jobs) < 2:
+            return [_run_job(self, j) for j in jobs]
+        by_key = {c.key: c for c in self.problem.causes}
+        packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None) for j in jobs]
+        out = []
+        for fit, nfev in self._pool.map(_pool_job, packed):
+            self.nfev += nfev
+            fit.causes = tuple(by_key.get(c.key, c) for c in fit.causes)  # the parent's cause objects
+            out.append(fit)
+        return out
 
     def residuals(self, values: dict[str, float], causes) -> np.ndarray:
         self.nfev += 1
@@ -162,12 +201,29 @@ class Fitter:
             if hasattr(self.problem, "train_mask"):
                 self.problem.train_mask = None
 
-    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free) -> Fit:
+    def _fit(self, causes, starts, mask, fixed, max_nfev, plist, free, rounds: int = 3) -> Fit:
         """Least squares from every start. A problem with a nuisance that is profiled rather than
         fitted (``problem.nuisance(values, causes)``, e.g. the lattice registry of friction scans)
         holds it fixed during each least-squares run and re-profiles it between runs (at most three
-        rounds; a re-profiled nuisance is kept only if it lowers chi^2)."""
+        rounds; a re-profiled nuisance is kept only if it lowers chi^2).
+
+        Screening (a problem declaring ``screen_nfev``, e.g. friction, where one evaluation is an
+        integration): with several starts, each start first gets ``screen_nfev`` evaluations (one
+        round), and only the best of them is run to convergence; the null start is among the
+        screened ones, so the nested-fit guarantee is unchanged."""
         prob = self.problem
+        screen = getattr(prob, "screen_nfev", None)
+        if screen and len(starts) > 1 and free and max_nfev is None:
+            scored = [self._fit(causes, [st], mask, fixed, screen, plist, free, rounds=1) for st in starts]
+            for si, f in enumerate(scored):
+                f.start = str(si)
+            f_s = min(scored, key=lambda f: f.chi2)
+            st = dict(f_s.values)
+            if f_s.nuisance is not None:
+                st["__nuisance__"] = f_s.nuisance
+            g = self._fit(causes, [st], mask, fixed, None, plist, free, rounds)
+            g.start = f_s.start
+            return g if g.chi2 <= f_s.chi2 else f_s
         has_nu = hasattr(prob, "nuisance")
         diff_step = getattr(prob, "diff_step", 1e-5)
         cap = max_nfev or getattr(prob, "nfev_per_param", 100) * (len(free) + 1)
@@ -199,7 +255,7 @@ class Fitter:
                 return r if _m is None else r[_m]
 
             res = None
-            for _round in range(3 if has_nu else 1):
+            for _round in range(rounds if has_nu else 1):
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", OptimizeWarning)
@@ -264,7 +320,7 @@ class Fitter:
         newp = [p for c in new for p in c.params]
         start0 = {**ref.values, **{p.name: p.null for p in newp}}
         starts = [dict(start0, __nuisance__=ref.nuisance) if ref.nuisance is not None else start0]
-        for i, combo in enumerate(_start_sets(new)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
+        for i, combo in enumerate(_start_sets(new, ref.values)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
             if only_starts is None or i in only_starts:
                 starts.append({**ref.values, **combo})
         extra = getattr(self.problem, "nested_starts", None)  # data-derived starts a problem may offer
@@ -289,13 +345,52 @@ class Fitter:
         return f
 
 
-def _start_sets(causes) -> list[dict[str, float]]:
+_POOL_FITTER: "Fitter | None" = None
+
+
+def _run_job(F: Fitter, job: tuple) -> "Fit":
+    """``(ref, new, mask[, warm])``: the baseline (``ref`` None, no ``new``) or a nested fit; with
+    ``warm`` (full-data optimum values) the baseline starts there only, and a nested fit from the
+    null start and from ``warm``'s values of the new parameters (the rest from ``ref``)."""
+    ref, new, mask = job[:3]
+    warm = job[3] if len(job) > 3 else None
+    new = tuple(new)
+    if ref is None and not new:
+        return F.fit((), [dict(warm)], mask) if warm is not None else F.baseline(mask)
+    if warm is None:
+        return F.nested(ref, new, mask)
+    newp = [p.name for c in new for p in c.params]
+    f0 = F.nested(ref, new, mask, only_starts=[])
+    # ``cv_warm_all`` (a rugged chi^2 surface, e.g. stick-slip patterns): the second start is the full-data
+    # optimum of every parameter, not only of the new ones (the fold's own optimum is still fitted on its
+    # training data; the held-out data only chose the basin)
+    w = dict(warm) if getattr(F.problem, "cv_warm_all", False) else {**ref.values, **{q: warm[q] for q in newp}}
+    f1 = F.fit(tuple(ref.causes) + new, [w], mask)
+    return f1 if f1.chi2 < f0.chi2 else f0
+
+
+def _pool_job(packed: tuple) -> tuple["Fit", int]:
+    """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
+    F = _POOL_FITTER
+    ref, keys, mask, warm = packed
+    by_key = {c.key: c for c in F.problem.causes}
+    if ref is not None:
+        ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
+    n0 = F.nfev
+    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm))
+    return fit, F.nfev - n0
+
+
+def _start_sets(causes, ref_values: dict[str, float] | None = None) -> list[dict[str, float]]:
     """Declared (data-independent) starting points of the new causes' parameters besides the null
     start: a cause's own ``start_sets`` if it declares them, else the combinations of its
     parameters' starts (and nulls), those with the fewest parameters at their null first."""
     out: list[dict[str, float]] = []
     for c in causes:
-        sets = c.start_sets() if hasattr(c, "start_sets") else None
+        # a cause may declare its starts relative to the model it extends (``start_sets_from(ref_values)``:
+        # e.g. a compensating change of a baseline parameter that the cause's effect trades off against)
+        sets = (c.start_sets_from(dict(ref_values or {})) if hasattr(c, "start_sets_from")
+                else c.start_sets() if hasattr(c, "start_sets") else None)
         if sets is None:
             ps = list(c.params)
             alts = [[p.null, *p.starts] for p in ps]
@@ -336,29 +431,22 @@ class CrossValidation:
         self.full_fits: dict[tuple, Fit] = {}
 
     def fold_fits(self, causes: tuple) -> list[Fit]:
+        """The fits of ``causes`` on every fold's training data, nested in the folds' fits of
+        ``causes[:-1]``: from the declared (data-free) starts, or, for a problem with ``cv_warm``
+        (interleaved groups), from the null start and the full-data optimum of the new cause only.
+        Independent over the folds (in the worker pool when there is one)."""
         key = tuple(c.key for c in causes)
         hit = self._ref.get(key)
         if hit is None:
-            hit = []
             warm = getattr(self.F.problem, "cv_warm", False) and key in self.full_fits
+            wv = dict(self.full_fits[key].values) if warm else None
+            masks = []
             for fold in self.folds:
                 mask = np.ones(self.n, bool)
                 mask[fold] = False
-                if not causes:
-                    if warm:
-                        hit.append(self.F.fit((), [dict(self.full_fits[key].values)], mask))
-                    else:
-                        hit.append(self.F.baseline(mask))
-                else:
-                    ref = self.fold_fits(causes[:-1])[len(hit)]
-                    if warm:  # interleaved groups: start at the null and at the full-data optimum only
-                        full = self.full_fits[key].values
-                        newp = [p.name for p in causes[-1].params]
-                        f0 = self.F.nested(ref, causes[-1:], mask, only_starts=[])
-                        f1 = self.F.fit(causes, [{**ref.values, **{q: full[q] for q in newp}}], mask)
-                        hit.append(f1 if f1.chi2 < f0.chi2 else f0)
-                    else:
-                        hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
+                masks.append(mask)
+            refs = self.fold_fits(causes[:-1]) if causes else [None] * len(masks)
+            hit = self.F.map_nested([(r, causes[-1:] if causes else (), m, wv) for r, m in zip(refs, masks)])
             self._ref[key] = hit
         return hit
 
@@ -534,8 +622,16 @@ def _check_baseline_identifiable(base: Fit) -> None:
 def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None,
              margin: float = EVIDENCE_MARGIN) -> dict[str, Any]:
     """Run the diagnosis on a problem object; return the JSON-able result (see module docstring)."""
-    t0 = time.perf_counter()
     F = Fitter(problem)
+    try:
+        return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin)
+    finally:
+        F.close_pool()
+
+
+def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float
+              ) -> dict[str, Any]:
+    t0 = time.perf_counter()
     n = len(problem.groups)
     folds = folds_of(problem.groups)
     use_cv = len(folds) >= 3
@@ -549,8 +645,9 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
     cv = CrossValidation(F, folds, n) if use_cv else None
     # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
-    for c in causes:
-        fit = F.nested(base, (c,))
+    F.open_pool()
+    fits = F.map_nested([(base, (c,), None) for c in causes])
+    for c, fit in zip(causes, fits):
         k = len(c.params)
         dchi2 = max(base.chi2 - fit.chi2, 0.0)
         thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))

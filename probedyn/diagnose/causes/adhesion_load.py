@@ -1,4 +1,11 @@
-"""Friction proportional to the total load N + N_adh (adhesion or a capillary meniscus)."""
+"""Friction proportional to the total load N + N_adh (adhesion or a capillary meniscus).
+
+Parametrised so that the corrugation at the mean load N_ref stays the baseline's ``u0 N_ref``:
+``U0(N) = u0 N_ref (N + N_adh) / (N_ref + N_adh)``. N_adh then changes only how the corrugation
+follows the load, not its level; referred to zero load instead, every change of N_adh changes the
+stick-slip pattern of every scan and the fit from the null value stalls (the pattern is not a
+smooth function of the corrugation once slips skip wells).
+"""
 
 from __future__ import annotations
 
@@ -20,8 +27,17 @@ class AdhesionLoad(Cause):
         if super().constrain(problem) is None:
             return None
         lo, hi = float(problem.loads.min()), float(problem.loads.max())
-        return AdhesionLoad((CauseParam("n_adh", "N", -0.9 * lo, 20.0 * hi, 0.0, "adhesion load",
-                                        starts=(0.5 * hi, 3.0 * hi)),))
+        c = AdhesionLoad((CauseParam("n_adh", "N", -0.9 * lo, 20.0 * hi, 0.0, "adhesion load",
+                                     starts=(0.5 * hi, 3.0 * hi)),))
+        c.N_ref = float(problem.N_mean)
+        return c
 
     def effect(self, v, s):
+        n_ref = getattr(self, "N_ref", None)
+        if n_ref:
+            s.u0 *= n_ref / (n_ref + v["n_adh"])
         s.n_adh += v["n_adh"]
+
+    def derived(self, v, problem):
+        n_ref = getattr(self, "N_ref", None) or 1.0
+        return {"u0_per_unit_total_load_J_per_N": v["u0"] * n_ref / (n_ref + v["n_adh"]), "reference_load_N": n_ref}
