@@ -355,7 +355,9 @@ class CrossValidation:
                         f1 = self.F.fit(causes, [{**ref.values, **{q: full[q] for q in newp}}], mask)
                         hit.append(f1 if f1.chi2 < f0.chi2 else f0)
                     else:
-                        hit.append(self.F.nested(ref, causes[-1:], mask))  # all declared (data-free) starts
+                        # the null start and the declared (data-free) start that won the full-data fit
+                        ws = self.winning_start.get(key)
+                        hit.append(self.F.nested(ref, causes[-1:], mask, only_starts=None if ws is None else [ws]))
             self._ref[key] = hit
         return hit
 

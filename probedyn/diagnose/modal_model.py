@@ -367,7 +367,7 @@ class ReducedModal:
             # point masses on the mass path
             xi_c = np.linspace(1.0, 0.0, n_mass_corr, endpoint=False)[::-1]
             try:
-                Ac = sp.vstack([m.attachment(tuple(p)) for p in base.mass_path(xi_c).T]).tocsr()
+                Ac = m.points_operator(base.mass_path(xi_c))
                 blocks["mass"].append(ksolve(np.asarray(Ac.T.todense())))
                 self.mass_ok = True
             except GeometryError:
@@ -488,7 +488,7 @@ class ReducedModal:
         """(101, 3, r) reduced displacement operators on the mass path (xi = 0, 0.01, ..., 1)."""
         if self._path_ops is None:
             m = self.base.model
-            A = sp.vstack([m.attachment(tuple(p)) for p in self.base.mass_path(self._path_xi).T]).tocsr()
+            A = m.points_operator(self.base.mass_path(self._path_xi))  # one vectorised mesh search
             self._path_ops = np.asarray(A @ self.Phi).reshape(len(self._path_xi), 3, self.r)
         return self._path_ops
 
@@ -505,11 +505,11 @@ class ReducedModal:
         blocks = self.blocks_for(s)
         sub = self._subspace(blocks)
         K, M = sub.matrices(s, penalty="clamp" in blocks)
-        try:
-            lam, V = sla.eigh(K, M, driver="gvd")
+        nlow = min(K.shape[0], max(2 * len(self.base.families), 12))
+        try:  # only the lowest nlow pairs (the measured modes are among them)
+            lam, V = sla.eigh(K, M, subset_by_index=[0, nlow - 1], driver="gvx")
         except (np.linalg.LinAlgError, ValueError) as exc:
             raise SolverError(f"reduced eigenproblem failed: {exc}") from None
-        nlow = min(len(lam), max(2 * len(self.base.families), 12))
         fams = sub.families_of(V[:, :nlow])
         vt = np.zeros((V.shape[0], len(needed)))
         lt = np.zeros(len(needed))
