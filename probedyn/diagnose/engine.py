@@ -310,9 +310,10 @@ def _start_sets(causes) -> list[dict[str, float]]:
 
 
 def folds_of(groups: np.ndarray, k_max: int = 10, k: int = 8) -> list[np.ndarray]:
-    """Leave-one-group-out for up to ``k_max`` groups, else K-fold over interleaved groups."""
+    """Leave-one-group-out for up to ``k_max`` groups, else K-fold over interleaved groups. A
+    negative numeric group label marks residuals that are never held out (prior pseudo-residuals)."""
     g = np.asarray(groups)
-    ug = list(dict.fromkeys(g.tolist()))
+    ug = [x for x in dict.fromkeys(g.tolist()) if not (isinstance(x, (int, float)) and x < 0)]
     if len(ug) <= k_max:
         return [np.nonzero(g == x)[0] for x in ug]
     return [np.nonzero(np.isin(g, ug[i::k]))[0] for i in range(k)]
@@ -628,7 +629,8 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
         "method": {
             "evidence": ("leave-one-group-out cross-validation (held-out chi^2), capped at the in-sample "
                          "log likelihood ratio" if use_cv else "Akaike information criterion (fewer than 3 groups)"),
-            "groups": len(list(dict.fromkeys(np.asarray(problem.groups).tolist()))), "folds": len(folds),
+            "groups": len([x for x in dict.fromkeys(np.asarray(problem.groups).tolist())
+                           if not (isinstance(x, (int, float)) and x < 0)]), "folds": len(folds),
             "alpha": alpha, "evidence_margin_nats": margin, "max_causes": max_causes,
             "claim_rule": "baseline chi-square p < alpha AND likelihood-ratio test at alpha / N_causes AND evidence > 0",
             "model": problem.model_description(),

@@ -218,6 +218,26 @@ class FEMBaseline:
         self.disc_note = "not estimated"
         if estimate_error:
             self._estimate_discretisation(needed, len(fams))
+        self.shear_share = self._shear_share()
+
+    def _shear_share(self) -> np.ndarray:
+        """Share of each mode's strain energy carried by the shear constants (Voigt 44, 55, 66 of
+        every region, in its own axes): ``phi^T K_shear phi / phi^T K phi``, with ``K`` linear in
+        the constants, ``K_shear = (K - K(shear block x 0.9)) / 0.1`` (exact). A relative change
+        ``g`` of the shear moduli moves ``ln f`` by ``share * g / 2`` (Rayleigh quotient); the share
+        is the FEM's own measure of how much shear deformation (the Timoshenko correction) a mode has."""
+        m = self.model
+        regions = {}
+        for name, mat, R in zip(m.region_names, m.materials, m.orientations):
+            C = np.array(mat.C, float)
+            C[3:, 3:] *= 0.9
+            regions[name] = (Material(mat.name, C, mat.density, mat.note), R)
+        K, _ = m.assemble()
+        K9, _ = stretched(m, np.ones(3), regions=regions).assemble()
+        P = self.shapes
+        kk = np.einsum("ij,ij->j", P, K @ P)
+        ks = np.einsum("ij,ij->j", P, (K - K9) @ P) / 0.1
+        return np.clip(ks / np.where(kk > 0, kk, np.inf), 0.0, 1.0)
 
     def index(self, family: str, order: int) -> int:
         k = 0
