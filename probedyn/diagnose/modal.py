@@ -22,7 +22,9 @@ causes but nuisance directions of the noise model, each with a Gaussian prior:
 
 Both enter linearly and are profiled in closed form in every residual evaluation (ridge least
 squares on the fitted data only, the prior as two pseudo-residuals ``a / sigma`` that belong to no
-cross-validation group), which equals fitting them jointly with Gaussian priors. A cause is
+cross-validation group), which equals fitting them jointly with Gaussian priors; the priors are
+truncated at ``MF_BOUND`` = 3 sigma (model form is a bounded range, 1.5 % uniform and 45 % of G at
+most: a 40 % discrepancy is not absorbed into it but left to the causes). A cause is
 therefore claimed only where its pattern exceeds what these two directions explain within their
 priors: a uniform modulus change below about 3 x 0.5 % in frequency is not claimed (the
 likelihood-ratio threshold), a thickness, clamp, mass or prestress pattern still is.
@@ -51,6 +53,7 @@ __all__ = ["ModalProblem", "MF_UNIFORM", "MF_SHEAR"]
 
 MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift (plate effect, nominal E)
 MF_SHEAR = 0.15  # prior sigma of the relative shear-modulus change (shear coefficient, anisotropic G)
+MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 
 _FREE = {  # [baseline] free quantity -> calibration parameter
     "thickness": CauseParam("cal_thickness", "1", 0.5, 2.0, 1.0, "thickness / nominal (calibrated)"),
@@ -236,8 +239,21 @@ class ModalProblem:
         residuals ``r`` of the fitted modes (ridge least squares = Gaussian prior N(0, 1))."""
         B = self.mf_dirs * (np.where(np.isfinite(f), f, 0.0) / self.sigma_f)[:, None]
         m = np.ones(self.n, bool) if self.train_mask is None else np.asarray(self.train_mask)[: self.n]
-        Bm = B[m]
-        return np.linalg.solve(Bm.T @ Bm + np.eye(B.shape[1]), Bm.T @ r[m])
+        Bm, rm = B[m], r[m]
+        A = Bm.T @ Bm + np.eye(B.shape[1])
+        a = np.linalg.solve(A, Bm.T @ rm)
+        # the model-form range is bounded (truncated prior, |a| <= MF_BOUND sigmas): beyond it a
+        # discrepancy is not model form and must be left to the causes
+        for _ in range(2):
+            out = np.abs(a) > MF_BOUND
+            if not out.any():
+                break
+            a[out] = np.clip(a[out], -MF_BOUND, MF_BOUND)
+            free = ~out
+            if free.any():
+                a[free] = np.linalg.solve(A[np.ix_(free, free)], Bm[:, free].T @ (rm - Bm[:, out] @ a[out]))
+                a[free] = np.clip(a[free], -MF_BOUND, MF_BOUND)
+        return a
 
     def residuals(self, values, causes=()) -> np.ndarray:
         r = self._residuals(*self.predict(values, causes))
