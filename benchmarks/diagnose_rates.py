@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -45,6 +46,11 @@ MAIN = {"point-mass": ("mass", 0.0), "clamp-compliance": ("c_rot", 0.0), "thickn
         "width-error": ("w_ratio", 1.0), "length-error": ("dL", 0.0), "modulus-error": ("e_ratio", 1.0),
         "axial-prestress": ("sigma", 0.0), "fluid-loading": ("rho_f", 0.0)}
 _BASES: dict = {}
+try:  # the commit the rows were computed with (a resumed study may mix commits: each row says which)
+    CODE = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parent).stdout.strip() or None
+except OSError:
+    CODE = None
 
 
 def _problem(path: Path, lever: str) -> ModalProblem:
@@ -63,7 +69,7 @@ def run_case(folder, case):
     t0, c0 = time.perf_counter(), time.process_time()
     res = diagnose(_problem(path, lever))
     dt, dc = time.perf_counter() - t0, time.process_time() - c0
-    row = {"seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
+    row = {"code": CODE, "seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
            "declared_medium": case.get("declared_medium"), "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt, "cpu_s": dc,
            "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"]}
