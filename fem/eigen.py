@@ -7,12 +7,12 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
 * ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
-  block of 16 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
+  block of 6-15 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
   (``OP = (K - sigma M)^-1 M``), M-orthonormalised block by block (two passes of classical
-  Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it and stops when
-  every wanted pair's residual ``||K x - lambda M x|| / ||K x||`` is below ``rtol``
-  (eigenvalue error ~ residual^2: 1e-9 residuals give frequencies to ~1e-12); otherwise it
-  restarts from the best Ritz vectors.
+  Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it after every block
+  solve and stops as soon as every wanted pair's shift-invert residual (exact, from the kept
+  images ``OP Q``: no extra solve) is below ``rtol`` (eigenvalue error ~ residual^2); after
+  ``steps + 1`` blocks it restarts from the best Ritz vectors.
 * ``method="arpack"``: ARPACK (``scipy.sparse.linalg.eigsh(..., OPinv=...)``) in shift-invert
   mode, one right-hand side per step (the reference; the benchmark compares the two).
 
@@ -26,8 +26,10 @@ matrix copy or hash.  Settings (:data:`PARDISO_OPTIONS`, each measured in benchm
 265k and 540k DOFs, docs/fem.md): ordering ``iparm[1]`` (0 minimum degree, 2 METIS, 3 parallel
 METIS), ``iparm[23]`` parallel factorisation algorithm (0 classic, 1 two-level), ``iparm[24]``
 forward/backward substitution (0 sequential, 2 parallel), ``iparm[27]`` single-precision
-factors (with ``iparm[7]`` iterative-refinement steps against the double matrix), ``iparm[59]``
-in-core (0) or out-of-core (2).
+factors (float32 matrix and factor; each solve then refined against the double matrix in
+double precision until its backward error is at the double level, :func:`_pardiso`),
+``iparm[36]`` matrix format (0 CSR, -80 VBSR: rows of >= 80 % equal pattern merged into
+blocks, the default), ``iparm[59]`` in-core (0) or out-of-core (2).
 
 Factorisation reuse: inside ``with reuse_factorizations():`` a matrix already factorised in that
 block (same shape, pattern and values: a BLAKE2 digest of its CSR arrays) is not factorised
@@ -67,6 +69,7 @@ PARDISO_OPTIONS: dict[str, int] = {
     "single": 0,          # iparm[27]: 1 = single-precision factors
     "refinement": 0,      # iparm[7]: max iterative refinement steps (0 = automatic)
     "ooc": 0,             # iparm[59]: 0 in-core, 2 out-of-core
+    "vbsr": -80,          # iparm[36]: 0 CSR; -t = variable block rows (VBSR): rows of >= t % equal pattern merged
 }
 
 
@@ -215,6 +218,7 @@ class _Pardiso:
         ip[24] = int(opts["parallel_solve"])
         ip[27] = int(opts["single"])
         ip[34] = 0  # one-based indexing
+        ip[36] = int(opts.get("vbsr", 0))
         ip[59] = int(opts["ooc"])
         self.mtype = int(mtype)
         self.n = U.shape[0]
@@ -266,6 +270,19 @@ class _Pardiso:
 
 
 def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
+    """PARDISO factorisation of ``A``.  With ``opts["single"]`` the factor is single precision
+    (``iparm[27] = 1``: matrix, right-hand sides and factor all float32; symmetric diagonal
+    scaling made it worse for hex-s2, 5.6 vs 0.16 error with SuperLU float32, so none), and every
+    solve is refined in double precision: ``x += S^-1 (b - A x)``
+    until the normwise backward error ``||b - A x||_1 / (||A||_1 ||x||_1)`` is below 32 eps64 (a
+    double-precision solve), stops falling by 2x for three sweeps (the round-off floor) or after
+    ``opts["refinement"]`` sweeps (default 40).  A
+    float32 solve alone is NOT accurate for these matrices: cond(K) ~ 1.5e9 already at 12k DOFs
+    (cantilever, P2), so cond * eps32 >> 1 and its error is ~0.1-0.4 (SuperLU in float32 gives the
+    same; benchmarks/modal.py); each refinement sweep contracts the error by about that factor
+    on small models (7.5k-12k DOFs: 10-15 sweeps) and the refinement stalls (SolverError) on
+    the 265k and 509k P2 cantilevers (benchmarks/results/modal-s4.txt)."""
+    single = bool(opts["single"])
     U = sp.triu(A, format="csr")
     U.sort_indices()
     ps = _Pardiso(U, mtype, opts)
@@ -282,18 +299,43 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
         ps.free()
         raise SolverError("zero or negative pivot in SPD factorisation")
     n = A.shape[0]
+    norm_A = float(abs(A).sum(axis=0).max()) if single else 1.0
+    info = {"analysis_s": t1 - t0, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
+            "mflops": int(ps.iparm[18]), "options": dict(opts)}
 
     def solve(b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=float)
         shape = b.shape
         # PARDISO reads a block of right-hand sides column by column: Fortran order
         bb = np.asfortranarray(b.reshape(n, -1))
+        if not single:
+            x = ps.call(33, bb)
+            return np.ascontiguousarray(x).reshape(shape)
         x = ps.call(33, bb)
+        max_sweeps = int(opts["refinement"]) or 40
+        sweeps, best, stall = 0, np.inf, 0
+        while sweeps < max_sweeps:
+            r = bb - A @ x
+            # normwise backward error of x: at a small multiple of eps64 it is a double-precision solve
+            be = float(np.max(np.abs(r).sum(axis=0) / (norm_A * np.maximum(np.abs(x).sum(axis=0), 1e-300))))
+            if be <= 32 * np.finfo(float).eps:
+                break
+            stall = stall + 1 if be > 0.5 * best else 0
+            if stall >= 3:  # round-off floor of the double residual
+                break
+            best = min(best, be)
+            x += ps.call(33, np.asfortranarray(r))
+            sweeps += 1
+        info["refinement_sweeps"] = sweeps
+        info["backward_error"] = be
+        if be > 1e3 * np.finfo(float).eps and sweeps < max_sweeps:
+            # stalled far from double precision: the float32 factor is too inaccurate (cond * eps32 >~ 1)
+            raise SolverError(f"mixed-precision refinement stalled at backward error {be:.1e} after {sweeps} "
+                              "sweeps: the single-precision factor is too inaccurate for this matrix (use single=0)")
         return np.ascontiguousarray(x).reshape(shape)
 
-    info = {"analysis_s": t1 - t0, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
-            "mflops": int(ps.iparm[18]), "options": dict(opts)}
-    return Factorization(solve, f"pardiso(mtype={mtype})", 0.0, ps.free, info)
+    return Factorization(solve, f"pardiso(mtype={mtype}{', single+refinement' if single else ''})", 0.0, ps.free,
+                         info)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -312,88 +354,140 @@ class EigenResult:
     info: dict[str, Any] = field(default_factory=dict)
 
 
-def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10) -> tuple[np.ndarray, np.ndarray]:
+def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10,
+                      max_cols: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormal basis of span(W) given ``MW = M W`` (directions whose relative Gram
     eigenvalue is below ``drop`` are dropped); returns (W', M W')."""
+    if W.shape[1] == 0:
+        return W, MW
     G = W.T @ MW
     G = 0.5 * (G + G.T)
     g, V = np.linalg.eigh(G)
     keep = g > drop * max(float(g.max()), 1e-300)
+    if max_cols is not None and keep.sum() > max_cols:  # the max_cols strongest directions
+        keep &= g >= np.sort(g)[-max_cols]
     C = V[:, keep] / np.sqrt(g[keep])
     return W @ C, MW @ C
 
 
 def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac: Factorization,
-                block: int | None = None, steps: int = 4, rtol: float = 1e-8, max_cycles: int = 10,
+                block: int | None = None, steps: int | None = None, rtol: float = 1e-12, max_cycles: int = 10,
                 seed: int = 12345) -> tuple[np.ndarray, np.ndarray, int, dict]:
     """The ``n_modes`` eigenpairs of ``K x = lambda M x`` nearest ``sigma`` (from above for a
     shift below the spectrum) by block shift-invert Lanczos with ``fac`` = factorisation of
     ``K - sigma M`` (module docstring).
 
-    ``block`` right-hand sides per solve (default ``n_modes + max(4, n_modes // 2)``), ``steps``
-    Krylov blocks per cycle; the basis Q, ``M Q`` and ``K Q`` are kept, so each new vector costs
-    one solve, one product with M and one with K.  Convergence: the shift-invert residual of
-    every wanted Ritz pair, ``||OP x - theta x||_M / theta`` (``OP = (K - sigma M)^-1 M``,
-    ``theta = 1 / (lambda - sigma)``, x M-normalised), below ``rtol``; the eigenvalue error is of
-    the order of its square (times theta over the gap).  The vectors ``OP x`` of that test
-    continue the Krylov space of the next cycle (thick restart from the Ritz vectors), so no
-    solve is wasted.  Returns (eigenvalues ascending, M-orthonormal vectors, number of vectors
-    solved, info)."""
+    ``block`` right-hand sides per solve (default ``max(4, n_modes // 2 + 1)``: 6 for 10 modes,
+    which needed 54 vectors and 0.9x the CPU time of a block of 12 with 84 vectors at 68.5k DOFs;
+    blocks of at least the largest eigenvalue multiplicity wanted), ``steps + 1`` blocks (default
+    about ``6 (n_modes + 2) / block``, 6 to 12) before a thick restart from the
+    ``max(block, n_modes + 2)`` best Ritz vectors.  For every block ``Q_j`` of the M-orthonormal basis the code keeps ``M Q_j``,
+    ``K Q_j`` and its image ``OP Q_j`` (``OP = (K - sigma M)^-1 M``, one block solve): so after each
+    solve the Rayleigh-Ritz pairs of ``(K, M)`` on the basis and their shift-invert residuals
+    ``||OP x - theta x||_M / theta`` (``theta = x^T M OP x``, x M-normalised) are known exactly
+    without a further solve, the iteration stops at the first solve after which every wanted pair
+    is below ``rtol`` (eigenvalue error of the order of its square times theta over the gap), and
+    the next Krylov block is ``OP`` of the last one (default ``rtol`` 1e-12, in practice "to the
+    round-off floor" where the residual stops halving, ~1e-9 at 68k DOFs: with 1e-8 or 1e-10
+    the vectors of a 2-mode Ritz basis were not accurate enough for its exact static limit,
+    tests/test_ritz.py; 54 -> 60 vectors at 68.5k DOFs), M-orthogonalised against the basis (two passes
+    of classical Gram-Schmidt).  Returns (eigenvalues ascending, M-orthonormal vectors, number of
+    vectors solved, info)."""
     n = K.shape[0]
-    b = int(block or n_modes + max(4, n_modes // 2))
-    b = max(n_modes + 1, min(b, n // 3))
+    b = int(block or max(4, n_modes // 2 + 1))
+    b = max(1, min(b, n // 3))
+    keep_r = max(b, n_modes + 2)  # Ritz vectors kept at a thick restart
+    max_blocks = max(2, int(steps) + 1) if steps else max(6, min(12, -(-6 * (n_modes + 2) // b)))
+    cap = max(max_blocks * b, keep_r + 2 * b, n_modes + 2 * b)
+    # the basis Q and M Q, K Q, OP Q in preallocated column buffers; the projections Q^T K Q and
+    # Q^T M Q are extended block by block (each step costs O(n m b), not O(n m^2))
+    Qb, MQb, KQb, OQb = (np.empty((n, cap), order="F") for _ in range(4))
+    A_r, B_r = np.zeros((cap, cap)), np.zeros((cap, cap))
     rng = np.random.default_rng(seed)
-    W = fac.solve(M @ rng.standard_normal((n, b)))
-    V, MV = _m_orthonormalize(W, M @ W)
-    W = fac.solve(MV)
-    n_solved = 2 * b
-    KV = K @ V
-    info: dict[str, Any] = {"block": b, "steps": steps, "cycles": 0}
+    W = fac.solve(M @ rng.standard_normal((n, b)))  # one smoothing solve: a start rich in low modes
+    W, MW = _m_orthonormalize(W, M @ W)
+    m = 0
+    n_solved = b
+    info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0}
+
+    last = 0  # first column of the last block appended
+
+    def append(W: np.ndarray, MW: np.ndarray, KW: np.ndarray | None = None, OW: np.ndarray | None = None) -> int:
+        nonlocal m, n_solved, last
+        k = W.shape[1]
+        last = m
+        sl = slice(m, m + k)
+        Qb[:, sl], MQb[:, sl] = W, MW
+        KQb[:, sl] = K @ W if KW is None else KW
+        if OW is None:
+            OQb[:, sl] = fac.solve(MW)
+            n_solved += k
+        else:
+            OQb[:, sl] = OW
+        A_r[: m + k, sl] = Qb[:, : m + k].T @ KQb[:, sl]
+        B_r[: m + k, sl] = Qb[:, : m + k].T @ MQb[:, sl]
+        A_r[sl, :m], B_r[sl, :m] = A_r[:m, sl].T, B_r[:m, sl].T
+        m += k
+        return k
+
+    append(W, MW)
     prev = None
-    for cycle in range(max_cycles):
-        Q, MQ, KQ = [V], [MV], [KV]
-        for step in range(steps):
-            if step > 0:
-                W = fac.solve(MQ[-1])
-                n_solved += W.shape[1]
-            Qa, MQa = np.hstack(Q), np.hstack(MQ)
-            for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
+    for _it in range(max_cycles * max_blocks):
+        if m < n_modes + 1:  # too few basis vectors for the wanted pairs yet (block < n_modes)
+            W = OQb[:, last:m]
+            Qa, MQa = Qb[:, :m], MQb[:, :m]
+            for _pass in range(2):
                 W = W - Qa @ (MQa.T @ W)
             W, MW = _m_orthonormalize(W, M @ W)
             if W.shape[1] == 0:
-                break
-            Q.append(W)
-            MQ.append(MW)
-            KQ.append(K @ W)
-        Qa, MQa, KQa = np.hstack(Q), np.hstack(MQ), np.hstack(KQ)
-        A_r = Qa.T @ KQa
-        B_r = Qa.T @ MQa
-        w, Y = sla.eigh(0.5 * (A_r + A_r.T), 0.5 * (B_r + B_r.T))
+                raise SolverError("block eigen-solver: Krylov space exhausted before n_modes vectors")
+            append(W, MW)
+            continue
+        Ar, Br = A_r[:m, :m], B_r[:m, :m]
+        w, Y = sla.eigh(0.5 * (Ar + Ar.T), 0.5 * (Br + Br.T))
         order = np.argsort(np.abs(w - sigma))
-        w, Y = w[order][:b], Y[:, order][:, :b]
-        X, MX, KX = Qa @ Y, MQa @ Y, KQa @ Y
-        W = fac.solve(MX)  # OP x: the residual test and the next cycle's first Krylov block
-        n_solved += b
+        w, Y = w[order], Y[:, order]
+        Yw = Y[:, :n_modes]
+        X, MX, OX = Qb[:, :m] @ Yw, MQb[:, :m] @ Yw, OQb[:, :m] @ Yw
         # theta = x^T M OP x (not 1 / (lambda - sigma): for rigid-body modes lambda is round-off
         # and lambda - sigma would not be accurate, while OP x is)
-        theta = np.einsum("ij,ij->j", MX, W)
-        R = W[:, :n_modes] - X[:, :n_modes] * theta[:n_modes]
-        res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, M @ R))) / np.abs(theta[:n_modes])
-        info["cycles"] = cycle + 1
+        theta = np.einsum("ij,ij->j", MX, OX)
+        R = OX - X * theta
+        res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, M @ R))) / np.abs(theta)
         info["residuals"] = res
         if np.all(res < rtol):
             break
-        # round-off floor: a residual that no longer falls (by 2x per cycle) is as good as it gets
+        # round-off floor: a residual that no longer falls (by 2x per solve) is as good as it gets
         # in double precision; below FLOOR_OK the eigenvalues are still accurate to ~1e-10
         if prev is not None and res.max() > 0.5 * prev and res.max() < FLOOR_OK:
             info["floor"] = True
             break
         prev = float(res.max())
-        V, MV, KV = X, MX, KX
+        if m + b > cap:  # thick restart from the b best Ritz vectors (their images known: no solve)
+            if info["cycles"] >= max_cycles:
+                raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
+                                  f"{max_cycles} cycles)")
+            Yb = Y[:, :keep_r]
+            keep = [Qb[:, :m] @ Yb, MQb[:, :m] @ Yb, KQb[:, :m] @ Yb, OQb[:, :m] @ Yb]
+            m = 0
+            append(*keep)
+            info["cycles"] += 1
+            info["restarts"] += 1
+            W = OQb[:, :m]  # the kept vectors' residual directions span (about) one block
+        else:
+            W = OQb[:, last:m]
+        Qa, MQa = Qb[:, :m], MQb[:, :m]
+        for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
+            W = W - Qa @ (MQa.T @ W)
+        W, MW = _m_orthonormalize(W, M @ W, max_cols=b)
+        if W.shape[1] == 0:  # invariant subspace: nothing new to add
+            break
+        append(W, MW)
     else:
-        raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
-                          f"{max_cycles} cycles)")
-    return w[:n_modes], X[:, :n_modes], n_solved, info
+        raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e})")
+    w = w[:n_modes]
+    o = np.argsort(w)
+    return w[o], X[:, o], n_solved, info
 
 
 def shift_invert_eigsh(
@@ -442,7 +536,7 @@ def shift_invert_eigsh(
     try:
         if use_block:
             try:
-                w, V, count, binfo = block_eigsh(K, M, n_modes, sigma, fac, rtol=tol if tol > 0 else 1e-8)
+                w, V, count, binfo = block_eigsh(K, M, n_modes, sigma, fac, rtol=tol if tol > 0 else 1e-12)
                 info.update(binfo)
             except SolverError as exc:
                 info["block_failed"] = str(exc)

@@ -64,7 +64,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from scipy.integrate import solve_ivp
+from scipy.integrate import Radau, solve_ivp
+from scipy.linalg import lapack as _lapack
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
@@ -245,6 +246,12 @@ class PushModel:
         hess = self.U0 * (self.G.T * c) @ self.G
         return grad, hess
 
+    def lattice_grad(self, rx: float, ry: float) -> np.ndarray:
+        """grad U alone (the right-hand side needs no Hessian): the same operations as
+        :meth:`lattice_force`, so the same numbers to the last bit."""
+        ph = self.G[:, 0] * (rx - self.x0) + self.G[:, 1] * ry
+        return self.U0 * (self.G.T @ np.sin(ph))
+
     def potential(self, rx, ry):
         ph = self.G[:, 0, None] * (np.asarray(rx) - self.x0) + self.G[:, 1, None] * np.asarray(ry)
         return -self.U0 * np.cos(ph).sum(axis=0)
@@ -287,17 +294,46 @@ class PushModel:
         return {"Fn": Fn, "Ft": Ft, "Fsub": (Fsx, Fsy), "zdot": (zdx, zdy), "wdot": wdot, "S": S, "grad": grad}
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        # :meth:`forces` inlined (the integrators call this ~1e4 times per push): the same
+        # floating-point operations in the same order, so the same numbers to the last bit
         p = self.p
-        f = self.forces(t, y)
-        xt, yt, ut, wt, xs, ys, us, ws, zx, zy, wm = y
-        Fn, Ft = f["Fn"], f["Ft"]
-        Fsx, Fsy = f["Fsub"]
+        xt, yt, ut, wt, xs, ys, us, ws, zx, zy, wm = y.tolist()
+        Fn, _, kc, _ = self.normal_contact(xs - xt)
+        Ft = -self.kappa * kc * (ys - yt)
+        sp2 = us * us + ws * ws
+        vabs = math.sqrt(sp2 + p["v_eps"] ** 2)
+        S = math.exp(-(wm / p["V_s"]) ** 2)
+        r = p["sigma0"] / p["F_c"]
+        zdx = us - vabs * r * zx
+        zdy = ws - vabs * r * zy
+        gx, gy = self.lattice_grad(xs, ys).tolist()
+        Fsx = p["sigma0"] * zx + self.sigma1 * zdx + p["F_v"] * us + S * gx
+        Fsy = p["sigma0"] * zy + self.sigma1 * zdy + p["F_v"] * ws + S * gy
         V = p["V"]
         dut = (-p["k_tx"] * (xt - V * t) - p["c_t"] * (ut - V) - Fn) / p["m_tx"]
         dwt = (-p["k_ty"] * yt - p["c_t"] * wt - Ft) / p["m_ty"]
         dus = (Fn - Fsx) / p["m_s"]
         dws = (Ft - Fsy) / p["m_s"]
-        return np.array([ut, wt, dut, dwt, us, ws, dus, dws, f["zdot"][0], f["zdot"][1], f["wdot"]])
+        return np.array([ut, wt, dut, dwt, us, ws, dus, dws, zdx, zdy, (vabs - wm) / self.tau_p])
+
+    def rhs_1d(self, t: float, y: np.ndarray) -> np.ndarray:
+        """:meth:`rhs` on the 1D state (the x components ``IX``; the y components are zero):
+        the same operations on the same values, so the same numbers to the last bit as
+        ``rhs(t, full)[IX]`` without building the 11-component state for every call."""
+        p = self.p
+        xt, ut, xs, us, zx, wm = y.tolist()
+        Fn, _, kc, _ = self.normal_contact(xs - xt)
+        sp2 = us * us + 0.0 * 0.0
+        vabs = math.sqrt(sp2 + p["v_eps"] ** 2)
+        S = math.exp(-(wm / p["V_s"]) ** 2)
+        r = p["sigma0"] / p["F_c"]
+        zdx = us - vabs * r * zx
+        gx = self.lattice_grad(xs, 0.0)[0]
+        Fsx = p["sigma0"] * zx + self.sigma1 * zdx + p["F_v"] * us + S * gx
+        V = p["V"]
+        dut = (-p["k_tx"] * (xt - V * t) - p["c_t"] * (ut - V) - Fn) / p["m_tx"]
+        dus = (Fn - Fsx) / p["m_s"]
+        return np.array([ut, dut, us, dus, zdx, (vabs - wm) / self.tau_p])
 
     def jac(self, t: float, y: np.ndarray) -> np.ndarray:
         """Analytic Jacobian of :meth:`rhs` (11 x 11)."""
@@ -429,6 +465,39 @@ class PushResult:
         return self.model.p["k_tx"] * (self.base - self.y[0])
 
 
+class _Radau(Radau):
+    """scipy's Radau with its dense LU factorisation and solves calling LAPACK (getrf/getrs)
+    directly: the same LAPACK routines scipy.linalg.lu_factor/lu_solve call, so the same
+    numbers, without their per-call checks and wrappers (on these 6- and 11-unknown systems the
+    wrappers cost more than the factorisation: 40 % of a push's time in scipy 1.17)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        if isinstance(self.J, np.ndarray):
+            self.lu, self.solve_lu = self._lu_direct, self._solve_direct
+
+    def _lu_direct(self, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        self.nlu += 1
+        if not np.isfinite(A).all():
+            raise ValueError("array must not contain infs or NaNs")
+        getrf = _lapack.zgetrf if A.dtype.kind == "c" else _lapack.dgetrf
+        lu, piv, info = getrf(A, overwrite_a=True)
+        if info < 0:  # pragma: no cover
+            raise ValueError(f"illegal value in {-info}th argument of internal getrf (lu_factor)")
+        return lu, piv
+
+    @staticmethod
+    def _solve_direct(LU: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
+        lu, piv = LU
+        if not np.isfinite(b).all():
+            raise ValueError("array must not contain infs or NaNs")
+        getrs = _lapack.zgetrs if (lu.dtype.kind == "c" or b.dtype.kind == "c") else _lapack.dgetrs
+        x, info = getrs(lu, piv, b, overwrite_b=True)
+        if info != 0:  # pragma: no cover
+            raise ValueError(f"illegal value in {-info}th argument of internal gesv|posv")
+        return x
+
+
 def simulate(model: PushModel, travel: float | None = None, *, n_out: int = 4000,
              max_step_frac: float = 0.05) -> PushResult:
     """Integrate the push over a base travel ``travel`` (default: the ``travel`` parameter or
@@ -448,10 +517,7 @@ def simulate(model: PushModel, travel: float | None = None, *, n_out: int = 4000
     if model.dim == 1:
         idx = np.array(IX)
 
-        def f(t, yy):
-            full = np.zeros(NS)
-            full[idx] = yy
-            return model.rhs(t, full)[idx]
+        f = model.rhs_1d
 
         def jf(t, yy):
             full = np.zeros(NS)
@@ -473,7 +539,7 @@ def simulate(model: PushModel, travel: float | None = None, *, n_out: int = 4000
         atol[[2, 3, 6, 7, 10]] = vel
         atol[[8, 9]] = zz
     t0 = time.perf_counter()
-    sol = solve_ivp(f, (0.0, T), y0r, method="Radau", jac=jf, rtol=p["rtol"], atol=atol,
+    sol = solve_ivp(f, (0.0, T), y0r, method=_Radau, jac=jf, rtol=p["rtol"], atol=atol,
                     max_step=max_step_frac * p["a"] / p["V"])
     wall = time.perf_counter() - t0
     if not sol.success:

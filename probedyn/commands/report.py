@@ -16,9 +16,12 @@ def report(
     out: Path = out_folder_option(Path("out/report"), "Output folder."),
     quick: bool = typer.Option(False, "--quick", help="Coarser meshes and shorter runs."),
     only: Optional[List[str]] = typer.Option(None, "--only", help="Only sections whose title contains this."),
+    jobs: Optional[int] = typer.Option(None, "--jobs", min=1,
+                                       help="Sections run at once on worker processes (default: "
+                                            "$PROBEDYN_REPORT_JOBS or 2 on 2+ cores; 1 = one after the other)."),
 ) -> None:
     """Run the default probes and schemes and write a Markdown report with figures."""
     from probedyn.report import build_report
 
-    path = build_report(out, quick=quick, only=only)
+    path = build_report(out, quick=quick, only=only, jobs=jobs)
     typer.echo(f"report written to {path}")

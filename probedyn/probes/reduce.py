@@ -23,7 +23,7 @@ import json
 import os
 import time
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -48,6 +48,33 @@ def cache_root() -> Path:
     d.mkdir(parents=True, exist_ok=True)
     return d
 
+
+
+def cached_reduction(path: Path, cache: bool, t0: float,
+                     accept: Callable[[ReducedProbe], bool] | None = None) -> ReducedProbe | None:
+    """The reduction stored at ``path`` if ``cache`` and it loads (and ``accept`` approves it),
+    with ``provenance`` saying "hit", the file and the load time; ``None`` otherwise (a corrupt or
+    stale entry is rebuilt by the caller and overwritten)."""
+    if not (cache and path.exists()):
+        return None
+    try:
+        rp = ReducedProbe.load(path)
+    except Exception:  # corrupt or stale entry: rebuild
+        return None
+    if accept is not None and not accept(rp):
+        return None
+    rp.provenance = dict(rp.provenance, cache="hit", cache_file=str(path), load_s=time.perf_counter() - t0)
+    return rp
+
+
+def store_reduction(rp: ReducedProbe, path: Path, cache: bool, t0: float) -> None:
+    """Record the build time and cache state in ``rp.provenance`` and, if ``cache``, store it at
+    ``path`` at once (a cache entry is kept even if the run that built it fails later)."""
+    rp.provenance["build_s"] = time.perf_counter() - t0
+    rp.provenance["cache"] = "miss" if cache else "off"
+    if cache:
+        rp.save(path, defer=False)
+        rp.provenance["cache_file"] = str(path)
 
 def default_point(model: Any) -> str:
     if getattr(model, "lumped_tip", None) is not None:
@@ -99,20 +126,14 @@ def reduce_probe(probe: str | Path = "cantilever", overrides: Mapping[str, Any] 
         frame = SCHEME_FRAMES.get(p.name)
     key = reduction_key(p.name, values, point, n_modes, frame, Q, mu)
     path = cache_root() / f"{p.name}-{key}.json"
-    if cache and path.exists():
-        try:
-            rp = ReducedProbe.load(path)
-        except Exception:  # corrupt or stale entry: rebuild below
-            rp = None
-        if rp is not None:
-            # the FE model (mesh from its cache, assembly deferred until used) comes back too, so a
-            # cached probe can attach masses at coordinates and be checked against the FEM
-            model = p.build(values)
-            if model.bundle.key == rp.provenance.get("mesh_key") and rp.ritz is not None:
-                rp.ritz.model = model
-            rp.provenance = dict(rp.provenance, cache="hit", cache_file=str(path),
-                                 load_s=time.perf_counter() - t0)
-            return rp
+    rp = cached_reduction(path, cache, t0)
+    if rp is not None:
+        # the FE model (mesh from its cache, assembly deferred until used) comes back too, so a
+        # cached probe can attach masses at coordinates and be checked against the FEM
+        model = p.build(values)
+        if model.bundle.key == rp.provenance.get("mesh_key") and rp.ritz is not None:
+            rp.ritz.model = model
+        return rp
     model = p.build(values)
     pt = point or default_point(model)
     mpl = _mass_per_length(p, values) if mu is not None else None
@@ -124,11 +145,7 @@ def reduce_probe(probe: str | Path = "cantilever", overrides: Mapping[str, Any] 
     fams = _families(model, rp)
     for m, f in zip(rp.modes, fams):
         m.family = f
-    rp.provenance["build_s"] = time.perf_counter() - t0
-    rp.provenance["cache"] = "miss" if cache else "off"
-    if cache:
-        rp.save(path, defer=False)  # a cache entry: kept even if the run fails
-        rp.provenance["cache_file"] = str(path)
+    store_reduction(rp, path, cache, t0)
     rp.ritz.model = model
     return rp
 

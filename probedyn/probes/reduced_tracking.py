@@ -47,7 +47,7 @@ from probedyn.core.errors import ParameterError
 from probedyn.lumped.reduced import ReducedProbe, reduce_model
 from probedyn.probes import get_probe
 from probedyn.probes.piezo import fill_reduced_actuation, piezo_model, piezo_setup, static_per_volt
-from probedyn.probes.reduce import cache_root, reduction_key
+from probedyn.probes.reduce import cache_root, cached_reduction, reduction_key, store_reduction
 from probedyn.schemes.tracking.plants import AX, SETUP, MechanicalPlant, modal_body_plant, smart_two_body
 
 #: tracking input -> drive pattern of probes/piezo.py (probes.tracking.INPUT_NAMES)
@@ -101,14 +101,9 @@ def actuated_probe(name: str, overrides: Mapping[str, Any] | None = None, n_mode
     mu = float(values.get("mu", 0.0))
     key = reduction_key(p.name, values, point, int(n_modes), None, None, mu) + f"-act{ACTUATED_VERSION}"
     path = cache_root() / f"{p.name}-{key}.json"
-    if cache and path.exists():
-        try:
-            rp = ReducedProbe.load(path)
-        except Exception:  # corrupt or stale entry: rebuild below
-            rp = None
-        if rp is not None and rp.actuation_static:
-            rp.provenance = dict(rp.provenance, cache="hit", cache_file=str(path), load_s=time.perf_counter() - t0)
-            return rp
+    rp = cached_reduction(path, cache, t0, accept=lambda r: bool(r.actuation_static))
+    if rp is not None:
+        return rp
     _, _, pm, _ = piezo_model(p.name, ov)
     rhoA = float(p.body_rho_A(values))
     rp = reduce_model(pm.mech, point, n_modes=int(n_modes), mu=mu, mass_per_length=rhoA,
@@ -116,11 +111,7 @@ def actuated_probe(name: str, overrides: Mapping[str, Any] | None = None, n_mode
                                                                 if isinstance(v, (int, float, str)) or v is None},
                                       body="smart probe body without its tip (tip on the plant's holder springs)"))
     fill_actuation(rp, pm)
-    rp.provenance["build_s"] = time.perf_counter() - t0
-    rp.provenance["cache"] = "miss" if cache else "off"
-    if cache:
-        rp.save(path)
-        rp.provenance["cache_file"] = str(path)
+    store_reduction(rp, path, cache, t0)
     return rp
 
 

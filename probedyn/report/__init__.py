@@ -12,17 +12,19 @@ names the model it shows in its caption and agrees with the table beside it. Num
 from library calls; a section adds no physics of its own.
 
 ``SECTIONS`` lists the sections in order as ``(title, "module:function")``; the report is
-written atomically to ``outdir/report.md`` with a table of the wall time of each section.
+written atomically to ``outdir/report.md`` with a table of the wall and CPU time of each
+section. Sections run on two worker processes at once by default (``--jobs``,
+``$PROBEDYN_REPORT_JOBS``; 1 = one after the other), see :mod:`probedyn.report._runner`.
 """
 
 from __future__ import annotations
 
-import importlib
 import time
 from pathlib import Path
 
 from probedyn import __version__
-from probedyn.core.io import make_dirs, write_text
+from probedyn.core.io import make_dirs, transaction, write_text
+from probedyn.report._runner import default_jobs, run_sections
 
 SECTIONS: list[tuple[str, str]] = [
     ("The plain cantilever", "probedyn.report.cantilever:section"),
@@ -39,9 +41,17 @@ SECTIONS: list[tuple[str, str]] = [
 ]
 
 
-def build_report(outdir: Path, quick: bool = False, only: list[str] | None = None) -> Path:
+def build_report(outdir: Path, quick: bool = False, only: list[str] | None = None,
+                 jobs: int | None = None) -> Path:
     """Run every section (or those whose title contains one of ``only``) and write
-    ``outdir/report.md``; return its path."""
+    ``outdir/report.md``; return its path.
+
+    ``jobs``: worker processes running sections at once (None: ``$PROBEDYN_REPORT_JOBS`` or
+    min(2, cores); 1: one after the other in this process), see :mod:`probedyn.report._runner`.
+    The Markdown is the same either way (sections are assembled in the order of ``SECTIONS``).
+    The report and its figures are written in one output transaction: they appear together,
+    or (on an error or an interrupt) not at all.
+    """
     outdir = Path(outdir)
     for o in only or ():  # before any work: a filter that selects nothing is a mistake
         if not any(o.lower() in title.lower() for title, _ in SECTIONS):
@@ -49,7 +59,8 @@ def build_report(outdir: Path, quick: bool = False, only: list[str] | None = Non
 
             raise ParameterError(f"--only {o!r} matches no section; sections: "
                                  + "; ".join(title for title, _ in SECTIONS))
-    make_dirs(outdir)
+    jobs = default_jobs() if jobs is None else jobs
+    selected = [(t, target) for t, target in SECTIONS if not only or any(o.lower() in t.lower() for o in only)]
     parts = [
         "# probedyn report",
         "",
@@ -59,16 +70,16 @@ def build_report(outdir: Path, quick: bool = False, only: list[str] | None = Non
         "`docs/source-departures.md` of the repository (\"departure N\" = item N of its table).",
         "",
     ]
-    timings = []
-    for title, target in SECTIONS:
-        if only and not any(o.lower() in title.lower() for o in only):
-            continue
-        mod_name, func_name = target.split(":")
-        func = getattr(importlib.import_module(mod_name), func_name)
+    with transaction([outdir]):
+        make_dirs(outdir)
         t0 = time.perf_counter()
-        body = func(outdir, quick)
-        timings.append((title, time.perf_counter() - t0))
-        parts += [f"## {title}", "", body.strip(), ""]
-    parts += ["## Run times", "", "| section | wall time [s] |", "|---|---:|"]
-    parts += [f"| {t} | {s:.1f} |" for t, s in timings]
-    return write_text(outdir / "report.md", "\n".join(parts) + "\n")
+        results = run_sections(selected, outdir, quick, jobs)
+        total = time.perf_counter() - t0
+        for r in results:
+            parts += [f"## {r.title}", "", r.body.strip(), ""]
+        parts += ["## Run times", "", "| section | wall time [s] | CPU time [s] |", "|---|---:|---:|"]
+        parts += [f"| {r.title} | {r.wall_s:.1f} | {r.cpu_s:.1f} |" for r in results]
+        how = "one after the other" if jobs == 1 or len(selected) < 2 else \
+            f"on {min(jobs, len(selected))} worker processes at once"
+        parts += ["", f"Sections run {how}: {total:.1f} s wall in all."]
+        return write_text(outdir / "report.md", "\n".join(parts) + "\n")

@@ -107,10 +107,15 @@ def plot_portraits(u0_list, psi: float, path: Path, v: float = 0.0, model=None, 
     psis = np.linspace(-2 * math.pi, 2 * math.pi, 1201)
     for j, u0 in enumerate(u0_list):
         ax = axes[0, j]
-        for k, p in enumerate(psis[::3]):
+        pts: dict[str, tuple[list[float], list[float]]] = {"s": ([], []), "u": ([], [])}
+        for p in psis[::3]:  # one line per kind (not one per psi: 800 artists drew slowly, same points)
             e = equilibria(u0, p)
-            ax.plot([p] * e.n_stable, e.stable, "b.", ms=1.5, label="stable (node)" if k == 0 else None)
-            ax.plot([p] * e.n_unstable, e.unstable, "r.", ms=0.8, label="unstable (saddle)" if k == 0 else None)
+            pts["s"][0].extend([p] * e.n_stable)
+            pts["s"][1].extend(e.stable)
+            pts["u"][0].extend([p] * e.n_unstable)
+            pts["u"][1].extend(e.unstable)
+        ax.plot(*pts["s"], "b.", ms=1.5, label="stable (node)")
+        ax.plot(*pts["u"], "r.", ms=0.8, label="unstable (saddle)")
         ax.set_xlabel(r"phase $\psi$ [rad]")
         ax.set_ylabel("X (eq 4.11)")
         ax.set_title(f"u0 = {u0:g}: equilibria of eq 4.11")

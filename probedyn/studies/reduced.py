@@ -19,7 +19,7 @@ import numpy as np
 from probedyn.core.errors import ParameterError
 from probedyn.lumped import apex as ax
 from probedyn.lumped.reduced import DIRECTIONS, ReducedProbe
-from probedyn.lumped.ritz import direct_compliance
+from probedyn.lumped.ritz import direct_compliances
 from probedyn.probes import get_probe
 from probedyn.probes.reduce import reduce_probe
 from probedyn.schemes import pushing as pu
@@ -92,9 +92,9 @@ def truncation_check(rp: ReducedProbe, fractions: Sequence[float] = (0.5, 0.9),
         raise ParameterError("truncation_check needs a FEM-reduced probe with its model attached")
     rows = []
     f = np.asarray(fractions, dtype=float) * rp.validity_hz
-    for d in directions:
-        i = DIRECTIONS.index(d)
-        H = direct_compliance(rp.ritz.model, rp.point, rp.frame[i], f)
+    # one factorisation per frequency for all directions (they are right-hand sides of one solve)
+    HH = direct_compliances(rp.ritz.model, rp.point, [rp.frame[DIRECTIONS.index(d)] for d in directions], f)
+    for d, H in zip(directions, HH):
         Hc = rp.compliance(d, f, damped=False).real
         Hn = rp.compliance(d, f, static_correction=False, damped=False).real
         C = 1.0 / rp.static_stiffness(d)
