@@ -1,26 +1,31 @@
 """Correct-cause, false-discovery and parameter-recovery rates of the modal diagnosis on seeded cases.
 
-Usage: ``python benchmarks/diagnose_rates.py N_PER_EFFECT N_NULL [OUT.json] [LEVER] [SKIP_SEEDS]``.
+Usage: ``python benchmarks/diagnose_rates.py N_EFFECT N_NULL OUT.json`` (resumable: the cases
+already in OUT.json are kept and skipped; the file is rewritten atomically after every case).
 
-Truth (tests/diagnose_truth.py, independent of the diagnosis): probedyn's 3D FEM on a finer
-mesh (3 instead of 2 elements through the thickness) with the hidden effect built into the
-mesh or the matrices (a point mass on a mesh vertex, lumped springs on the clamp-face nodes,
-a re-meshed thicker/wider/longer lever, another modulus, a geometric stiffness assembled in
-the test module, Sader fluid loading by the test module's own hydrodynamic function), plus
-noise (1e-3 relative on six frequencies, 5 % on Q where given). Null cases: the same FEM truth
-without effect (noise seeds vary) and a Timoshenko beam (``probedyn.lumped.beam``, five
-bending modes) without effect. Seeds: effects 1000 + i, FEM nulls 5000 + i, Timoshenko nulls
-7000 + i. The nominal FEM baseline of the lever is built once and shared by the cases (it is
-the same probe FEM every case would build).
+Cases: ``tests/diagnose_cases.py`` (seeds 1000 + i with the effects cycling and the levers A
+(long), B (short and wide: shear matters), C (narrow) cycling every 8; nulls 5000 + i on the
+levers in turn, every third from the Timoshenko beam, every fourth declared in air).
+Truth (tests/diagnose_truth.py, independent of the diagnosis): probedyn's 3D FEM on a finer,
+unstretched mesh (4 layers of 20-node hexahedra instead of the diagnosis' 3 stretched), solved
+directly, with the hidden effect built into the mesh or the matrices (a point mass on a mesh
+vertex, lumped springs on the clamp-face nodes, a re-meshed thicker/wider/longer lever, another
+modulus, a geometric stiffness assembled in the test module, Sader fluid loading by the test
+module's own hydrodynamic function), plus noise (1e-3 relative on six frequencies, 5 % on Q where
+given); Timoshenko nulls: ``probedyn.lumped.beam`` (four flapwise + one lateral mode). The nominal
+FEM baseline of each lever is built once and shared by its cases (the same probe FEM every case
+would build).
 
-Reported: correct cause first (the first finding, or the first of its confounded group), the
-false-discovery rate on the nulls (any finding), the median |fit - truth| / |truth - null| of
-the effect's main parameter when the cause is right, every miss with its class, run times.
+Reported: correct cause first (the first finding), the false-discovery rate on the nulls (any
+finding) by truth kind, the median |fit - truth| / |truth - null| of the effect's main parameter
+when the cause is right, every miss with its class, run times (wall and CPU).
 """
 
 from __future__ import annotations
 
 import json
+import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -30,7 +35,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from diagnose_truth import LEVERS, MODAL_EFFECTS, make_modal_case  # noqa: E402
+from diagnose_cases import modal_cases  # noqa: E402
+from diagnose_truth import make_modal_case  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose  # noqa: E402
 from probedyn.diagnose.formats import read_measurement  # noqa: E402
@@ -40,6 +46,11 @@ MAIN = {"point-mass": ("mass", 0.0), "clamp-compliance": ("c_rot", 0.0), "thickn
         "width-error": ("w_ratio", 1.0), "length-error": ("dL", 0.0), "modulus-error": ("e_ratio", 1.0),
         "axial-prestress": ("sigma", 0.0), "fluid-loading": ("rho_f", 0.0)}
 _BASES: dict = {}
+try:  # the commit the rows were computed with (a resumed study may mix commits: each row says which)
+    CODE = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                          cwd=Path(__file__).resolve().parent).stdout.strip() or None
+except OSError:
+    CODE = None
 
 
 def _problem(path: Path, lever: str) -> ModalProblem:
@@ -49,35 +60,49 @@ def _problem(path: Path, lever: str) -> ModalProblem:
     return prob
 
 
-def run_case(folder, seed, effect, lever, truth_kind="fem"):
-    path, truth = make_modal_case(Path(folder), seed, effect, lever, truth_kind=truth_kind)
-    t0 = time.perf_counter()
+def run_case(folder, case):
+    seed, effect, lever, truth_kind = case["seed"], case["effect"], case["lever"], case["truth_kind"]
+    t0, c0 = time.perf_counter(), time.process_time()
+    path, truth = make_modal_case(Path(folder), seed, effect, lever, truth_kind=truth_kind,
+                                  declared_medium=case.get("declared_medium", "vacuum"))
+    t_truth, c_truth = time.perf_counter() - t0, time.process_time() - c0
+    t0, c0 = time.perf_counter(), time.process_time()
     res = diagnose(_problem(path, lever))
-    dt = time.perf_counter() - t0
-    row = {"seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
-           "verdict": res["verdict"], "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt,
-           "baseline_p": res["baseline"]["p_value"]}
+    dt, dc = time.perf_counter() - t0, time.process_time() - c0
+    row = {"code": CODE, "seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
+           "declared_medium": case.get("declared_medium"), "verdict": res["verdict"],
+           "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt, "cpu_s": dc,
+           "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"]}
     if res["findings"]:
         f0 = res["findings"][0]
         group = [f0["cause"], *f0.get("confounded_with", [])]
         row.update(first=f0["cause"], group=group)
-        if effect:
-            row["correct_first"] = f0["cause"] == effect
-            row["correct_in_group"] = effect in group
-            if effect in group and effect in MAIN:
-                name, null = MAIN[effect]
-                fit = res["final"]["parameters"].get(name) if f0["cause"] == effect else None
-                if fit is not None:
-                    row["recovery_error"] = abs(fit - truth["params"][name]) / abs(truth["params"][name] - null)
+    if effect:
+        row["correct_first"] = bool(res["findings"]) and res["findings"][0]["cause"] == effect
+        row["correct_in_group"] = effect in row.get("group", [])
+        if row["correct_first"] and effect in MAIN:
+            name, null = MAIN[effect]
+            fit = res["findings"][0]["parameters"].get(name, {}).get("value")
+            if fit is not None:
+                row["recovery_error"] = abs(fit - truth["params"][name]) / abs(truth["params"][name] - null)
     return row
+
+
+def miss_class(r) -> str:
+    """The class of a miss: no discrepancy found, a cause claimed but confounded, or another cause first."""
+    if not r["findings"]:
+        return "not detected (" + r["verdict"] + ")"
+    if r.get("correct_in_group"):
+        return "confounded (right cause in the group)"
+    return "wrong cause first: " + r["findings"][0]
 
 
 def summarize(rows):
     eff = [r for r in rows if r["effect"]]
     nul = [r for r in rows if not r["effect"]]
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
-    misses = [{k: r.get(k) for k in ("seed", "effect", "verdict", "findings", "group")} for r in eff
-              if not r.get("correct_first")]
+    misses = [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings", "group")},
+               "class": miss_class(r)} for r in eff if not r.get("correct_first")]
     return {
         "n_effect": len(eff), "n_null": len(nul),
         "correct_first": float(np.mean([bool(r.get("correct_first")) for r in eff])) if eff else None,
@@ -90,34 +115,42 @@ def summarize(rows):
         "median_recovery_error": float(np.median(rec)) if rec else None,
         "n_recovered": len(rec),
         "runtime_median_s": float(np.median([r["runtime_s"] for r in rows])) if rows else None,
+        "cpu_median_s": float(np.median([r["cpu_s"] for r in rows])) if rows else None,
+        "truth_cpu_median_s": float(np.median([r["truth_cpu_s"] for r in rows])) if rows else None,
+        "by_effect": {e: {"n": sum(r["effect"] == e for r in eff),
+                          "correct_first": sum(bool(r.get("correct_first")) for r in eff if r["effect"] == e)}
+                      for e in sorted({r["effect"] for r in eff})},
+        "machine": "2 cores shared with 5 other agents (wall times 3-10x idle; CPU times are per process)",
         "misses": misses,
         "null_findings": [{k: r.get(k) for k in ("seed", "truth_kind", "verdict", "findings")} for r in nul if r["findings"]],
     }
 
 
-def study(n_per_effect: int, n_null: int, out: str | None = None, lever: str = "C", skip=()):
-    rows = []
-    cases = [(1000 + i * len(MODAL_EFFECTS) + j, e, "fem") for i in range(n_per_effect) for j, e in enumerate(MODAL_EFFECTS)]
-    nulls = [c for i in range(n_null) for c in ((5000 + i, None, "fem"), (7000 + i, None, "timoshenko"))]
-    # interleaved (effect, null, effect, null, ...) so that a run cut short still measures both rates
-    mixed = []
-    for i in range(max(len(cases), len(nulls))):
-        mixed += cases[i:i + 1] + nulls[i:i + 1]
-    cases = [c for c in mixed if c[0] not in skip]
+def study(n_effect: int, n_null: int, out: str):
+    outp = Path(out)
+    rows = json.loads(outp.read_text())["rows"] if outp.exists() else []
+    done = {r["seed"] for r in rows}
+    cases = modal_cases(n_effect, n_null)
+    eff = [c for c in cases if c["effect"]]
+    nul = [c for c in cases if not c["effect"]]
+    mixed = []  # interleaved (effect, null, ...) so that a run cut short still measures both rates
+    for i in range(max(len(eff), len(nul))):
+        mixed += eff[i:i + 1] + nul[i:i + 1]
     with tempfile.TemporaryDirectory() as d:
-        for seed, eff, tk in cases:
-            rows.append(run_case(d, seed, eff, lever, tk))
-            print(json.dumps({k: rows[-1].get(k) for k in ("seed", "effect", "truth_kind", "verdict", "findings",
-                                                           "recovery_error", "runtime_s")}, default=float), flush=True)
-            if out:
-                Path(out).write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
+        for case in mixed:
+            if case["seed"] in done:
+                continue
+            rows.append(run_case(d, case))
+            print(json.dumps({k: rows[-1].get(k) for k in ("seed", "effect", "lever", "truth_kind", "verdict", "findings",
+                                                           "recovery_error", "runtime_s", "cpu_s")}, default=float),
+                  flush=True)
+            tmp = outp.with_suffix(".tmp")
+            tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
+            os.replace(tmp, outp)
     return summarize(rows)
 
 
 if __name__ == "__main__":
     n_eff, n_null = int(sys.argv[1]), int(sys.argv[2])
-    out = sys.argv[3] if len(sys.argv) > 3 else None
-    lever = sys.argv[4] if len(sys.argv) > 4 else "C"
-    skip = tuple(int(x) for x in sys.argv[5].split(",")) if len(sys.argv) > 5 else ()
-    assert lever in LEVERS
-    print(json.dumps(study(n_eff, n_null, out, lever, skip), indent=1, default=float))
+    out = sys.argv[3] if len(sys.argv) > 3 else "benchmarks/diagnose_rates_modal.json"
+    print(json.dumps(study(n_eff, n_null, out), indent=1, default=float))

@@ -13,6 +13,9 @@ def modal_cases(n_effect: int = 56, n_null: int = 56) -> list[dict]:
         out.append({"seed": 1000 + i, "effect": MODAL_EFFECTS[i % len(MODAL_EFFECTS)],
                     "lever": levers[(i // len(MODAL_EFFECTS)) % len(levers)], "truth_kind": "fem"})
     for i in range(n_null):
-        out.append({"seed": 5000 + i, "effect": None, "lever": levers[i % len(levers)], "truth_kind": "fem",
+        # a third of the nulls from the Timoshenko beam (a truth of another model form) on every
+        # lever in turn (i = 6, 7, 8, 15, 16, 17, ...), the rest FEM
+        out.append({"seed": 5000 + i, "effect": None, "lever": levers[i % len(levers)],
+                    "truth_kind": "timoshenko" if (i // len(levers)) % 3 == 2 else "fem",
                     "declared_medium": "air" if i % 4 == 1 else "vacuum"})
     return out

@@ -2,8 +2,9 @@
 
 Every truth is produced by a path independent of the diagnosis:
 
-* **modal**: probedyn's 3D FEM on a *finer mesh* than the diagnosis uses (3 instead of 2 elements
-  through the thickness), with the hidden effect built into the mesh or the matrices by code
+* **modal**: probedyn's 3D FEM on a *finer mesh* than the diagnosis uses (4 layers of 20-node
+  hexahedra through the thickness, not stretched, instead of the diagnosis' 3 layers meshed thick
+  and stretched back), solved directly (shift-invert, no Ritz reduction), with the hidden effect built into the mesh or the matrices by code
   here -- a point mass on a mesh *vertex* (the diagnosis interpolates a point of its mass path),
   lumped nodal springs on the clamp-face nodes (the diagnosis uses a consistent face foundation
   and a Ritz reduction), a *re-meshed* thicker / wider / longer lever (the diagnosis stretches its
@@ -40,7 +41,7 @@ LEVERS = {
 MODES = [("flapwise", 1), ("flapwise", 2), ("flapwise", 3), ("flapwise", 4), ("lateral", 1), ("torsion", 1)]
 MODAL_EFFECTS = ["point-mass", "clamp-compliance", "thickness-error", "width-error", "length-error",
                  "modulus-error", "axial-prestress", "fluid-loading"]
-TRUTH_ETT = 3  # elements through the thickness of the truth meshes (the diagnosis: 2)
+TRUTH_ETT = 4  # hex-s2 layers through the thickness of the truth meshes (the diagnosis: 3, meshed thick and stretched)
 E_SI, NU_SI, RHO_SI = 169e9, 0.28, 2330.0
 
 
@@ -115,10 +116,11 @@ def _solve_custom(model, K, M, n, clamped: bool):
 
 
 def _geometric_stiffness(model, sigma):
-    """sigma * int (d_x u).(d_x v) dV, assembled here with scikit-fem (scalar P2 Laplacian along x)."""
-    from skfem import Basis, BilinearForm, ElementTetP2
+    """sigma * int (d_x u).(d_x v) dV, assembled here with scikit-fem (the model's own scalar
+    quadratic element, hexahedral or tetrahedral; scalar Laplacian along x, 3rd-order quadrature)."""
+    from skfem import Basis, BilinearForm
 
-    basis = Basis(model.mesh, ElementTetP2(), intorder=2)
+    basis = Basis(model.mesh, model.basis.elem, intorder=4)
 
     @BilinearForm
     def gxx(u, v, w):
@@ -128,11 +130,11 @@ def _geometric_stiffness(model, sigma):
 
 
 def _face_nodal_areas(model, face):
-    """Lumped nodal areas of a face: the diagonal of its consistent P2 face mass, scaled to the
-    face area (HRZ lumping; every node gets a positive share)."""
-    from skfem import BilinearForm, ElementTetP2, FacetBasis
+    """Lumped nodal areas of a face: the diagonal of its consistent face mass (the model's own
+    scalar element), scaled to the face area (HRZ lumping; every node gets a positive share)."""
+    from skfem import BilinearForm, FacetBasis
 
-    fb = FacetBasis(model.mesh, ElementTetP2(), facets=np.asarray(model.mesh.boundaries[face]), intorder=4)
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=np.asarray(model.mesh.boundaries[face]), intorder=4)
 
     @BilinearForm
     def mass(u, v, w):

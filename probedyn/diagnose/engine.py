@@ -167,12 +167,13 @@ class Fitter:
             self._pool = None
 
     def map_nested(self, jobs: list[tuple]) -> list["Fit"]:
-        """``jobs``: ``(ref, new_causes, mask[, warm])`` (a nested fit) or ``(None, (), mask[, warm])``
+        """``jobs``: ``(ref, new_causes, mask[, warm[, only_starts]])`` (a nested fit) or ``(None, (), mask[, warm])``
         (the baseline), see :func:`_run_job`. Returns the fits in order."""
         if self._pool is None or len(jobs) < 2:
             return [_run_job(self, j) for j in jobs]
         by_key = {c.key: c for c in self.problem.causes}
-        packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None) for j in jobs]
+        packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None,
+                   j[4] if len(j) > 4 else None) for j in jobs]
         out = []
         for fit, nfev in self._pool.map(_pool_job, packed):
             self.nfev += nfev
@@ -349,16 +350,17 @@ _POOL_FITTER: "Fitter | None" = None
 
 
 def _run_job(F: Fitter, job: tuple) -> "Fit":
-    """``(ref, new, mask[, warm])``: the baseline (``ref`` None, no ``new``) or a nested fit; with
+    """``(ref, new, mask[, warm[, only_starts]])``: the baseline (``ref`` None, no ``new``) or a nested fit; with
     ``warm`` (full-data optimum values) the baseline starts there only, and a nested fit from the
     null start and from ``warm``'s values of the new parameters (the rest from ``ref``)."""
     ref, new, mask = job[:3]
     warm = job[3] if len(job) > 3 else None
+    only = job[4] if len(job) > 4 else None
     new = tuple(new)
     if ref is None and not new:
         return F.fit((), [dict(warm)], mask) if warm is not None else F.baseline(mask)
     if warm is None:
-        return F.nested(ref, new, mask)
+        return F.nested(ref, new, mask, only_starts=only)
     newp = [p.name for c in new for p in c.params]
     f0 = F.nested(ref, new, mask, only_starts=[])
     # ``cv_warm_all`` (a rugged chi^2 surface, e.g. stick-slip patterns): the second start is the full-data
@@ -372,12 +374,12 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
 def _pool_job(packed: tuple) -> tuple["Fit", int]:
     """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
     F = _POOL_FITTER
-    ref, keys, mask, warm = packed
+    ref, keys, mask, warm, only = packed
     by_key = {c.key: c for c in F.problem.causes}
     if ref is not None:
         ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
     n0 = F.nfev
-    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm))
+    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm, only))
     return fit, F.nfev - n0
 
 
@@ -408,9 +410,10 @@ def _start_sets(causes, ref_values: dict[str, float] | None = None) -> list[dict
 
 
 def folds_of(groups: np.ndarray, k_max: int = 10, k: int = 8) -> list[np.ndarray]:
-    """Leave-one-group-out for up to ``k_max`` groups, else K-fold over interleaved groups."""
+    """Leave-one-group-out for up to ``k_max`` groups, else K-fold over interleaved groups. A
+    negative numeric group label marks residuals that are never held out (prior pseudo-residuals)."""
     g = np.asarray(groups)
-    ug = list(dict.fromkeys(g.tolist()))
+    ug = [x for x in dict.fromkeys(g.tolist()) if not (isinstance(x, (int, float)) and x < 0)]
     if len(ug) <= k_max:
         return [np.nonzero(g == x)[0] for x in ug]
     return [np.nonzero(np.isin(g, ug[i::k]))[0] for i in range(k)]
@@ -446,7 +449,10 @@ class CrossValidation:
                 mask[fold] = False
                 masks.append(mask)
             refs = self.fold_fits(causes[:-1]) if causes else [None] * len(masks)
-            hit = self.F.map_nested([(r, causes[-1:] if causes else (), m, wv) for r, m in zip(refs, masks)])
+            # not warm: the null start and the declared (data-free) start that won the full-data fit
+            ws = self.winning_start.get(key)
+            only = None if ws is None else [ws]
+            hit = self.F.map_nested([(r, causes[-1:] if causes else (), m, wv, only) for r, m in zip(refs, masks)])
             self._ref[key] = hit
         return hit
 
@@ -726,7 +732,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         "method": {
             "evidence": ("leave-one-group-out cross-validation (held-out chi^2), capped at the in-sample "
                          "log likelihood ratio" if use_cv else "Akaike information criterion (fewer than 3 groups)"),
-            "groups": len(list(dict.fromkeys(np.asarray(problem.groups).tolist()))), "folds": len(folds),
+            "groups": len([x for x in dict.fromkeys(np.asarray(problem.groups).tolist())
+                           if not (isinstance(x, (int, float)) and x < 0)]), "folds": len(folds),
             "alpha": alpha, "evidence_margin_nats": margin, "max_causes": max_causes,
             "claim_rule": "baseline chi-square p < alpha AND likelihood-ratio test at alpha / N_causes AND evidence > 0",
             "model": problem.model_description(),

@@ -218,6 +218,26 @@ class FEMBaseline:
         self.disc_note = "not estimated"
         if estimate_error:
             self._estimate_discretisation(needed, len(fams))
+        self.shear_share = self._shear_share()
+
+    def _shear_share(self) -> np.ndarray:
+        """Share of each mode's strain energy carried by the shear constants (Voigt 44, 55, 66 of
+        every region, in its own axes): ``phi^T K_shear phi / phi^T K phi``, with ``K`` linear in
+        the constants, ``K_shear = (K - K(shear block x 0.9)) / 0.1`` (exact). A relative change
+        ``g`` of the shear moduli moves ``ln f`` by ``share * g / 2`` (Rayleigh quotient); the share
+        is the FEM's own measure of how much shear deformation (the Timoshenko correction) a mode has."""
+        m = self.model
+        regions = {}
+        for name, mat, R in zip(m.region_names, m.materials, m.orientations):
+            C = np.array(mat.C, float)
+            C[3:, 3:] *= 0.9
+            regions[name] = (Material(mat.name, C, mat.density, mat.note), R)
+        K, _ = m.assemble()
+        K9, _ = stretched(m, np.ones(3), regions=regions).assemble()
+        P = self.shapes
+        kk = np.einsum("ij,ij->j", P, K @ P)
+        ks = np.einsum("ij,ij->j", P, (K - K9) @ P) / 0.1
+        return np.clip(ks / np.where(kk > 0, kk, np.inf), 0.0, 1.0)
 
     def index(self, family: str, order: int) -> int:
         k = 0
@@ -367,7 +387,7 @@ class ReducedModal:
             # point masses on the mass path
             xi_c = np.linspace(1.0, 0.0, n_mass_corr, endpoint=False)[::-1]
             try:
-                Ac = sp.vstack([m.attachment(tuple(p)) for p in base.mass_path(xi_c).T]).tocsr()
+                Ac = m.points_operator(base.mass_path(xi_c))
                 blocks["mass"].append(ksolve(np.asarray(Ac.T.todense())))
                 self.mass_ok = True
             except GeometryError:
@@ -384,10 +404,10 @@ class ReducedModal:
         E = (K + lam0[0] * M).tocsr()
         Q = np.zeros((N, 0))
         EQ = np.zeros((N, 0))
-        for bname in self.BLOCKS:
-            if not blocks[bname]:
-                continue
-            Xb = np.column_stack(blocks[bname])
+        # one array at a time (a block's arrays in order): the FEM modes go in before their x, y, z
+        # splits, which on a slender lever have ~(L/t)^2 times their energy, so that the modes are
+        # never a small-eigenvalue combination of the splits (dropped as round-off)
+        for Xb in [arr for bname in self.BLOCKS for arr in blocks[bname]]:
             EX = E @ Xb
             nrm = np.sqrt(np.maximum(np.einsum("ij,ij->j", Xb, EX), 1e-300))
             Xb, EX = Xb / nrm, EX / nrm
@@ -401,16 +421,30 @@ class ReducedModal:
             Tb = V[:, keep] / np.sqrt(w[keep])[None, :]
             Q = np.column_stack([Q, Xb @ Tb])
             EQ = np.column_stack([EQ, EX @ Tb])
+        # Gram-Schmidt in the energy norm loses orthogonality when E is very ill-conditioned (a
+        # thin lever meshed thick and stretched 10x, rigid-body shapes beside bending shapes):
+        # re-orthonormalise the union once (symmetric, E_r^-1/2), dropping numerically dependent
+        # directions, so that E_r = I to round-off and coordinates in the basis are exact
+        for _ in range(2):
+            EQ = E @ Q  # recomputed, not the updated product (which drifts by cancellation)
+            w, V = np.linalg.eigh(_sym(Q.T @ EQ))
+            keep = w > 1e-10 * w.max()
+            Tf = V[:, keep] / np.sqrt(w[keep])[None, :]
+            Q = Q @ Tf
+        EQ = E @ Q
         self.Phi = Q  # orthonormal in the energy norm E = K + lambda_1 M
+        self.shift = float(lam0[0])  # the same shift for the reduced eigenproblems (_lowest_pairs)
         P = self.Phi
         self.r = P.shape[1]
         self.E_r = _sym(P.T @ EQ)
-        cols, owner = [], []
+        cols, owner, chunk = [], [], []
         for b in self.BLOCKS:
             for arr in blocks[b]:
+                chunk += [len(cols)] * arr.shape[1]
                 cols.append(arr)
                 owner += [b] * arr.shape[1]
         owner = np.array(owner)
+        self._chunk = np.array(chunk)
         # coordinates of each raw shape in the basis: raw = Phi C  with  C = Phi^T E raw
         self._raw_coords = np.linalg.solve(self.E_r, EQ.T @ np.column_stack(cols))
         self._owner = owner
@@ -457,10 +491,11 @@ class ReducedModal:
             # the same block-ordered orthogonalisation as the union, in reduced coordinates
             Er = self.E_r
             T = np.zeros((self.r, 0))
-            for bname in self.BLOCKS:
-                if bname not in blocks:
+            for ci in range(int(self._chunk.max()) + 1):
+                sel = self._chunk == ci
+                if self._owner[sel][0] not in blocks:
                     continue
-                X = self._raw_coords[:, self._owner == bname]
+                X = self._raw_coords[:, sel]
                 EX = Er @ X
                 nrm = np.sqrt(np.maximum(np.einsum("ij,ij->j", X, EX), 1e-300))
                 X, EX = X / nrm, EX / nrm
@@ -488,7 +523,7 @@ class ReducedModal:
         """(101, 3, r) reduced displacement operators on the mass path (xi = 0, 0.01, ..., 1)."""
         if self._path_ops is None:
             m = self.base.model
-            A = sp.vstack([m.attachment(tuple(p)) for p in self.base.mass_path(self._path_xi).T]).tocsr()
+            A = m.points_operator(self.base.mass_path(self._path_xi))  # one vectorised mesh search
             self._path_ops = np.asarray(A @ self.Phi).reshape(len(self._path_xi), 3, self.r)
         return self._path_ops
 
@@ -505,11 +540,8 @@ class ReducedModal:
         blocks = self.blocks_for(s)
         sub = self._subspace(blocks)
         K, M = sub.matrices(s, penalty="clamp" in blocks)
-        try:
-            lam, V = sla.eigh(K, M, driver="gvd")
-        except (np.linalg.LinAlgError, ValueError) as exc:
-            raise SolverError(f"reduced eigenproblem failed: {exc}") from None
-        nlow = min(len(lam), max(2 * len(self.base.families), 12))
+        nlow = min(K.shape[0], max(2 * len(self.base.families), 12))
+        lam, V = _lowest_pairs(K, M, nlow, self.shift)
         fams = sub.families_of(V[:, :nlow])
         vt = np.zeros((V.shape[0], len(needed)))
         lt = np.zeros(len(needed))
@@ -622,6 +654,28 @@ class _Sub:
 
 def _sym(A: np.ndarray) -> np.ndarray:
     return 0.5 * (A + A.T)
+
+
+def _lowest_pairs(K: np.ndarray, M: np.ndarray, n: int, shift: float) -> tuple[np.ndarray, np.ndarray]:
+    """The ``n`` lowest eigenpairs of ``K v = lam M v`` (reduced, dense), solved as the shifted
+    inverse pencil ``M v = mu (K + shift M) v``, ``lam = 1 / mu - shift``: the Ritz basis is
+    orthonormal in the energy norm ``K + lambda_1 M``, so ``K + shift M`` is well conditioned while
+    ``M`` alone is not (shapes with much strain and little kinetic energy: condition numbers up
+    to 1e10 on very thin levers, where a Cholesky factor of ``M`` loses every digit of the low
+    modes). Vectors are returned M-normalised. Falls back to the direct pencil if ``K + shift M``
+    is not positive definite (a state beyond buckling)."""
+    r = K.shape[0]
+    try:
+        mu, V = sla.eigh(M, K + shift * M, subset_by_index=[r - n, r - 1], driver="gvx")
+        lam = 1.0 / mu[::-1] - shift
+        V = V[:, ::-1]
+    except (np.linalg.LinAlgError, ValueError):
+        try:
+            lam, V = sla.eigh(K, M, subset_by_index=[0, n - 1], driver="gvx")
+        except (np.linalg.LinAlgError, ValueError) as exc:
+            raise SolverError(f"reduced eigenproblem failed: {exc}") from None
+    mn = np.sqrt(np.maximum(np.einsum("ij,ij->j", V, M @ V), 1e-300))
+    return lam, V / mn[None, :]
 
 
 def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):

@@ -27,8 +27,7 @@ class AxialPrestress(Cause):
         # Euler buckling of a clamped-free column: sigma_cr = pi^2 E t^2 / (48 L^2)
         s_cr = math.pi**2 * b.E_ref * b.t**2 / (48.0 * b.L**2)
         return AxialPrestress((CauseParam("sigma", "Pa", -0.9 * s_cr, 30.0 * s_cr, 0.0,
-                                          "axial stress (compression down to 0.9 of the buckling stress)",
-                                          starts=(-0.3 * s_cr, 3.0 * s_cr)),))
+                                          "axial stress (compression down to 0.9 of the buckling stress)"),))
 
     def effect(self, v, s):
         s.axial_stress += v["sigma"]

@@ -3,7 +3,8 @@
 Each is an exact affine stretch of the probe's mesh along its axis (``fem_terms``: the P2
 stiffness of the stretched mesh is a sum of six projected matrices with known scale factors).
 The free-length error is an *offset* ``dL`` of the clamp edge (the same for every length of a
-length sweep), the others are ratios.
+length sweep), the others are ratios. Every frequency is monotone in each of these single
+parameters, so the nested fit starts only from the null (no extra starts).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ class ThicknessError(Cause):
     description = "Actual thickness t = ratio t_nom: flapwise and torsional modes scale with t, lateral ones hardly."
     needs = "a lateral or torsional mode besides the flapwise ones (flapwise alone: same as a modulus error)"
     changes = ("thickness",)
-    params = (CauseParam("t_ratio", "1", 0.6, 1.6, 1.0, "t / t_nominal", starts=(0.85, 1.15)),)
+    params = (CauseParam("t_ratio", "1", 0.6, 1.6, 1.0, "t / t_nominal"),)
 
     def effect(self, v, s):
         s.scale = np.array(s.scale, float)
@@ -38,7 +39,7 @@ class WidthError(Cause):
     description = "Actual width w = ratio w_nom: lateral modes scale with w, torsion falls, flapwise hardly changes in vacuum."
     needs = "a lateral or torsional mode (or fluid loading, which depends on w)"
     changes = ("width",)
-    params = (CauseParam("w_ratio", "1", 0.6, 1.6, 1.0, "w / w_nominal", starts=(0.85, 1.15)),)
+    params = (CauseParam("w_ratio", "1", 0.6, 1.6, 1.0, "w / w_nominal"),)
 
     def effect(self, v, s):
         s.scale = np.array(s.scale, float)
@@ -61,8 +62,7 @@ class LengthError(Cause):
         if super().constrain(problem) is None:
             return None
         Lmin = problem.shortest_length
-        return LengthError((CauseParam("dL", "m", -0.3 * Lmin, 0.3 * Lmin, 0.0, "free length minus nominal",
-                                       starts=(-0.05 * Lmin, 0.05 * Lmin)),))
+        return LengthError((CauseParam("dL", "m", -0.3 * Lmin, 0.3 * Lmin, 0.0, "free length minus nominal"),))
 
     def effect(self, v, s):
         s.scale = np.array(s.scale, float)

@@ -15,7 +15,7 @@ class ModulusError(Cause):
                    "the density shows the same way): every mode scales by sqrt(ratio).")
     needs = "modes of two families, or a declared geometry (a uniform scale is also a thickness/length pattern)"
     changes = ("modulus",)
-    params = (CauseParam("e_ratio", "1", 0.4, 2.5, 1.0, "E / E_nominal", starts=(0.8, 1.25)),)
+    params = (CauseParam("e_ratio", "1", 0.4, 2.5, 1.0, "E / E_nominal"),)  # monotone: the null start suffices
 
     def effect(self, v, s):
         s.E_factor *= v["e_ratio"]
