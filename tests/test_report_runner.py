@@ -80,10 +80,16 @@ def test_interrupt_kills_workers_and_leaves_nothing(tmp_path, monkeypatch):
         # which does not wake a thread blocked on a lock until something else does
         signal.pthread_kill(threading.main_thread().ident, signal.SIGINT)
 
-    threading.Thread(target=interrupt_when_started, daemon=True).start()
-    t0 = time.monotonic()
-    with pytest.raises(KeyboardInterrupt):
-        R.build_report(out, jobs=2)
+    # Ctrl-C raises KeyboardInterrupt here even when the test run itself was started with SIGINT
+    # ignored (a background job, nohup, some CI runners)
+    old_handler = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        threading.Thread(target=interrupt_when_started, daemon=True).start()
+        t0 = time.monotonic()
+        with pytest.raises(KeyboardInterrupt):
+            R.build_report(out, jobs=2)
+    finally:
+        signal.signal(signal.SIGINT, old_handler)
     assert time.monotonic() - t0 < 30  # the sleeping worker was killed, not waited for
     assert _files(out) == ["old.md"]
     assert not [p for p in out.iterdir() if re.search(r"probedyn-tmp", p.name)]
@@ -114,7 +120,10 @@ def test_ctrl_c_to_the_process_group(tmp_path, when):
     import sys
 
     out = tmp_path / "out"
-    script = ("import sys\nsys.path.insert(0, %r)\nimport probedyn.report as R\n"
+    # SIGINT back to its default first: a test run started with SIGINT ignored (a background job,
+    # nohup, some CI runners) would hand the ignore down, and the CLI keeps an inherited ignore
+    script = ("import signal, sys\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n"
+              "sys.path.insert(0, %r)\nimport probedyn.report as R\n"
               "R.SECTIONS = [('Sleeping', 'report_runner_sections:sleeping'), ('First', 'report_runner_sections:first')]\n"
               "from probedyn.cli import main\nsys.exit(main(['report', '--jobs', '2', '--out', %r]))\n"
               % (str(Path(__file__).parent), str(out)))

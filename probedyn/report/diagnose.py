@@ -110,7 +110,9 @@ def plot_residuals(res: dict[str, Any], path: Path, labels: list[str] | None = N
         ax.bar(x - w / 2, before, w, label="baseline (probe FEM)", color="tab:red")
         ax.bar(x + w / 2, after, w, label=f"{name} (FEM re-solve)", color="tab:blue")
         if labels:
-            ticks = list(labels) + [f"Q {lb}" for lb in labels]
+            ticks = list(labels) + ([f"Q {lb}" for lb in labels] if res.get("data", {}).get("with_Q") else [])
+            # residuals beyond the measured ones: the modal noise model's model-form prior pseudo-residuals
+            ticks += [f"model-form prior {i + 1}" for i in range(len(x) - len(ticks))]
             ax.set_xticks(x, ticks[: len(x)], rotation=45, ha="right", fontsize=7)
         ax.set_xlabel("measured mode")
     else:
