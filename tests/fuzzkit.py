@@ -32,6 +32,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from probedyn.core.resources import environment
+
 BAD = ("traceback", "silent", "hang", "wrong")
 TALLY: list[dict[str, Any]] = []
 
@@ -72,20 +74,6 @@ def _fill(argv: list[str], tmp: Path) -> list[str]:
     return [a.replace("{tmp}", str(tmp)) for a in argv]
 
 
-@contextlib.contextmanager
-def _environ(env: dict[str, str]):
-    old = {k: os.environ.get(k) for k in env}
-    os.environ.update(env)
-    try:
-        yield
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-
-
 def run_inprocess(argv: list[str], env: dict[str, str] | None = None, timeout: float = 60.0) -> Outcome:
     from probedyn.cli import main
 
@@ -101,7 +89,7 @@ def run_inprocess(argv: list[str], env: dict[str, str] | None = None, timeout: f
     signal.setitimer(signal.ITIMER_REAL, timeout)
     t0 = time.perf_counter()
     try:
-        with _environ(env or {}), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        with environment(env or {}), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             try:
                 code = main(argv)
             except _Hang:

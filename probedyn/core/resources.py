@@ -10,8 +10,10 @@ instead of a MemoryError traceback, an OOM kill or hours of swapping.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
+from typing import Iterator, Mapping
 
 from probedyn.core.errors import ResourceError
 
@@ -91,3 +93,20 @@ def check_memory(nbytes: float, what: str, how: str = "", hint: str = "") -> Non
             f"{what} needs {est} of memory; {fmt_bytes(avail)} are available"
             + (f": {hint}" if hint else "")
         )
+
+
+@contextlib.contextmanager
+def environment(env: Mapping[str, str]) -> Iterator[None]:
+    """Set the variables of ``env`` for the duration of the block, then restore each one (or
+    remove it if it was unset). For settings read when a process or library starts, e.g. the
+    thread counts handed to the report's worker processes."""
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v

@@ -47,6 +47,7 @@ from typing import Iterator, Sequence
 
 from probedyn.core import io
 from probedyn.core.errors import ProbedynError, ResourceError
+from probedyn.core.resources import environment
 
 #: CPU seconds of each section in the full (not quick) report, measured in the workers of a
 #: fresh-clone run (benchmarks/results/report-times-s4.json, "after_fresh_clone_cold_parallel");
@@ -200,20 +201,6 @@ def _sigint_held() -> Iterator[None]:
             signal.raise_signal(signal.SIGINT)
 
 
-@contextlib.contextmanager
-def _worker_environment() -> Iterator[None]:
-    old = {k: os.environ.get(k) for k in WORKER_ENV}
-    os.environ.update(WORKER_ENV)
-    try:
-        yield
-    finally:
-        for k, v in old.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-
-
 def _move_staged(stage: Path, outdir: Path) -> None:
     """Move every finished file of ``stage`` to the same place below ``outdir`` (through
     :func:`probedyn.core.io.atomic_path`: deferred inside a transaction)."""
@@ -231,7 +218,7 @@ def run_parallel(sections: Sequence[tuple[str, str]], outdir: Path, quick: bool,
     order = sorted(range(len(sections)), key=lambda i: -EXPECTED_CPU_S.get(sections[i][0], 5.0))
     results: dict[int, SectionResult] = {}
     with _staging(outdir) as stage:
-        with _worker_environment():
+        with environment(WORKER_ENV):
             ex = cf.ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"),
                                         initializer=_worker_init, initargs=(os.getpid(),))
             try:
