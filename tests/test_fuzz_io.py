@@ -22,14 +22,8 @@ from probedyn.core.schema import Field, Table
 
 
 @pytest.fixture(autouse=True)
-def _sigint_not_ignored():
-    """These tests deliver SIGINT: under a runner started with SIGINT ignored (``pytest &`` from a
-    script, nohup), which probedyn rightly keeps ignoring, give the test its default handler."""
-    old = signal.getsignal(signal.SIGINT)
-    if old is signal.SIG_IGN:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, old)
+def _sigint(sigint_not_ignored):
+    """These tests deliver SIGINT (tests/conftest.py: sigint_not_ignored)."""
 
 
 @pytest.fixture(autouse=True)
