@@ -254,7 +254,19 @@ class ModalProblem:
         r = (d.freq - f) / self.sigma_f
         r = np.where(np.isfinite(r), r, 1e6)
         a = self.model_form(r, f)
-        r = r - (self.mf_dirs * (f / self.sigma_f)[:, None]) @ a
+        B = self.mf_dirs * (f / self.sigma_f)[:, None]
+        r = r - B @ a
+        if self.train_mask is not None:
+            # held-out modes: the residual is whitened by its predictive sigma, which includes the
+            # model-form amplitude's uncertainty left after the training modes (posterior covariance
+            # (B_t^T B_t + I)^-1 of the ridge profile): a mode the training data constrain poorly
+            # in that direction is not held to the bare noise (diagonal; one mode per fold here)
+            held = ~np.asarray(self.train_mask)[: self.n]
+            if held.any():
+                Bt = np.where(np.isfinite(B), B, 0.0)
+                P = np.linalg.inv(Bt[~held].T @ Bt[~held] + np.eye(B.shape[1]))
+                var = 1.0 + np.einsum("ij,jk,ik->i", Bt[held], P, Bt[held])
+                r[held] = r[held] / np.sqrt(var)
         if len(self.q_idx):
             i = self.q_idx
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / d.Q_sigma_rel[i]])
@@ -262,7 +274,7 @@ class ModalProblem:
         return np.where(np.isfinite(r), r, 1e6)
 
     def model_form(self, r: np.ndarray, f: np.ndarray) -> np.ndarray:
-        """The two model-form amplitudes (in prior sigmas) that best explain the whitened frequency
+        """The model-form amplitude(s) (in prior sigmas) that best explain the whitened frequency
         residuals ``r`` of the fitted modes (ridge least squares = Gaussian prior N(0, 1))."""
         B = self.mf_dirs * (np.where(np.isfinite(f), f, 0.0) / self.sigma_f)[:, None]
         m = np.ones(self.n, bool) if self.train_mask is None else np.asarray(self.train_mask)[: self.n]
