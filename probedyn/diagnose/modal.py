@@ -18,8 +18,8 @@ The noise model carries that gap as one nuisance direction, ``ln f_i`` moving by
 a Gaussian prior ``a ~ N(0, 1)`` -- the model form is uncertain by about one FEM-to-beam gap --
 truncated at ``MF_BOUND`` = 3 (a larger discrepancy is not model form and is left to the
 causes). The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode
-by mode (1.4-1.5 % flapwise, 0.6 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.4-0.7 %,
-0.2 % and 1.8 % on 300 x 30 x 10 um), and shrinks where they agree (long, narrow levers), keeping
+by mode (1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
+0.21 % and 1.8 % on 300 x 30 x 10 um), and shrinks where they agree (long, narrow levers), keeping
 the sensitivity there; a uniform modulus change is not absorbed, because the gap is not uniform
 over the families. Probes without a beam model (a meshed tip, several materials, an anisotropic
 crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 %.
