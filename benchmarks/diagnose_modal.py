@@ -2,7 +2,7 @@
 
 Prints, measured in this process (wall and CPU time, ``time.process_time``: on a shared machine
 the CPU time is the reproducible number): building the FEM baseline (probe FEM, discretisation
-estimate, shear-energy shares), the whole diagnosis with that baseline reused (Ritz reduction,
+estimate, the 1D-3D beam gaps of the model-form floor), the whole diagnosis with that baseline reused (Ritz reduction,
 nested fits, cross-validation, FEM re-solve of the final model), and their ratio.
 
 Usage: python benchmarks/diagnose_modal.py

@@ -1,17 +1,17 @@
 """The modal diagnosis' model-form floor (probedyn/diagnose/modal.py) against independent references.
 
-* The FEM's shear-energy share of each mode (the direction of the shear-modulus nuisance) against
-  Timoshenko beam theory (``probedyn.lumped.beam``, Cowper's kappa): ``d ln f / d ln (kappa G)``
-  of the beam must equal half the FEM's share. Tolerance 25 %: Cowper's kappa differs from the
-  effective shear coefficient of a 3D rectangle with w/t = 2 by up to ~10 %, and the clamp's 3D
-  boundary layer adds shear energy of relative size ~ t / (half wavelength) (7-15 % for modes
-  2-4 of a lever with L/t = 15). Mode 1 is not compared: its beam shear share (0.5 %) is smaller
-  than the boundary layer's.
-* The profiled model-form amplitudes use the fitted (training) modes only, never leave their
-  bounds, and their prior pseudo-residuals are never held out.
+* The 1D-3D gap the floor is made of (``FEMBaseline.beam_gap``, ``ln(f_FEM / f_beam)``) is bracketed
+  by beam theory: for the bending modes the 3D FEM with its rigid clamp lies between the Timoshenko
+  beam with ``E`` (anticlastic curvature free) and with the plate modulus ``E / (1 - nu^2)``
+  (curvature fully restrained), i.e. ``0 < gap < ln(1 / sqrt(1 - nu^2))``; in torsion the clamp
+  restrains the warping of the root, which Saint-Venant theory neglects, so the FEM is stiffer
+  (``gap > 0``). These are inequalities of the physics, not fitted numbers.
+* The profiled model-form amplitude uses the fitted (training) modes only, never leaves its
+  bound, and its prior pseudo-residual is never held out.
 * A noise-only measurement from the Timoshenko beam (another model form of the same lever) is
-  not explained by a catalog cause (issue 11: the plate/shear model-form difference, 0.5-0.8 %
-  on lever C, is 5-8 times the stated noise).
+  not explained by a catalog cause, on lever B (100 x 40 x 10 um, short and wide), where the
+  model-form gap is largest (1.4-1.5 % flapwise, 15 times the stated noise; issue 11: 5/5 such
+  nulls were "explained" by a cause with a constant floor).
 """
 
 from __future__ import annotations
@@ -35,35 +35,38 @@ from probedyn.probes import get_probe  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def base_C():
+def base_B():
     probe = get_probe("cantilever")[0]
-    return FEMBaseline(probe, probe.resolve(dict(LEVERS["C"])), {"flapwise": 4, "lateral": 1, "torsion": 1})
+    return FEMBaseline(probe, probe.resolve(dict(LEVERS["B"])), {"flapwise": 4, "lateral": 1, "torsion": 1})
 
 
-def test_shear_share_matches_timoshenko(base_C):
-    g = LEVERS["C"]
-    k0 = bm.cowper_kappa(NU_SI)
-
-    def freqs(kappa, fam, n):
-        return bm.timoshenko_frequencies(bm.RectBeam(g["length"], g["width"], g["thickness"], E_SI, NU_SI, RHO_SI,
-                                                     kappa=kappa), fam, n)
-
-    for fam, orders in (("flapwise", (2, 3, 4)), ("lateral", (1,))):
-        n = max(orders)
-        sens = np.log(freqs(1.01 * k0, fam, n) / freqs(k0, fam, n)) / np.log(1.01)
+def test_beam_gap_is_bracketed_by_beam_theory(base_B):
+    b = base_B
+    plate = np.log(1.0 / np.sqrt(1.0 - NU_SI**2))  # the plate bound above the E-beam, 4.2 % for nu = 0.28
+    for fam, orders in (("flapwise", (1, 2, 3, 4)), ("lateral", (1,))):
         for o in orders:
-            fem = 0.5 * base_C.shear_share[base_C.index(fam, o)]
-            assert 0.8 < fem / sens[o - 1] < 1.25, (fam, o, fem, sens[o - 1])
+            i = b.index(fam, o)
+            assert 0.0 < b.beam_gap[i] < plate, (fam, o, b.beam_gap[i])
+            assert b.plate_gap[i] < 0.0, (fam, o, b.plate_gap[i])
+            assert b.beam_gap[i] - b.plate_gap[i] == pytest.approx(plate, rel=1e-9)
+    assert b.beam_gap[b.index("torsion", 1)] > 0.0
+    # the floor's direction is that gap, mode by mode, independent of the measurement
+    g = LEVERS["B"]
+    ref = bm.timoshenko_frequencies(bm.RectBeam(g["length"], g["width"], g["thickness"], E_SI, NU_SI, RHO_SI),
+                                    "flapwise", 2)
+    assert b.beam_gap[b.index("flapwise", 2)] == pytest.approx(np.log(b.freqs[b.index("flapwise", 2)] / ref[1]),
+                                                                rel=1e-12)
 
 
-def test_model_form_floor_on_a_timoshenko_null(tmp_path, base_C):
-    path, _ = make_modal_case(tmp_path, 7002, None, "C", truth_kind="timoshenko")
-    prob = ModalProblem(read_measurement(path), bases={None: base_C})
+def test_model_form_floor_on_a_timoshenko_null(tmp_path, base_B):
+    path, _ = make_modal_case(tmp_path, 7002, None, "B", truth_kind="timoshenko")
+    prob = ModalProblem(read_measurement(path), bases={None: base_B})
     n = prob.n
-    # the two prior pseudo-residuals are the last entries and belong to no fold
-    assert list(prob.groups[-2:]) == [-1, -1]
+    k = len(prob.mf_names)
+    # the prior pseudo-residuals are the last entries and belong to no fold
+    assert list(prob.groups[-k:]) == [-1] * k
     for fold in folds_of(prob.groups):
-        assert not np.any(fold >= len(prob.groups) - 2)
+        assert not np.any(fold >= len(prob.groups) - k)
     vals = {p.name: p.null for p in prob.base_params}
     f, _ = prob.predict(vals)
     r = (prob.data.freq - f) / prob.sigma_f
@@ -78,10 +81,17 @@ def test_model_form_floor_on_a_timoshenko_null(tmp_path, base_C):
         r2[0] += 50.0
         assert np.allclose(prob.model_form(r, f), prob.model_form(r2, f))
         assert not np.allclose(prob.model_form(r, f), a_all)
+        # the held-out mode's residual is whitened by its predictive sigma: noise (1) plus the
+        # amplitude's posterior variance after the training modes, b^2 / (sum_train b^2 + 1)
+        b = prob.mf_dirs[:, 0] * f / prob.sigma_f
+        a_t = prob.model_form(r, f)[0]
+        var = 1.0 + b[0] ** 2 / (np.sum(b[1:] ** 2) + 1.0)
+        _, Q = prob.predict(vals)
+        assert prob._residuals(f, Q)[0] == pytest.approx((r[0] - b[0] * a_t) / np.sqrt(var), rel=1e-9)
     finally:
         prob.train_mask = None
-    # a 100-sigma uniform shift is far outside the model-form range: the profile stops at its bound
-    big = prob.model_form(r + 100.0 * (f / prob.sigma_f) * 1e-3 * 100, f)
+    # a 10 % uniform shift is far outside the model-form range: the profile stops at its bound
+    big = prob.model_form(r + (f / prob.sigma_f) * 0.1, f)
     assert np.max(np.abs(big)) == pytest.approx(MF_BOUND)
     res = diagnose(prob)
     assert res["findings"] == [], (res["verdict"], res["findings"])
@@ -109,3 +119,17 @@ def test_reduced_model_reproduces_the_fem_on_a_very_thin_stretched_lever():
     f, _ = red.solve(s, need)
     ref = np.array([b.freqs[b.index(fa, o)] for fa, o in need])
     assert np.allclose(f, ref, rtol=1e-4), (f, ref)
+
+
+@pytest.mark.slow
+def test_length_error_told_from_modulus_and_clamp_by_heldout_modes(tmp_path):
+    """A 1.9 % length error of lever A (seed 1004 of the rate study, FEM truth cached): bending
+    modes fall as 1/L^2 (3.8 %), torsion as 1/L (1.9 %); a modulus error moves all by the same
+    factor and a compliant clamp mode 1 most. Session 4 named clamp compliance first (its two
+    parameters reached the evidence cap with the best in-sample fit); ranked by held-out evidence
+    the torsion mode, predicted from the bending modes, decides."""
+    from probedyn.diagnose.problems import make_problem
+
+    path, _ = make_modal_case(tmp_path, 1004, "length-error", "A", compute=False)
+    res = diagnose(make_problem(path))
+    assert res["findings"][0]["cause"] == "length-error", [(c["cause"], c["evidence_cv"]) for c in res["candidates"]]

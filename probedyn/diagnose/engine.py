@@ -31,6 +31,9 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
 5. **Confounding.** Every claimed cause within ``EVIDENCE_MARGIN`` = ln 10 = 2.30 nats (a Bayes
    factor of 10, Jeffreys' "strong") of the winner is *confounded* with it; the problem
    predicts extra observables for each fitted model and the separating measurements are named.
+   A problem with ``rank_by_heldout`` (modal) ranks the claimed causes and judges confounding by
+   the uncapped held-out evidence: the cap bounds each cause against the baseline, and when
+   several causes reach it, it would rank only their in-sample fits.
 6. **Extend** greedily while the extended model still fails the chi^2 test (at most
    ``max_causes``, each nested in the current model and passing the same tests).
 7. **Gain.** The final model is re-solved with the full model where the fits used a reduced
@@ -684,7 +687,16 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             d["evidence"] = 0.5 * d["dchi2"] - d["k"]
             d["method"] = "akaike (fewer than 3 groups)"
     claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
-    claimed.sort(key=lambda d: -d["evidence"])
+    # ranking: by the evidence (capped), or -- a problem with ``rank_by_heldout`` -- by the held-out
+    # evidence itself: the cap bounds each cause's Bayes factor against the *baseline*, but when several
+    # causes reach their caps it only ranks their in-sample fits (a cause with more parameters wins);
+    # between two causes the held-out log likelihood difference is the out-of-sample comparison
+    by_ho = bool(getattr(problem, "rank_by_heldout", False))
+
+    def rank(d):
+        return d["evidence_cv"] if by_ho and d.get("evidence_cv") is not None else d["evidence"]
+
+    claimed.sort(key=lambda d: -rank(d))
     findings: list[dict] = []
     confounded: list[dict] = []
     chosen: list[Cause] = []
@@ -692,7 +704,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     reasons: list[str] = []
     if claimed:
         best = claimed[0]
-        rivals = [d for d in claimed[1:] if d["evidence"] >= best["evidence"] - margin]
+        rivals = [d for d in claimed[1:] if rank(d) >= rank(best) - margin]
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
         current = best["fit"]

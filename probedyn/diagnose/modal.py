@@ -5,29 +5,36 @@ Residuals are whitened: ``(f_meas - f_model) / sigma_f`` for every mode, with
 :class:`~probedyn.diagnose.modal_model.FEMBaseline`), and ``(ln Q_meas - ln Q_model) / (sigma_Q / Q)``
 for every measured Q. Cross-validation groups are the modes (a mode's f and Q together).
 
-**Model-form floor.** Two differences between the FEM and any real lever (or another model of
-it, e.g. a 1D Timoshenko beam) that a user cannot control at the 0.1 % level are not catalog
-causes but nuisance directions of the noise model, each with a Gaussian prior:
+**Model-form floor** (derived per probe). The 3D FEM and any real lever -- or another model of
+it, e.g. a 1D Timoshenko beam -- differ in what the FEM idealises: the rigid clamp restrains the
+anticlastic curvature of the root (a wide lever's bending stiffness lies between the beam value
+``E I`` and the plate value ``E I / (1 - nu^2)`` depending on that restraint) and the warping of
+the root section in torsion, the clamp's 3D boundary layer, the shear deformation of short
+levers. How much these 3D details move each mode *of this probe* is computable: the gap
+``g_i = ln(f_FEM,i / f_beam,i)`` between the FEM and probedyn's own beam theory of the same prism
+(:meth:`FEMBaseline._beam_gap`: Timoshenko bending with ``E``, Saint-Venant torsion without
+warping; the FEM lies between that beam and the plate-modulus beam, a bracket the tests check).
+The noise model carries that gap as one nuisance direction, ``ln f_i`` moving by ``a g_i``, with
+a Gaussian prior ``a ~ N(0, 1)`` -- the model form is uncertain by about one FEM-to-beam gap --
+truncated at ``MF_BOUND`` = 3 (a larger discrepancy is not model form and is left to the
+causes). The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode
+by mode (1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
+0.21 % and 1.8 % on 300 x 30 x 10 um), and shrinks where they agree (long, narrow levers), keeping
+the sensitivity there; a uniform modulus change is not absorbed, because the gap is not uniform
+over the families. Probes without a beam model (a meshed tip, several materials, an anisotropic
+crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 %.
 
-* a uniform elastic-stiffness scale (every ``ln f`` moves by the same ``a_E``), prior sigma
-  ``MF_UNIFORM`` = 0.5 % in frequency: the effective bending stiffness of a wide lever lies between
-  the beam value ``E I`` and the plate value ``E I / (1 - nu^2)`` depending on how the root
-  restrains the anticlastic curvature (the 3D FEM of a rigid clamp vs a beam theory: 0.4-0.8 % on
-  levers with w/t = 2-3), and nominal E of an anisotropic material quoted as isotropic;
-* the shear moduli (``ln f_i`` moves by ``s_i a_G / 2`` with ``s_i`` the FEM's shear-energy share of
-  mode i, :attr:`FEMBaseline.shear_share`), prior sigma ``MF_SHEAR`` = 15 % of G: the transverse
-  shear stiffness of a lever is what beam theories represent by a shear coefficient (5/6,
-  10(1+nu)/(12+11nu), or the 3D value), and silicon's shear modulus in the bending plane varies
-  from 51 to 80 GPa with the crystal direction while an isotropic model fixes G = E / 2(1+nu).
+The amplitude enters linearly and is profiled in closed form in every residual evaluation
+(ridge least squares on the fitted data only, the prior as a pseudo-residual ``a`` that belongs to
+no cross-validation group), which equals fitting it jointly with its Gaussian prior.
 
-Both enter linearly and are profiled in closed form in every residual evaluation (ridge least
-squares on the fitted data only, the prior as two pseudo-residuals ``a / sigma`` that belong to no
-cross-validation group), which equals fitting them jointly with Gaussian priors; the priors are
-truncated at ``MF_BOUND`` = 3 sigma (model form is a bounded range, 1.5 % uniform and 45 % of G at
-most: a 40 % discrepancy is not absorbed into it but left to the causes). A cause is
-therefore claimed only where its pattern exceeds what these two directions explain within their
-priors: a uniform modulus change below about 3 x 0.5 % in frequency is not claimed (the
-likelihood-ratio threshold), a thickness, clamp, mass or prestress pattern still is.
+**Ranking** (``rank_by_heldout``): claimed causes are ranked, and confounding is judged, by their
+leave-one-mode-out evidence: whether a cause fitted to the other modes predicts a mode's
+frequency (a torsion mode after the bending modes, the fourth flapwise after the first three) is
+what separates a length error (bending ~ 1/L^2, torsion ~ 1/L) from a modulus error (all ~
+sqrt(E)) or a compliant clamp (mode 1 most); when several causes reach the evidence cap of the
+in-sample likelihood ratio, the cap alone would rank their in-sample fits and favour the cause
+with more parameters.
 
 Baseline: the probe's FEM with its declared parameters, the declared medium (Sader loading of
 the flapwise modes) and a declared known mass; calibrated parameters: the intrinsic quality
@@ -49,10 +56,9 @@ from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
 from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve
 
-__all__ = ["ModalProblem", "MF_UNIFORM", "MF_SHEAR"]
+__all__ = ["ModalProblem", "MF_UNIFORM", "MF_BOUND"]
 
-MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift (plate effect, nominal E)
-MF_SHEAR = 0.15  # prior sigma of the relative shear-modulus change (shear coefficient, anisotropic G)
+MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a probe without a beam model
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 
 _FREE = {  # [baseline] free quantity -> calibration parameter
@@ -68,6 +74,9 @@ class ModalProblem:
     kind = "modal"
     unit = "relative frequency"
     reduced = True
+    #: rank claimed causes by their held-out (leave-one-mode-out) evidence: which mode pattern a
+    #: cause predicts for a mode it was not fitted to is what tells causes apart (see docs/diagnose.md)
+    rank_by_heldout = True
 
     def __init__(self, data: ModalData, *, bases: dict | None = None) -> None:
         self.data = data
@@ -113,18 +122,13 @@ class ModalProblem:
                 self.disc[i] = b.disc_err[b.index(fa, o)]
         self.sigma_f = np.sqrt(d.freq_sigma**2 + self.disc**2)
         self.q_idx = np.nonzero(np.isfinite(d.Q))[0]
-        # model-form directions (relative frequency per unit prior sigma), see the module docstring
-        share = np.zeros(self.n)
-        for L in self.lengths:
-            b = self.bases[L]
-            for i, (fa, o) in zip(self.rows_of[L], self.need_of[L]):
-                share[i] = b.shear_share[b.index(fa, o)]
-        self.shear_share = share
-        self.mf_dirs = np.column_stack([np.full(self.n, MF_UNIFORM), 0.5 * MF_SHEAR * share])
-        self.mf_names = ("uniform stiffness", "shear moduli")
+        # the model-form direction (relative frequency per unit prior sigma), see the module docstring
+        self.beam_gap, self.mf_floor = self._model_form_gap()
+        self.mf_dirs = self.beam_gap[:, None]
+        self.mf_names = ("1D-3D model form" if self.mf_floor == "beam" else "uniform stiffness",)
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
-        # groups: modes, their Q, and the two model-form priors (-1: never held out)
-        self.groups = np.concatenate([np.arange(self.n), self.q_idx, [-1, -1]])
+        # groups: modes, their Q, and the model-form prior (-1: never held out)
+        self.groups = np.concatenate([np.arange(self.n), self.q_idx, -np.ones(len(self.mf_names), int)])
         self.group_labels = [f"{fa} {o}" + (f" @ L = {L:.4g} m" if len(self.lengths) > 1 else "")
                              for fa, o, L in zip(d.family, d.order, d.length)]
         base: list[CauseParam] = []
@@ -165,6 +169,29 @@ class ModalProblem:
             b.reduced = r
             self.reds[L] = r
         return r
+
+    def _model_form_gap(self) -> tuple[np.ndarray, str]:
+        """The first model-form direction (relative frequency per prior sigma, one entry per
+        measured mode): the probe's own 1D-3D gap ``ln(f_FEM / f_beam)`` of each measured mode
+        (:meth:`FEMBaseline._beam_gap`), so that the floor is as large as beam theory and the 3D FEM
+        disagree on *this* probe, mode by mode, and vanishes where they agree; a mode the beam has
+        no value for takes the largest gap of its family (else of all measured modes). Probes
+        without a beam (a tip, several materials, an anisotropic crystal) keep a uniform stiffness
+        direction of ``MF_UNIFORM``."""
+        gap = np.full(self.n, np.nan)
+        for L in self.lengths:
+            b = self.bases[L]
+            if b.beam_gap is None:
+                return np.full(self.n, MF_UNIFORM), "uniform"
+            for i, (fa, o) in zip(self.rows_of[L], self.need_of[L]):
+                gap[i] = b.beam_gap[b.index(fa, o)]
+        ok = np.isfinite(gap)
+        if not ok.any():
+            return np.full(self.n, MF_UNIFORM), "uniform"
+        for i in np.nonzero(~ok)[0]:
+            same = ok & (self.data.family == self.data.family[i])
+            gap[i] = np.max(np.abs(gap[same if same.any() else ok]))
+        return gap, "beam"
 
     def _check_units(self) -> None:
         """kHz typed as Hz (or the reverse), or a wrong probe: the measured frequencies are orders
@@ -227,7 +254,19 @@ class ModalProblem:
         r = (d.freq - f) / self.sigma_f
         r = np.where(np.isfinite(r), r, 1e6)
         a = self.model_form(r, f)
-        r = r - (self.mf_dirs * (f / self.sigma_f)[:, None]) @ a
+        B = self.mf_dirs * (f / self.sigma_f)[:, None]
+        r = r - B @ a
+        if self.train_mask is not None:
+            # held-out modes: the residual is whitened by its predictive sigma, which includes the
+            # model-form amplitude's uncertainty left after the training modes (posterior covariance
+            # (B_t^T B_t + I)^-1 of the ridge profile): a mode the training data constrain poorly
+            # in that direction is not held to the bare noise (diagonal; one mode per fold here)
+            held = ~np.asarray(self.train_mask)[: self.n]
+            if held.any():
+                Bt = np.where(np.isfinite(B), B, 0.0)
+                P = np.linalg.inv(Bt[~held].T @ Bt[~held] + np.eye(B.shape[1]))
+                var = 1.0 + np.einsum("ij,jk,ik->i", Bt[held], P, Bt[held])
+                r[held] = r[held] / np.sqrt(var)
         if len(self.q_idx):
             i = self.q_idx
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / d.Q_sigma_rel[i]])
@@ -235,7 +274,7 @@ class ModalProblem:
         return np.where(np.isfinite(r), r, 1e6)
 
     def model_form(self, r: np.ndarray, f: np.ndarray) -> np.ndarray:
-        """The two model-form amplitudes (in prior sigmas) that best explain the whitened frequency
+        """The model-form amplitude(s) (in prior sigmas) that best explain the whitened frequency
         residuals ``r`` of the fitted modes (ridge least squares = Gaussian prior N(0, 1))."""
         B = self.mf_dirs * (np.where(np.isfinite(f), f, 0.0) / self.sigma_f)[:, None]
         m = np.ones(self.n, bool) if self.train_mask is None else np.asarray(self.train_mask)[: self.n]
@@ -295,7 +334,7 @@ class ModalProblem:
             out["Q_residual_sigma"] = [float(v) for v in r[self.n:self.n + len(self.q_idx)]]
         out["model_form"] = {nm: {"amplitude_prior_sigmas": float(a),
                                   "relative_frequency_shift_mode1": float(a * self.mf_dirs[0, k])}
-                             for k, (nm, a) in enumerate(zip(self.mf_names, r[-2:]))}
+                             for k, (nm, a) in enumerate(zip(self.mf_names, r[len(r) - len(self.mf_names):]))}
         return out
 
     # -- observables that would separate confounded causes --------------------------------------
