@@ -11,8 +11,11 @@ the same matrices:
   precision ``iparm[27] = 1`` (its solution error against the double factor is reported),
   out-of-core ``iparm[59] = 2``; factorisation time and the time of one 15-column block solve;
 * eigen-solvers on one factorisation: ARPACK (one right-hand side per step) vs the block
-  shift-invert Lanczos of ``probedyn.fem.eigen`` (15 right-hand sides per solve), same
-  frequencies required to 1e-8.
+  shift-invert Lanczos of ``probedyn.fem.eigen`` (a block of 6 right-hand sides per solve for
+  10 modes; its error-bound history is printed), same frequencies required to 1e-8.
+
+"End to end" for probedyn = mesh + assembly + free-DOF extraction (since session 5) +
+factorisation + block solve.
 
 Part 2, accuracy per second: the default mesh (hex-s2, graded) against P2 tetrahedra, with the
 errors of all 10 frequencies against the converged values (Richardson, docs/fem.md).
@@ -31,6 +34,11 @@ Usage::
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-265k.txt
     .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --no-accuracy \\
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-510k.txt
+    # session 5 (benchmarks/results/modal-s5-*.txt; end to end now includes the free-DOF extraction)
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-265k.txt
+    .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-509k.txt
 
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not

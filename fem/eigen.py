@@ -393,23 +393,31 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     basis ``Q`` of the block Krylov space ``[V, OP V, OP^2 V, ...]`` (``V = OP R``, R random:
     one smoothing solve) is M-orthonormal (two passes of classical Gram-Schmidt); for every block
     ``Q_j`` the code keeps ``M Q_j``, the image ``OP Q_j`` (one block solve) and ``M OP Q_j`` (one
-    product with M), so the next block's ``M W`` is a combination of kept columns, ``K`` is never
-    applied, and the Rayleigh-Ritz matrix ``H = Q^T M OP Q`` and ``G = (OP Q)^T M OP Q`` grow by
-    one block column per solve.  Ritz pairs ``(theta, x = Q y)`` of ``H``; their residuals
-    ``rho = ||OP x - theta x||_M`` follow from ``rho^2 = y^T G y - theta^2`` (exact arithmetic;
-    its round-off floor ~ 1e-8 theta, so below 1e-6 theta they are recomputed from the columns:
-    ``r = OP Q y - theta Q y``, ``rho^2 = r^T M r`` with ``M r`` from the kept ``M Q``, ``M OP Q``).
+    product with M; ``M W`` of the next block is one more product with M: as a combination of
+    kept columns it would inherit the orthogonalisation's cancellation, eps / residual), ``K``
+    is never applied, and the Rayleigh-Ritz matrix ``H = Q^T M OP Q`` and ``G = (OP Q)^T M OP Q``
+    grow by one block column per solve.  Ritz pairs ``(theta, x = Q y)`` of ``H``; their
+    residuals ``rho = ||OP x - theta x||_M`` follow from ``rho^2 = y^T G y - theta^2`` (exact
+    arithmetic; its round-off floor is ~1e-8 theta_1, so once every bound below is under
+    :data:`PROJECTED_OK` they are recomputed from the columns: ``r = OP Q y - theta Q y``,
+    ``rho^2 = r^T M r`` with ``M r`` from the kept ``M Q``, ``M OP Q``).  The eigenvalues
+    returned are ``sigma + 1/theta`` (as ARPACK's); Rayleigh quotients of K would weigh the
+    vectors' residual components along high modes by ``lambda_j / lambda_i``.
 
-    **Stopping rule** (Parlett, The Symmetric Eigenvalue Problem, thm 11.7.1 / Kato-Temple): for
-    a Ritz pair with residual ``rho`` there is an eigenvalue of OP within ``rho^2 / gap`` of
-    theta, ``gap`` = the distance from theta to the rest of the spectrum (estimated by the
-    nearest other Ritz value, wanted or not), so the relative error of ``lambda - sigma = 1/theta`` is at most
-    ``(rho / theta)^2 * theta / gap``.  The iteration stops at the first solve after which this
-    bound is below ``etol`` (default :data:`ETOL` = 1e-11: frequencies to ~5e-12, far below the
-    1e-8 at which every caller compares them) for every wanted pair, and, when ``rtol`` is given,
-    ``rho / theta < rtol`` (the eigenvectors' angle error is at most ``rho / gap``: a caller that
-    needs its vectors to a given accuracy passes it), or when the largest relative residual stops
-    halving below :data:`FLOOR_OK` (the round-off floor of double precision).
+    **Stopping rule** (Parlett, The Symmetric Eigenvalue Problem, thm 11.7.1 / Kato-Temple; and
+    for the vectors thm 11.7.1's companion, ``sin angle <= rho / gap``): for a Ritz pair with
+    residual ``rho`` there is an eigenvalue of OP within ``rho^2 / gap`` of theta, ``gap`` = the
+    distance from theta to the rest of the spectrum (estimated by the nearest other Ritz value,
+    wanted or not), so the relative error of ``lambda - sigma = 1/theta`` is at most
+    ``(rho / theta)^2 * theta / gap`` and the angle of x to its eigenvector at most
+    ``(rho / theta) * theta / gap``.  The iteration stops at the first solve after which, for
+    every wanted pair, the first is below ``etol`` (default :data:`ETOL` = 1e-11: frequencies to
+    ~5e-12, far below the 1e-8 at which callers compare them), the second below ``vtol``
+    (:data:`VTOL` = 1e-6: mode shapes to six digits) and, when ``rtol`` is given,
+    ``rho / theta < rtol`` (``rtol=TO_FLOOR``: to the round-off floor, for callers that take the
+    vectors as exact eigenvectors), or when the largest relative residual stops halving below
+    :data:`FLOOR_OK` (the round-off floor of double precision).  The solves' own round-off
+    (backward error eps ||K||) moves theta by ~1e-9 relative at 265k DOFs, ARPACK's alike.
 
     ``block`` right-hand sides per solve (default ``max(4, n_modes // 2 + 1)``: 6 for 10 modes;
     blocks of at least the largest eigenvalue multiplicity wanted), ``steps + 1`` blocks (default
