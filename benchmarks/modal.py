@@ -11,8 +11,11 @@ the same matrices:
   precision ``iparm[27] = 1`` (its solution error against the double factor is reported),
   out-of-core ``iparm[59] = 2``; factorisation time and the time of one 15-column block solve;
 * eigen-solvers on one factorisation: ARPACK (one right-hand side per step) vs the block
-  shift-invert Lanczos of ``probedyn.fem.eigen`` (15 right-hand sides per solve), same
-  frequencies required to 1e-8.
+  shift-invert Lanczos of ``probedyn.fem.eigen`` (a block of 6 right-hand sides per solve for
+  10 modes; its error-bound history is printed), same frequencies required to 1e-8.
+
+"End to end" for probedyn = mesh + assembly + free-DOF extraction (since session 5) +
+factorisation + block solve.
 
 Part 2, accuracy per second: the default mesh (hex-s2, graded) against P2 tetrahedra, with the
 errors of all 10 frequencies against the converged values (Richardson, docs/fem.md).
@@ -31,6 +34,11 @@ Usage::
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-265k.txt
     .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --no-accuracy \\
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s4-510k.txt
+    # session 5 (benchmarks/results/modal-s5-*.txt; end to end now includes the free-DOF extraction)
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-265k.txt
+    .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-509k.txt
 
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
@@ -69,6 +77,7 @@ PARDISO_VARIANTS = [
     ("VBSR, ordering 2 (METIS)", {"ordering": 2}),
     ("VBSR, ordering 0 (minimum degree)", {"ordering": 0}),
     ("CSR, two-level parallel factorisation (iparm[23]=1)", {"vbsr": 0, "factor_algorithm": 1}),
+    ("VBSR, two-level parallel factorisation (iparm[23]=1)", {"factor_algorithm": 1}),
     ("VBSR, parallel forward/backward (iparm[24]=2)", {"parallel_solve": 2}),
     ("float32 factor (iparm[27]=1) + refinement in double", {"single": 1}),
     ("CSR, out-of-core (iparm[59]=2)", {"vbsr": 0, "ooc": 2}),
@@ -128,7 +137,9 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
                    M_max_rel_diff=float(abs(Mo - Mc).max() / abs(Mo).max()))
         del Ko, Mo
     del Kc, Mc
-    K, M = model.free_matrices()
+    c0 = clock()
+    K, M = model.free_matrices()  # the clamped DOFs eliminated (part of every modal solve)
+    out["free_s"], out["free_cpu_s"] = since(c0)
     out["dofs"] = int(K.shape[0])
     out["nnz_K"] = int(K.nnz)
     # ---- eigen-solvers on one factorisation ---------------------------------------------------
@@ -143,6 +154,9 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
         out["block_s"], out["block_cpu_s"] = since(c0)
         out["block_vectors"] = n_solved
         out["block_size"] = info["block"]
+        out["block_history"] = info.get("history")
+        out["block_error_bound"] = float(np.max(info["error_bounds"]))
+        out["block_residual"] = float(np.max(info["residuals"]))
         f_block = np.sqrt(w) / (2 * np.pi)
         out["f_hz"] = f_block.tolist()
         n = K.shape[0]
@@ -173,8 +187,9 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
         out["single_solve_s"], out["single_solve_cpu_s"] = since(c0)
     finally:
         fac.release()
-    out["probedyn_total_s"] = out["mesh_s"] + out["assemble_s"] + out["factor_s"] + out["block_s"]
-    out["probedyn_total_cpu_s"] = out["mesh_cpu_s"] + out["assemble_cpu_s"] + out["factor_cpu_s"] + out["block_cpu_s"]
+    out["probedyn_total_s"] = out["mesh_s"] + out["assemble_s"] + out["free_s"] + out["factor_s"] + out["block_s"]
+    out["probedyn_total_cpu_s"] = (out["mesh_cpu_s"] + out["assemble_cpu_s"] + out["free_cpu_s"] + out["factor_cpu_s"]
+                                   + out["block_cpu_s"])
     out["peak_rss_gib_solve"] = rss()
     # ---- PARDISO settings ------------------------------------------------------------------------
     if variants:
@@ -342,8 +357,12 @@ def main() -> None:
             f"{asm_n / asm_c:>6.1f} {r['factor_s']:>7.2f} {r['arpack_s']:>7.2f} {r['arpack_solves']:>8d} "
             f"{r['block_s']:>6.2f} {r['block_vectors']:>6d} {r['arpack_s'] / r['block_s']:>6.2f} "
             f"{r['block_vs_arpack_max_rel']:>8.1e} {r['peak_rss_gib']:>5.2f}")
-        say(f"{'':>7} CPU s: mesh {r['mesh_cpu_s']:.1f}, assembly {r['assemble_cpu_s']:.1f}, factor {r['factor_cpu_s']:.1f}, "
-            f"block {r['block_cpu_s']:.1f} (b = {r['block_size']}), ARPACK {r['arpack_cpu_s']:.1f}")
+        say(f"{'':>7} CPU s: mesh {r['mesh_cpu_s']:.1f}, assembly {r['assemble_cpu_s']:.1f}, free DOFs "
+            f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, block {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
+            f"ARPACK {r['arpack_cpu_s']:.1f}")
+        say(f"{'':>7} block solver: largest eigenvalue error bound {r['block_error_bound']:.1e}, residual "
+            f"{r['block_residual']:.1e}; (vectors, bound) per Rayleigh-Ritz step: "
+            + ", ".join(f"({h[0]}, {h[1]:.0e})" for h in r["block_history"]))
     say("")
     say("PARDISO settings (same K; factorisation, one 15-column block solve; solution error vs the default; "
         "wall / CPU s):")
@@ -375,7 +394,7 @@ def main() -> None:
                 f"{', '.join(format(x, '.1f') for x in g['total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in g['total_cpu_s_runs'])} s CPU{pin}")
             say(f"    probedyn mesh {r['mesh_s']:.1f}/{r['mesh_cpu_s']:.1f}, assembly {r['assemble_s']:.1f}/"
-                f"{r['assemble_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, block "
+                f"{r['assemble_cpu_s']:.1f}, free DOFs {r['free_s']:.1f}/{r['free_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, block "
                 f"{r['block_s']:.1f}/{r['block_cpu_s']:.1f} -> total runs "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_cpu_s_runs'])} s CPU")

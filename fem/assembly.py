@@ -121,11 +121,18 @@ class Pattern:
         return B.tocsr()
 
     def vector_from_scalar(self, data: np.ndarray) -> sp.csr_matrix:
-        """``kron(S, I3)`` of the scalar matrix with values ``data`` (interleaved numbering)."""
-        blocks = np.zeros((data.size, 3, 3))
-        for c in range(3):
-            blocks[:, c, c] = data
-        return self.vector(blocks)
+        """``kron(S, I3)`` of the scalar matrix with values ``data`` (interleaved numbering),
+        built directly as CSR with only its non-zeros: row ``3 s + c`` holds ``S[s, t]`` at
+        column ``3 t + c`` (a third of the entries of the 3 x 3 block pattern, so a product with
+        the mass matrix streams a third of the memory)."""
+        ptr, ind = self.indptr, self.indices
+        lens = np.repeat(np.diff(ptr), 3)  # length of row 3 s + c
+        vptr = np.zeros(3 * self.n + 1, dtype=np.int64)
+        np.cumsum(lens, out=vptr[1:])
+        # source entry of every output entry: ptr[s] + (position within the row)
+        src = np.arange(vptr[-1], dtype=np.int64) + np.repeat(np.repeat(ptr[:-1], 3) - vptr[:-1], lens)
+        comp = np.repeat(np.tile(np.arange(3, dtype=np.int64), self.n), lens)
+        return sp.csr_matrix((data[src], 3 * ind[src] + comp, vptr), shape=(3 * self.n, 3 * self.n))
 
 
 _PATTERNS: dict = {}

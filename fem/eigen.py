@@ -7,12 +7,14 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
 * ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
-  block of 6-15 costs a few single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
+  block of 6 costs about 3.5 single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
   (``OP = (K - sigma M)^-1 M``), M-orthonormalised block by block (two passes of classical
-  Gram-Schmidt), takes Rayleigh-Ritz pairs of the original ``(K, M)`` on it after every block
-  solve and stops as soon as every wanted pair's shift-invert residual (exact, from the kept
-  images ``OP Q``: no extra solve) is below ``rtol`` (eigenvalue error ~ residual^2); after
-  ``steps + 1`` blocks it restarts from the best Ritz vectors.
+  Gram-Schmidt), takes the Ritz pairs of OP on it after every block solve (no product with K:
+  the projections are built from the kept ``M Q``, ``OP Q`` and ``M OP Q``) and stops as soon
+  as every wanted pair's eigenvalue error bound (Kato-Temple: ``(rho/theta)^2 theta/gap``) is
+  below :data:`ETOL` and its eigenvector angle bound ``rho/gap`` below :data:`VTOL` (a caller
+  that needs the vectors at the round-off floor, the Ritz reduction, passes ``tol=TO_FLOOR``);
+  after ``steps + 1`` blocks it restarts from the best Ritz vectors.
 * ``method="arpack"``: ARPACK (``scipy.sparse.linalg.eigsh(..., OPinv=...)``) in shift-invert
   mode, one right-hand side per step (the reference; the benchmark compares the two).
 
@@ -60,6 +62,14 @@ SOLVERS = ("auto", "pardiso", "superlu")
 METHODS = ("block", "arpack")
 #: block solver: accept a stagnating shift-invert residual below this (round-off floor reached)
 FLOOR_OK = 1e-5
+#: block solver: bound on the relative eigenvalue error of every returned pair (block_eigsh)
+ETOL = 1e-11
+#: block solver: bound on the angle error of every returned eigenvector (block_eigsh)
+VTOL = 1e-6
+#: a residual tolerance below the round-off floor: ``tol=TO_FLOOR`` iterates until the residuals stop falling
+TO_FLOOR = 1e-12
+#: block solver: projected residuals are trusted while every bound is above this (their floor: ~1e-8 theta_1)
+PROJECTED_OK = 1e-6
 
 #: PARDISO settings (module docstring); ``factorize(..., options=...)`` overrides per call
 PARDISO_OPTIONS: dict[str, int] = {
@@ -371,122 +381,157 @@ def _m_orthonormalize(W: np.ndarray, MW: np.ndarray, drop: float = 1e-10,
 
 
 def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac: Factorization,
-                block: int | None = None, steps: int | None = None, rtol: float = 1e-12, max_cycles: int = 10,
+                block: int | None = None, steps: int | None = None, rtol: float | None = None,
+                etol: float = ETOL, vtol: float = VTOL, max_cycles: int = 10,
                 seed: int = 12345) -> tuple[np.ndarray, np.ndarray, int, dict]:
-    """The ``n_modes`` eigenpairs of ``K x = lambda M x`` nearest ``sigma`` (from above for a
-    shift below the spectrum) by block shift-invert Lanczos with ``fac`` = factorisation of
-    ``K - sigma M`` (module docstring).
+    """The ``n_modes`` eigenpairs of ``K x = lambda M x`` nearest ``sigma`` by block shift-invert
+    Lanczos with ``fac`` = factorisation of ``K - sigma M`` (module docstring).
 
-    ``block`` right-hand sides per solve (default ``max(4, n_modes // 2 + 1)``: 6 for 10 modes,
-    which needed 54 vectors and 0.9x the CPU time of a block of 12 with 84 vectors at 68.5k DOFs;
+    Method (Ericsson & Ruhe 1980; the block form of Grimes, Lewis & Simon, SIAM J. Matrix Anal.
+    Appl. 15 (1994) 228, with full re-orthogonalisation): ``OP = (K - sigma M)^-1 M`` is
+    self-adjoint in the M-inner product, with eigenvalues ``theta = 1 / (lambda - sigma)``.  The
+    basis ``Q`` of the block Krylov space ``[V, OP V, OP^2 V, ...]`` (``V = OP R``, R random:
+    one smoothing solve) is M-orthonormal (two passes of classical Gram-Schmidt); for every block
+    ``Q_j`` the code keeps ``M Q_j``, the image ``OP Q_j`` (one block solve) and ``M OP Q_j`` (one
+    product with M; ``M W`` of the next block is one more product with M: as a combination of
+    kept columns it would inherit the orthogonalisation's cancellation, eps / residual), ``K``
+    is never applied, and the Rayleigh-Ritz matrix ``H = Q^T M OP Q`` and ``G = (OP Q)^T M OP Q``
+    grow by one block column per solve.  Ritz pairs ``(theta, x = Q y)`` of ``H``; their
+    residuals ``rho = ||OP x - theta x||_M`` follow from ``rho^2 = y^T G y - theta^2`` (exact
+    arithmetic; its round-off floor is ~1e-8 theta_1, so once every bound below is under
+    :data:`PROJECTED_OK` they are recomputed from the columns: ``r = OP Q y - theta Q y``,
+    ``rho^2 = r^T M r`` with ``M r`` from the kept ``M Q``, ``M OP Q``).  The eigenvalues
+    returned are ``sigma + 1/theta`` (as ARPACK's); Rayleigh quotients of K would weigh the
+    vectors' residual components along high modes by ``lambda_j / lambda_i``.
+
+    **Stopping rule** (Parlett, The Symmetric Eigenvalue Problem, thm 11.7.1 / Kato-Temple; and
+    for the vectors thm 11.7.1's companion, ``sin angle <= rho / gap``): for a Ritz pair with
+    residual ``rho`` there is an eigenvalue of OP within ``rho^2 / gap`` of theta, ``gap`` = the
+    distance from theta to the rest of the spectrum (estimated by the nearest other Ritz value,
+    wanted or not), so the relative error of ``lambda - sigma = 1/theta`` is at most
+    ``(rho / theta)^2 * theta / gap`` and the angle of x to its eigenvector at most
+    ``(rho / theta) * theta / gap``.  The iteration stops at the first solve after which, for
+    every wanted pair, the first is below ``etol`` (default :data:`ETOL` = 1e-11: frequencies to
+    ~5e-12, far below the 1e-8 at which callers compare them), the second below ``vtol``
+    (:data:`VTOL` = 1e-6: mode shapes to six digits) and, when ``rtol`` is given,
+    ``rho / theta < rtol`` (``rtol=TO_FLOOR``: to the round-off floor, for callers that take the
+    vectors as exact eigenvectors), or when the largest relative residual stops halving below
+    :data:`FLOOR_OK` (the round-off floor of double precision).  The solves' own round-off
+    (backward error eps ||K||) moves theta by ~1e-9 relative at 265k DOFs, ARPACK's alike.
+
+    ``block`` right-hand sides per solve (default ``max(4, n_modes // 2 + 1)``: 6 for 10 modes;
     blocks of at least the largest eigenvalue multiplicity wanted), ``steps + 1`` blocks (default
     about ``6 (n_modes + 2) / block``, 6 to 12) before a thick restart from the
-    ``max(block, n_modes + 2)`` best Ritz vectors.  For every block ``Q_j`` of the M-orthonormal basis the code keeps ``M Q_j``,
-    ``K Q_j`` and its image ``OP Q_j`` (``OP = (K - sigma M)^-1 M``, one block solve): so after each
-    solve the Rayleigh-Ritz pairs of ``(K, M)`` on the basis and their shift-invert residuals
-    ``||OP x - theta x||_M / theta`` (``theta = x^T M OP x``, x M-normalised) are known exactly
-    without a further solve, the iteration stops at the first solve after which every wanted pair
-    is below ``rtol`` (eigenvalue error of the order of its square times theta over the gap), and
-    the next Krylov block is ``OP`` of the last one (default ``rtol`` 1e-12, in practice "to the
-    round-off floor" where the residual stops halving, ~1e-9 at 68k DOFs: with 1e-8 or 1e-10
-    the vectors of a 2-mode Ritz basis were not accurate enough for its exact static limit,
-    tests/test_ritz.py; 54 -> 60 vectors at 68.5k DOFs), M-orthogonalised against the basis (two passes
-    of classical Gram-Schmidt).  Returns (eigenvalues ascending, M-orthonormal vectors, number of
-    vectors solved, info)."""
+    ``max(block, n_modes + 2)`` best Ritz vectors.  Returns (eigenvalues ascending, M-orthonormal
+    vectors, number of vectors solved, info: ``residuals`` rho/theta and ``error_bounds`` of
+    the returned pairs, ``history`` (vectors solved, largest bound) per Rayleigh-Ritz step)."""
     n = K.shape[0]
     b = int(block or max(4, n_modes // 2 + 1))
     b = max(1, min(b, n // 3))
     keep_r = max(b, n_modes + 2)  # Ritz vectors kept at a thick restart
     max_blocks = max(2, int(steps) + 1) if steps else max(6, min(12, -(-6 * (n_modes + 2) // b)))
     cap = max(max_blocks * b, keep_r + 2 * b, n_modes + 2 * b)
-    # the basis Q and M Q, K Q, OP Q in preallocated column buffers; the projections Q^T K Q and
-    # Q^T M Q are extended block by block (each step costs O(n m b), not O(n m^2))
-    Qb, MQb, KQb, OQb = (np.empty((n, cap), order="F") for _ in range(4))
-    A_r, B_r = np.zeros((cap, cap)), np.zeros((cap, cap))
+    Qb, MQb, OQb, MOQb = (np.empty((n, cap), order="F") for _ in range(4))
+    H, G = np.zeros((cap, cap)), np.zeros((cap, cap))
     rng = np.random.default_rng(seed)
     W = fac.solve(M @ rng.standard_normal((n, b)))  # one smoothing solve: a start rich in low modes
     W, MW = _m_orthonormalize(W, M @ W)
     m = 0
     n_solved = b
-    info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0}
-
+    info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0, "history": []}
     last = 0  # first column of the last block appended
 
-    def append(W: np.ndarray, MW: np.ndarray, KW: np.ndarray | None = None, OW: np.ndarray | None = None) -> int:
+    def append(W: np.ndarray, MW: np.ndarray, OW: np.ndarray | None = None, MOW: np.ndarray | None = None) -> None:
         nonlocal m, n_solved, last
         k = W.shape[1]
         last = m
         sl = slice(m, m + k)
         Qb[:, sl], MQb[:, sl] = W, MW
-        KQb[:, sl] = K @ W if KW is None else KW
         if OW is None:
             OQb[:, sl] = fac.solve(MW)
             n_solved += k
+            MOQb[:, sl] = M @ OQb[:, sl]
         else:
-            OQb[:, sl] = OW
-        A_r[: m + k, sl] = Qb[:, : m + k].T @ KQb[:, sl]
-        B_r[: m + k, sl] = Qb[:, : m + k].T @ MQb[:, sl]
-        A_r[sl, :m], B_r[sl, :m] = A_r[:m, sl].T, B_r[:m, sl].T
+            OQb[:, sl], MOQb[:, sl] = OW, MOW
+        H[: m + k, sl] = MQb[:, : m + k].T @ OQb[:, sl]
+        G[: m + k, sl] = OQb[:, : m + k].T @ MOQb[:, sl]
+        H[sl, :m], G[sl, :m] = H[:m, sl].T, G[:m, sl].T
         m += k
-        return k
+
+    def next_block(src: slice, max_cols: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """OP of the columns ``src`` M-orthogonalised against the basis (CGS2), and M of it."""
+        W = OQb[:, src].copy()
+        Qa, MQa = Qb[:, :m], MQb[:, :m]
+        for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
+            W -= Qa @ (MQa.T @ W)
+        # M W explicitly: as a combination M OP Q_src - M Q C it would carry the cancellation of
+        # the orthogonalisation (relative error eps / residual once the Ritz pairs converge)
+        return _m_orthonormalize(W, M @ W, max_cols=max_cols)
 
     append(W, MW)
     prev = None
     for _it in range(max_cycles * max_blocks):
         if m < n_modes + 1:  # too few basis vectors for the wanted pairs yet (block < n_modes)
-            W = OQb[:, last:m]
-            Qa, MQa = Qb[:, :m], MQb[:, :m]
-            for _pass in range(2):
-                W = W - Qa @ (MQa.T @ W)
-            W, MW = _m_orthonormalize(W, M @ W)
+            W, MW = next_block(slice(last, m), None)
             if W.shape[1] == 0:
                 raise SolverError("block eigen-solver: Krylov space exhausted before n_modes vectors")
             append(W, MW)
             continue
-        Ar, Br = A_r[:m, :m], B_r[:m, :m]
-        w, Y = sla.eigh(0.5 * (Ar + Ar.T), 0.5 * (Br + Br.T))
-        order = np.argsort(np.abs(w - sigma))
-        w, Y = w[order], Y[:, order]
+        Hm = H[:m, :m]
+        th, Y = np.linalg.eigh(0.5 * (Hm + Hm.T))
+        order = np.argsort(-np.abs(th))  # largest |theta| = lambda nearest sigma
+        th, Y = th[order], Y[:, order]
         Yw = Y[:, :n_modes]
-        X, MX, OX = Qb[:, :m] @ Yw, MQb[:, :m] @ Yw, OQb[:, :m] @ Yw
-        # theta = x^T M OP x (not 1 / (lambda - sigma): for rigid-body modes lambda is round-off
-        # and lambda - sigma would not be accurate, while OP x is)
-        theta = np.einsum("ij,ij->j", MX, OX)
-        R = OX - X * theta
-        res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, M @ R))) / np.abs(theta)
-        info["residuals"] = res
-        if np.all(res < rtol):
+        Gm = G[:m, :m]
+        rho2 = np.einsum("ij,ij->j", Yw, (0.5 * (Gm + Gm.T)) @ Yw) - th[:n_modes] ** 2
+        res = np.sqrt(np.abs(rho2)) / np.abs(th[:n_modes])
+        # gap of each wanted theta to the nearest other Ritz value (the unwanted ones included)
+        gap = np.array([np.min(np.abs(np.delete(th, i) - th[i])) for i in range(n_modes)])
+        rel_gap = np.abs(th[:n_modes]) / np.maximum(gap, 1e-300)
+        bound = res ** 2 * rel_gap
+        explicit = bound.max() < PROJECTED_OK
+        if explicit:  # near convergence: residuals from the columns (the projection's floor is ~1e-8 theta_1)
+            R = OQb[:, :m] @ Yw - Qb[:, :m] @ (Yw * th[:n_modes])
+            MR = MOQb[:, :m] @ Yw - MQb[:, :m] @ (Yw * th[:n_modes])
+            res = np.sqrt(np.abs(np.einsum("ij,ij->j", R, MR))) / np.abs(th[:n_modes])
+            bound = res ** 2 * rel_gap
+        info["residuals"], info["error_bounds"] = res, bound
+        info["history"].append((n_solved, float(bound.max()), float(res.max())))
+        if np.all(bound < etol) and np.all(res * rel_gap < vtol) and (rtol is None or np.all(res < rtol)):
             break
         # round-off floor: a residual that no longer falls (by 2x per solve) is as good as it gets
         # in double precision; below FLOOR_OK the eigenvalues are still accurate to ~1e-10
-        if prev is not None and res.max() > 0.5 * prev and res.max() < FLOOR_OK:
+        if explicit and prev is not None and res.max() > 0.5 * prev and res.max() < FLOOR_OK:
             info["floor"] = True
             break
-        prev = float(res.max())
-        if m + b > cap:  # thick restart from the b best Ritz vectors (their images known: no solve)
+        prev = float(res.max()) if explicit else None
+        if m + b > cap:  # thick restart from the best Ritz vectors (their images known: no solve)
             if info["cycles"] >= max_cycles:
                 raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e} after "
                                   f"{max_cycles} cycles)")
-            Yb = Y[:, :keep_r]
-            keep = [Qb[:, :m] @ Yb, MQb[:, :m] @ Yb, KQb[:, :m] @ Yb, OQb[:, :m] @ Yb]
+            Yk = Y[:, :keep_r]
+            keep = [Qb[:, :m] @ Yk, MQb[:, :m] @ Yk, OQb[:, :m] @ Yk, MOQb[:, :m] @ Yk]
             m = 0
             append(*keep)
             info["cycles"] += 1
             info["restarts"] += 1
-            W = OQb[:, :m]  # the kept vectors' residual directions span (about) one block
+            src = slice(0, m)  # the kept vectors' residual directions span (about) one block
         else:
-            W = OQb[:, last:m]
-        Qa, MQa = Qb[:, :m], MQb[:, :m]
-        for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
-            W = W - Qa @ (MQa.T @ W)
-        W, MW = _m_orthonormalize(W, M @ W, max_cols=b)
+            src = slice(last, m)
+        W, MW = next_block(src, b)
         if W.shape[1] == 0:  # invariant subspace: nothing new to add
             break
         append(W, MW)
     else:
         raise SolverError(f"block eigen-solver did not converge (largest residual {res.max():.1e})")
-    w = w[:n_modes]
+    # the eigenvalues are sigma + 1/theta (as ARPACK's): theta carries the Kato-Temple bound above.
+    # Rayleigh quotients of K would not be better: K weighs the vectors' residual components along
+    # high modes by lambda_j / lambda_i (measured: 5e-9 off for a 1-mode solve stopped at
+    # rho / theta = 1.3e-6, whose theta was within 1e-11 of ARPACK's)
+    X = Qb[:, :m] @ Yw
+    w = sigma + 1.0 / th[:n_modes]
     o = np.argsort(w)
+    info["residuals"], info["error_bounds"] = info["residuals"][o], info["error_bounds"][o]
     return w[o], X[:, o], n_solved, info
 
 
@@ -536,7 +581,7 @@ def shift_invert_eigsh(
     try:
         if use_block:
             try:
-                w, V, count, binfo = block_eigsh(K, M, n_modes, sigma, fac, rtol=tol if tol > 0 else 1e-12)
+                w, V, count, binfo = block_eigsh(K, M, n_modes, sigma, fac, rtol=tol if tol > 0 else None)
                 info.update(binfo)
             except SolverError as exc:
                 info["block_failed"] = str(exc)

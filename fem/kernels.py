@@ -2,6 +2,7 @@
 cache is per source file, so editing the drivers does not recompile these).
 
 * :func:`pattern` - node adjacency (block-CSR pattern) and the position of every element block;
+* :func:`principal_submatrix` - ``A[keep][:, keep]`` of a CSR matrix (the free-DOF matrices);
 * :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
 * :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
 """
@@ -79,6 +80,33 @@ def pattern(ed, n):  # pragma: no cover - compiled
                         i1 = mid
                 pos[e, a, b] = i0
     return indptr, indices, pos
+
+
+@njit(cache=True)
+def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover - compiled
+    """CSR arrays of ``A[keep][:, keep]`` (``new[j]`` = position of column j in ``keep`` or -1);
+    one pass over the kept rows, sorted rows stay sorted (``new`` is monotone on ``keep``)."""
+    m = keep.size
+    ptr = np.zeros(m + 1, np.int64)
+    for i in range(m):
+        r = keep[i]
+        c = 0
+        for k in range(indptr[r], indptr[r + 1]):
+            if new[indices[k]] >= 0:
+                c += 1
+        ptr[i + 1] = ptr[i] + c
+    ind = np.empty(ptr[m], np.int64)
+    val = np.empty(ptr[m], data.dtype)
+    for i in range(m):
+        r = keep[i]
+        p = ptr[i]
+        for k in range(indptr[r], indptr[r + 1]):
+            j = new[indices[k]]
+            if j >= 0:
+                ind[p] = j
+                val[p] = data[k]
+                p += 1
+    return ptr, ind, val
 
 
 # ---------------------------------------------------------------------------------------
@@ -195,4 +223,4 @@ def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
 
 
 
-__all__ = ["pattern", "jacobian", "stiffness_kernel", "mass_kernel"]
+__all__ = ["pattern", "principal_submatrix", "jacobian", "stiffness_kernel", "mass_kernel"]

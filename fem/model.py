@@ -32,11 +32,30 @@ from probedyn.core.errors import GeometryError, MaterialError, ParameterError, S
 from probedyn.fem import elasticity as el
 from probedyn.fem.assembly import element_kind, element_volumes
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
+from probedyn.fem.kernels import principal_submatrix as _principal_submatrix
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
 from probedyn.fem.size import check_model
 
 Where = Union[str, Sequence[float], np.ndarray]
+
+
+def principal_submatrix(A: sp.spmatrix, keep: np.ndarray) -> sp.csr_matrix:
+    """``A[keep][:, keep]`` for sorted, unique ``keep`` as canonical CSR (sorted, no duplicates)
+    by one compiled pass with a column map (:func:`probedyn.fem.kernels.principal_submatrix`;
+    scipy's general column indexing took 1.2 s for K at 265k DOFs)."""
+    A = sp.csr_matrix(A)
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+    keep = np.ascontiguousarray(keep, dtype=np.int64)
+    new = np.full(A.shape[1], -1, dtype=np.int64)
+    new[keep] = np.arange(keep.size)
+    ptr, ind, val = _principal_submatrix(A.indptr.astype(np.int64, copy=False), A.indices.astype(np.int64, copy=False),
+                                         A.data, keep, new)
+    out = sp.csr_matrix((val, ind, ptr), shape=(keep.size, keep.size))
+    out.has_canonical_format = True
+    return out
 
 
 @dataclass(frozen=True)
@@ -152,17 +171,31 @@ class ElasticModel:
 
     @property
     def clamped_dofs(self) -> np.ndarray:
+        """Sorted clamped DOFs (read-only; found once per clamp list and basis: the facet-DOF
+        search costs ~0.4 s at 265k DOFs)."""
         if not self.clamp:
             return np.zeros(0, dtype=np.int64)
-        facets = np.concatenate([self.mesh.boundaries[c] for c in self.clamp])
-        nodes = self.basis.get_dofs(facets=facets).all()
-        return np.sort((3 * nodes[:, None] + np.arange(3)[None, :]).ravel())
+        key = (tuple(self.clamp), id(self.basis))
+        hit = getattr(self, "_clamped_cache", None)
+        if hit is None or hit[0] != key or hit[1] is not self.basis:
+            facets = np.concatenate([self.mesh.boundaries[c] for c in self.clamp])
+            nodes = self.basis.get_dofs(facets=facets).all()
+            dofs = np.sort((3 * nodes[:, None] + np.arange(3)[None, :]).ravel())
+            mask = np.ones(self.ndofs_total, dtype=bool)
+            mask[dofs] = False
+            free = np.nonzero(mask)[0]
+            dofs.setflags(write=False)
+            free.setflags(write=False)
+            self._clamped_cache = hit = (key, self.basis, dofs, free)
+        return hit[2]
 
     @property
     def free_dofs(self) -> np.ndarray:
-        mask = np.ones(self.ndofs_total, dtype=bool)
-        mask[self.clamped_dofs] = False
-        return np.nonzero(mask)[0]
+        """Sorted free DOFs (read-only)."""
+        if not self.clamp:
+            return np.arange(self.ndofs_total)
+        self.clamped_dofs
+        return self._clamped_cache[3]
 
     @property
     def dofs(self) -> int:
@@ -226,11 +259,7 @@ class ElasticModel:
         K, M = self.assemble()
         if getattr(self, "_free_cache", None) is None or self._free_cache[0] is not K or self._free_cache[1] is not M:
             free = self.free_dofs
-            Kf = K[free][:, free].tocsr()
-            Mf = M[free][:, free].tocsr()
-            for A in (Kf, Mf):
-                A.sum_duplicates()
-                A.sort_indices()
+            Kf, Mf = (principal_submatrix(A, free) for A in (K, M))
             self._free_cache = (K, M, Kf, Mf)
         return self._free_cache[2], self._free_cache[3]
 

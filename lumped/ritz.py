@@ -65,7 +65,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from probedyn.core.errors import DataFormatError, GeometryError, ParameterError, SolverError
-from probedyn.fem.eigen import factorize, shift_invert_eigsh
+from probedyn.fem.eigen import TO_FLOOR, factorize, shift_invert_eigsh
 from probedyn.fem.model import PointMass, Spring
 
 Where = Union[str, Sequence[float], np.ndarray]
@@ -240,8 +240,10 @@ class RitzBasis:
         t0 = time.perf_counter()
         sysm = _System(model)
         t1 = time.perf_counter()
+        # tol: the reduction takes the modes as exact eigenvectors (diagonal K_r, static shapes
+        # K-orthogonal to them), so their residuals are driven to the round-off floor
         res = shift_invert_eigsh(sysm.K, sysm.M, n_modes, sigma=0.0 if getattr(model, "clamp", None) else None,
-                                 solver=solver)
+                                 solver=solver, tol=TO_FLOOR)
         Phi = res.vectors
         lam = res.eigenvalues
         t2 = time.perf_counter()
