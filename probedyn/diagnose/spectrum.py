@@ -204,17 +204,18 @@ def _best_scale(peaks: list[float], preds: list[float]) -> float:
     return best
 
 
-def spectrum_problem(meas: SpectrumData) -> ModalProblem:
+def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> ModalProblem:
     """Identify the peaks of a spectrum against the probe's FEM and return the modal problem of
-    the accepted ones (with the peak table for the report)."""
+    the accepted ones (with the peak table for the report). ``base``: the probe's FEM baseline when
+    already built (spectra of one probe share it and its reduction)."""
     freq, psd = meas.freq, meas.value
     s_log = log_scatter(psd, meas.averages)
     df = float(np.median(np.diff(freq)))
     idx = detect_peaks(freq, psd, s_log, averages=meas.averages)
     if not idx:
         raise DataFormatError(f"{meas.path}: no peak stands out of the spectrum's background by 5 standard deviations")
-    needed = {"flapwise": 2}
-    base = FEMBaseline(meas.probe, meas.probe_values, needed)
+    if base is None:
+        base = FEMBaseline(meas.probe, meas.probe_values, {"flapwise": 2})
     preds = _predictions(base, meas.medium, meas.temperature)
     fits = []
     for i in idx:
