@@ -110,13 +110,12 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
                        declared_medium: str | None = "vacuum", T: float = 295.0) -> tuple[Path, dict]:
     """Write a thermal spectrum of lever ``lever`` with a hidden ``effect`` (None: noise only).
 
-    ``effect = "fluid-loading"``: the lever is in air and the medium is not declared. Otherwise the
+    ``effect = "fluid-loading"``: the lever is in water, ethanol or air and the medium is not declared. Otherwise the
     truth is in ``declared_medium`` (vacuum or air; in air Sader loading of the flapwise modes)."""
     rng = np.random.default_rng(seed)
     params = draw_modal_effect(effect, lever, rng) if effect else {}
     if effect == "fluid-loading":
-        params = {"medium": "air", "rho_f": FLUIDS["air"][0], "eta_f": FLUIDS["air"][1]}
-        declared_medium = None
+        declared_medium = None  # the fluid (water, ethanol or air, as the modal study) is not declared
     medium = params.get("medium") if effect == "fluid-loading" else declared_medium
     tr = timoshenko_spectrum_truth(lever) if truth_kind == "timoshenko" else spectrum_fem_truth(lever, effect, params)
     g = LEVERS[lever]
