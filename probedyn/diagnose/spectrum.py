@@ -366,8 +366,11 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     c_cal = table[0].get("_c_cal") if table else None
     for t in table:
         t.pop("_c_cal", None)
-    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s, "peaks": table,
-                  "labels_from": {"hypothesis": best["cause"] or "nominal probe", "values": best["values"],
+    # the frequency scale reported is the nominal probe's (measured / nominal frequencies of the
+    # matched modes); the labels may come from a hypothesis with its own scale s
+    s_nominal = scored[0][3]
+    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s_nominal, "peaks": table,
+                  "labels_from": {"hypothesis": best["cause"] or "nominal probe", "values": best["values"], "scale": s,
                                   "hypotheses_tried": len(hyps), "labellings_compared": len(options),
                                   "labelling_chi2": chi2s or None,
                                   "note": "the hypothesis that placed the peaks on modes (labels only, not a diagnosis)"},
