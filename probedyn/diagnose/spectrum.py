@@ -49,7 +49,8 @@ MATCH_TOL = 0.03
 Q_FACTOR = 3.0
 AREA_FACTOR = 100.0
 GRID_FRACTIONS = (0.005, 0.015, 0.03, 0.05, 0.08, 0.11, 0.15, 0.2, 0.25, 0.3, 0.4, 0.55, 0.75, 1.0)
-MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
+MAX_LABELLINGS = 4
+CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)  # distinct labellings compared by their modal fit
 
 
 def sho_psd(f, f0, Q, A):
@@ -194,10 +195,10 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
     return out
 
 
-def _best_scale(peaks: list[float], preds: list[float]) -> float:
-    """The frequency scale in [1/2, 2] that maps the most predictions onto peaks within MATCH_TOL
-    (ties: the scale nearest 1)."""
-    cands = [p / q for p in peaks for q in preds if 0.5 <= p / q <= 2.0] or [1.0]
+def _best_scale(peaks: list[float], preds: list[float], span: float = 2.0) -> float:
+    """The frequency scale in [1/span, span] that maps the most predictions onto peaks within
+    MATCH_TOL (ties: the scale nearest 1)."""
+    cands = [p / q for p in peaks for q in preds if 1 / span <= p / q <= span] or [1.0]
     best, best_key = 1.0, None
     for s in cands:
         n = sum(any(abs(p / (s * q) - 1) < MATCH_TOL for q in preds) for p in peaks)
@@ -314,12 +315,20 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     for h in hyps:
         fh = h["f_Hz"]
         pf = [f for f, p in zip(fh, preds) if fam_ok(p["family"])]
-        sh = _best_scale([f["f0_Hz"] for f in fits], pf) if pf else 1.0
+        # the nominal probe may be off by up to 2x (geometry); a cause hypothesis is a specific
+        # deviation, on top of which only the uniform uncertainty of the nominal material and
+        # geometry (CAUSE_SCALE) is left -- else a cause at its bound times a 2x scale relabels
+        # flapwise 2 as flapwise 1 on a two-peak spectrum, and both labellings fit exactly
+        sh = (_best_scale([f["f0_Hz"] for f in fits], pf, 2.0 if h["cause"] is None else CAUSE_SCALE)
+              if pf else 1.0)
         n_res, n_all, dev2 = _matches(fits, fh, sh)
         scored.append(((n_res, n_all), (round(abs(math.log(sh)) / 0.01), round(dev2 / MATCH_TOL**2, 2),
                                          h["cause"] is not None), h, sh))
     top = max(k for k, *_ in scored)
-    cands = sorted((x for x in scored if x[0] == top), key=lambda x: x[1])
+    # the nominal probe's labels stand unless a cause hypothesis places more peaks: with few peaks
+    # many hypotheses (a cause near its bound) place them all too, under other labels, and fit them
+    # exactly -- the data cannot prefer them, the declared probe can
+    cands = [scored[0]] if scored[0][0] == top else sorted((x for x in scored if x[0] == top), key=lambda x: x[1])
     # distinct labellings among the hypotheses that place the most peaks: where they differ (a peak
     # that is torsion 1 under one hypothesis and lateral 2 under another), frequencies alone cannot
     # decide; the labelling whose modal fit (the baseline or one catalog cause, Q included) has the
