@@ -36,9 +36,8 @@ from pathlib import Path
 import numpy as np
 
 import diagnose_truth as dt
-from diagnose_truth import LEVERS, MODES, E_SI, NU_SI, RHO_SI, draw_modal_effect, fem_truth, fluid_loaded
-
-K_B = 1.380649e-23
+from diagnose_truth import LEVERS, MODES, RHO_SI, draw_modal_effect, fem_truth, fluid_loaded
+from diagnose_truth_curves import K_B
 SPECTRUM_EFFECTS = ["point-mass", "clamp-compliance", "thickness-error", "width-error", "length-error",
                     "modulus-error", "axial-prestress", "fluid-loading"]
 DETECTOR_TILT = math.radians(10.0)
