@@ -22,6 +22,13 @@
    1 for a PSD calibrated in tip displacement; an uncalibrated sensitivity or an optical lever
    scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
    Q or amplitude implausible).
+   The predictions are those of a *hypothesis*: the nominal probe, or the probe carrying one catalog
+   cause at a grid of its parameters (:func:`_hypotheses`, on the Ritz reduction). A hidden effect
+   moves the families differently (a width error moves lateral and torsional modes only), so the
+   nearest nominal mode after one common scale may be another family's; the labels are those of the
+   hypothesis placing the most resolved peaks (the nominal probe's unless a cause places more), and
+   labellings that tie are decided by their modal fit, the peaks they disagree on left out when the
+   fits are within the evidence margin (reported as ambiguous).
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
    declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
 """
