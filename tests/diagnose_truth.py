@@ -100,8 +100,9 @@ def _families_pick(freqs, fams, modes):
     return np.array(out)
 
 
-def _solve_custom(model, K, M, n, clamped: bool):
-    """Eigen-solve a (possibly unclamped) model with extra matrices; FEM classification."""
+def _solve_custom(model, K, M, n, clamped: bool, shapes: bool = False):
+    """Eigen-solve a (possibly unclamped) model with extra matrices; FEM classification (and the
+    mass-normalised shapes with ``shapes``)."""
     from probedyn.fem import elasticity as el
     from probedyn.fem.eigen import shift_invert_eigsh
     from probedyn.fem.modes import classify_shapes
@@ -112,7 +113,8 @@ def _solve_custom(model, K, M, n, clamped: bool):
     Phi[free] = res.vectors
     w = el.lumped_weights(model.mesh, model.elem_density)
     fams, _ = classify_shapes(model.basis.doflocs, w, Phi.reshape(model.n_nodes, 3, -1), axis=model.beam_axis)
-    return np.sqrt(np.maximum(res.eigenvalues, 0)) / (2 * math.pi), fams
+    f = np.sqrt(np.maximum(res.eigenvalues, 0)) / (2 * math.pi)
+    return (f, fams, Phi) if shapes else (f, fams)
 
 
 def _geometric_stiffness(model, sigma):
@@ -146,9 +148,12 @@ def _face_nodal_areas(model, face):
     return d * (area / d.sum())
 
 
-def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12) -> dict:
+def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
+              detector=None) -> dict:
     """Vacuum frequencies [Hz] of the MODES of lever ``lever`` carrying ``effect`` (FEM, ``ett``
-    elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`)."""
+    elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`).
+    ``detector(model) -> (node index, unit direction)``: also return each MODE's mass-normalised
+    displacement there along that direction (``"detector_disp"``, for thermal spectra)."""
     from probedyn.fem.model import PointMass
 
     probe = _probe()
@@ -188,7 +193,11 @@ def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT
         clamped = False
     if effect == "axial-prestress":
         K = (K + _geometric_stiffness(model, params["sigma"])).tocsr()
-    f, fams = _solve_custom(model, K, M, n_modes, clamped)
+    f, fams, Phi = _solve_custom(model, K, M, n_modes, clamped, shapes=True)
+    if detector is not None:
+        j, e = detector(model)
+        d = np.asarray(e, float) @ Phi.reshape(model.n_nodes, 3, -1)[j]
+        extra["detector_disp"] = _families_pick(d, fams, MODES).tolist()
     return {"freqs": _families_pick(f, fams, MODES).tolist(), "fem_families": fams, "dofs": int(model.dofs), **extra}
 
 

@@ -22,12 +22,20 @@
    1 for a PSD calibrated in tip displacement; an uncalibrated sensitivity or an optical lever
    scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
    Q or amplitude implausible).
+   The predictions are those of a *hypothesis*: the nominal probe, or the probe carrying one catalog
+   cause at a grid of its parameters (:func:`_hypotheses`, on the Ritz reduction). A hidden effect
+   moves the families differently (a width error moves lateral and torsional modes only), so the
+   nearest nominal mode after one common scale may be another family's; the labels are those of the
+   hypothesis placing the most resolved peaks (the nominal probe's unless a cause places more), and
+   labellings that tie are decided by their modal fit, the peaks they disagree on left out when the
+   fits are within the evidence margin (reported as ambiguous).
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
    declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any
 
@@ -39,7 +47,7 @@ from scipy.stats import gamma as gamma_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.diagnose.formats import ModalData, SpectrumData
 from probedyn.diagnose.modal import ModalProblem
-from probedyn.diagnose.modal_model import FEMBaseline, _fluid_mode
+from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode
 
 __all__ = ["spectrum_problem", "fit_line", "detect_peaks", "sho_psd"]
 
@@ -47,6 +55,10 @@ K_B = 1.380649e-23
 MATCH_TOL = 0.03
 Q_FACTOR = 3.0
 AREA_FACTOR = 100.0
+GRID_FRACTIONS = (0.002, 0.005, 0.01, 0.015, 0.02, 0.03, 0.04, 0.05, 0.065, 0.08, 0.1, 0.125, 0.15, 0.2, 0.25,
+                  0.3, 0.4, 0.55, 0.75, 1.0)
+MAX_LABELLINGS = 4
+CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)  # distinct labellings compared by their modal fit
 
 
 def sho_psd(f, f0, Q, A):
@@ -191,10 +203,10 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
     return out
 
 
-def _best_scale(peaks: list[float], preds: list[float]) -> float:
-    """The frequency scale in [1/2, 2] that maps the most predictions onto peaks within MATCH_TOL
-    (ties: the scale nearest 1)."""
-    cands = [p / q for p in peaks for q in preds if 0.5 <= p / q <= 2.0] or [1.0]
+def _best_scale(peaks: list[float], preds: list[float], span: float = 2.0) -> float:
+    """The frequency scale in [1/span, span] that maps the most predictions onto peaks within
+    MATCH_TOL (ties: the scale nearest 1)."""
+    cands = [p / q for p in peaks for q in preds if 1 / span <= p / q <= span] or [1.0]
     best, best_key = 1.0, None
     for s in cands:
         n = sum(any(abs(p / (s * q) - 1) < MATCH_TOL for q in preds) for p in peaks)
@@ -204,17 +216,97 @@ def _best_scale(peaks: list[float], preds: list[float]) -> float:
     return best
 
 
-def spectrum_problem(meas: SpectrumData) -> ModalProblem:
+def _matches(fits: list[dict], f_pred: list[float], s: float) -> tuple[int, int, float]:
+    """Resolved and all peaks within MATCH_TOL of a distinct predicted mode (nearest first) after the
+    common scale ``s``, and the sum of their squared log deviations."""
+    taken: dict[int, float] = {}
+    n_res = 0
+    for ft in sorted(fits, key=lambda ft: -ft["area_m2"]):
+        d = [abs(math.log(ft["f0_Hz"] / (s * f))) if f > 0 else math.inf for f in f_pred]
+        j = int(np.argmin(d))
+        if d[j] < MATCH_TOL and j not in taken:
+            taken[j] = d[j]
+            n_res += ft["fwhm_bins"] >= 2.0
+    return n_res, len(taken), float(sum(v * v for v in taken.values()))
+
+
+def _grid(p) -> list[float]:
+    """Values of one cause parameter for the identification hypotheses: its null and, towards each
+    bound, GRID_FRACTIONS of the way (geometric over a log-scaled range). Successive values must move
+    a mode by less than twice MATCH_TOL, or a mode that the effect moved between two grid values is
+    within the window of neither (a width ratio of 1.165 between 1.12 and 1.21 left the lateral mode
+    3.7 % from both; a tensile stress of 24 MPa between 17 and 35 MPa -- the range reaches 30 times
+    the buckling stress -- left flapwise 1 5-7 % from both): the fractions step by <= 0.05 of the
+    range up to 0.3 of it and by ~1.5x below 0.1, coarser beyond 0.3 where the catalog's effects are rare."""
+    if p.scale == "log":
+        return [float(x) for x in np.geomspace(p.lo, p.hi, 9)]
+    out = [p.null]
+    for b in (p.lo, p.hi):
+        if b != p.null:
+            out += [p.null + (b - p.null) * x for x in GRID_FRACTIONS]
+    return out
+
+
+def _hypotheses(meas: SpectrumData, base: FEMBaseline, preds: list[dict]) -> list[dict]:
+    """Mode frequencies of the nominal probe (``preds``) and of the probe carrying each catalog cause
+    the declared conditions allow, on a grid of its parameters (:func:`_grid`, products for two
+    parameters), from the Ritz reduction of the FEM as ratios to its nominal solution (exact at the
+    null). A hidden effect moves the families differently -- a width error moves lateral and
+    torsional modes only, a clamp compliance or a compressive stress mostly the first flapwise
+    mode -- so one common scale cannot place every peak, and the nearest nominal mode may be
+    another family's; the labels are those of the hypothesis that makes the most peaks modes."""
+    out = [{"cause": None, "values": {}, "f_Hz": [p["f_Hz"] for p in preds]}]
+    idx = [i for i, p in enumerate(preds) if p["family"] in FAMILIES]
+    if not idx:
+        return out
+    L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
+    n = len(idx)
+    fam = np.array([preds[i]["family"] for i in idx])
+    order = np.array([preds[i]["order"] for i in idx])
+    f0 = np.array([preds[i]["f_Hz"] for i in idx])
+    md = ModalData(path=meas.path, kind="modal", meta=meas.meta, description=meas.description, medium=meas.medium,
+                   medium_name=meas.medium_name, temperature=meas.temperature, known=meas.known, free=(),
+                   probe=meas.probe, probe_values=meas.probe_values, family=fam, order=order, freq=f0,
+                   freq_sigma=1e-3 * f0, Q=np.full(n, np.nan), Q_sigma_rel=np.full(n, np.nan),
+                   length=np.full(n, meas.probe_values.get("length", np.nan)), known_mass=meas.known_mass,
+                   noise_stated=True)
+    prob = ModalProblem(md, bases={L: base})
+    try:
+        ref, _ = prob.predict({})
+    except Exception:  # noqa: BLE001 -- a probe the reduction cannot handle: nominal labels only
+        return out
+    for c in prob.causes:
+        grids = [_grid(p) for p in c.params]
+        nulls = [p.null for p in c.params]
+        for vals in itertools.product(*grids):
+            if list(vals) == nulls:
+                continue
+            v = {p.name: float(x) for p, x in zip(c.params, vals)}
+            try:
+                fh, _ = prob.predict(v, (c,))
+            except Exception:  # noqa: BLE001 -- a grid point outside what the reduction solves
+                continue
+            if not np.all(np.isfinite(fh)) or np.any(fh <= 0):
+                continue
+            f_all = [p["f_Hz"] for p in preds]
+            for k, i in enumerate(idx):
+                f_all[i] = preds[i]["f_Hz"] * fh[k] / ref[k]
+            out.append({"cause": c.key, "values": v, "f_Hz": f_all})
+    return out
+
+
+def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> ModalProblem:
     """Identify the peaks of a spectrum against the probe's FEM and return the modal problem of
-    the accepted ones (with the peak table for the report)."""
+    the accepted ones (with the peak table for the report). ``base``: the probe's FEM baseline when
+    already built (spectra of one probe share it and its reduction)."""
     freq, psd = meas.freq, meas.value
     s_log = log_scatter(psd, meas.averages)
     df = float(np.median(np.diff(freq)))
     idx = detect_peaks(freq, psd, s_log, averages=meas.averages)
     if not idx:
         raise DataFormatError(f"{meas.path}: no peak stands out of the spectrum's background by 5 standard deviations")
-    needed = {"flapwise": 2}
-    base = FEMBaseline(meas.probe, meas.probe_values, needed)
+    if base is None:
+        base = FEMBaseline(meas.probe, meas.probe_values, {"flapwise": 2})
     preds = _predictions(base, meas.medium, meas.temperature)
     fits = []
     for i in idx:
@@ -223,9 +315,95 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
         except ValueError:
             continue
     hint = list(meas.families)
-    seen = set()
-    pf = [p["f_Hz"] for p in preds if (p["family"] in hint if hint else p["family"] == "flapwise")]
-    s = _best_scale([f["f0_Hz"] for f in fits], pf) if pf else 1.0
+    fam_ok = (lambda fa: fa in hint) if hint else (lambda fa: fa == "flapwise")
+    L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
+    # the labels: the hypotheses (the nominal probe, or a catalog cause at a grid value) under which
+    # the most resolved peaks are modes (within MATCH_TOL after a common scale), see _hypotheses
+    hyps = _hypotheses(meas, base, preds)
+    scored = []
+    for h in hyps:
+        fh = h["f_Hz"]
+        pf = [f for f, p in zip(fh, preds) if fam_ok(p["family"])]
+        # the nominal probe may be off by up to 2x (geometry); a cause hypothesis is a specific
+        # deviation, on top of which only the uniform uncertainty of the nominal material and
+        # geometry (CAUSE_SCALE) is left -- else a cause at its bound times a 2x scale relabels
+        # flapwise 2 as flapwise 1 on a two-peak spectrum, and both labellings fit exactly
+        sh = (_best_scale([f["f0_Hz"] for f in fits], pf, 2.0 if h["cause"] is None else CAUSE_SCALE)
+              if pf else 1.0)
+        n_res, n_all, dev2 = _matches(fits, fh, sh)
+        # only resolved lines count: unresolved ones are spurs or frequency-only modes, and with
+        # many hypotheses some place a spur on a mode (a spur labelled torsion 1 moved the real
+        # torsion onto lateral 2 and flapwise 3 onto axial 1 in a noise-only spectrum)
+        scored.append(((n_res,), (round(abs(math.log(sh)) / 0.01), round(dev2 / MATCH_TOL**2, 2),
+                                         h["cause"] is not None), h, sh))
+    top = max(k for k, *_ in scored)
+    # the nominal probe's labels stand unless a cause hypothesis places more peaks: with few peaks
+    # many hypotheses (a cause near its bound) place them all too, under other labels, and fit them
+    # exactly -- the data cannot prefer them, the declared probe can
+    cands = [scored[0]] if scored[0][0] == top else sorted((x for x in scored if x[0] == top), key=lambda x: x[1])
+    # distinct labellings among the hypotheses that place the most peaks: where they differ (a peak
+    # that is torsion 1 under one hypothesis and lateral 2 under another), frequencies alone cannot
+    # decide; the labelling whose modal fit (the baseline or one catalog cause, Q included) has the
+    # lowest chi-square is taken -- the likelihood of the whole spectrum's modes decides the labels
+    options = []
+    for _, _, h, sh in cands:
+        tab = _label_table(meas, fits, [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])], sh, df)
+        lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
+        if lab not in [o[0] for o in options]:
+            options.append((lab, tab, h, sh))
+        if len(options) >= MAX_LABELLINGS:
+            break
+    chi2s = []
+    if len(options) > 1:
+        for lab, tab, h, sh in options:
+            chi2s.append(_best_fit_chi2(_modal_problem(meas, tab, base, L)))
+        order_ = np.argsort(chi2s)
+        k = int(order_[0])
+    else:
+        k = 0
+    _, table, best, s = options[k]
+    if len(options) > 1:
+        # labellings whose best fits are within the engine's evidence margin of the best one are
+        # as likely: the peaks they label differently are ambiguous and left out (a wrong label
+        # would be "explained" by a wrong cause)
+        from probedyn.diagnose.engine import EVIDENCE_MARGIN
+
+        for j in order_[1:]:
+            if chi2s[j] - chi2s[k] < 2 * EVIDENCE_MARGIN:
+                for t, lab_j in zip(table, options[j][0]):
+                    here = (t["family"], t["order"]) if t["accepted"] else None
+                    if here is not None and lab_j != here:
+                        t["accepted"] = False
+                        other = f"{lab_j[0]} {lab_j[1]}" if lab_j else "not a mode"
+                        t["reasons"] = [f"ambiguous: {here[0]} {here[1]} or {other} (the modal fits of the two labellings "
+                                        f"differ by chi2 {chi2s[j] - chi2s[k]:.3g} < {2 * EVIDENCE_MARGIN:g})"]
+                        t["family"] = t["order"] = None
+    acc = [t for t in table if t["accepted"]]
+    if not acc:
+        raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
+                              f"({'; '.join(r for t in table for r in t['reasons'][:1])})")
+    prob = _modal_problem(meas, table, base, L)
+    prob.kind = meas.kind
+    c_cal = table[0].get("_c_cal") if table else None
+    for t in table:
+        t.pop("_c_cal", None)
+    # the frequency scale reported is the nominal probe's (measured / nominal frequencies of the
+    # matched modes); the labels may come from a hypothesis with its own scale s
+    s_nominal = scored[0][3]
+    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s_nominal, "peaks": table,
+                  "labels_from": {"hypothesis": best["cause"] or "nominal probe", "values": best["values"], "scale": s,
+                                  "hypotheses_tried": len(hyps), "labellings_compared": len(options),
+                                  "labelling_chi2": chi2s or None,
+                                  "note": "the hypothesis that placed the peaks on modes (labels only, not a diagnosis)"},
+                  "thermal_area_factor": c_cal}
+    prob.extra_report = lambda: {"peaks": prob.peaks}
+    return prob
+
+
+def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: float, df: float) -> list[dict]:
+    """The peak table under one set of predicted frequencies ``preds`` and common scale ``s``:
+    each peak's nearest mode, accepted or rejected with its reasons (see the module docstring)."""
+    seen: set = set()
     table = []
     for ft in fits:
         reasons = []
@@ -274,10 +452,15 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
                 t["reasons"] = [f"peak area {t['area_m2']:.3g} m^2 is {r / c_cal:.3g} x the thermal k_B T / k_eff of "
                                 f"{t['family']} {t['order']} (times the spectrum's common factor {c_cal:.3g})"]
                 t["family"] = t["order"] = None
+    if table:
+        table[0]["_c_cal"] = c_cal
+    return table
+
+
+def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) -> ModalProblem:
+    """The modal problem of the accepted peaks (frequency with the fit's standard error and the
+    declared calibration uncertainty, Q with its fit error)."""
     acc = [t for t in table if t["accepted"]]
-    if not acc:
-        raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
-                              f"({'; '.join(r for t in table for r in t['reasons'][:1])})")
     fam = np.array([t["family"] for t in acc])
     order = np.array([t["order"] for t in acc])
     f = np.array([t["f0_Hz"] for t in acc])
@@ -289,10 +472,19 @@ def spectrum_problem(meas: SpectrumData) -> ModalProblem:
                    probe=meas.probe, probe_values=meas.probe_values, family=fam, order=order, freq=f, freq_sigma=sig,
                    Q=Q, Q_sigma_rel=qrel, length=np.full(len(f), meas.probe_values.get("length", np.nan)),
                    known_mass=meas.known_mass, noise_stated=True)
-    L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
-    prob = ModalProblem(md, bases={L: base})
-    prob.kind = meas.kind
-    prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s, "peaks": table,
-                  "thermal_area_factor": c_cal}
-    prob.extra_report = lambda: {"peaks": prob.peaks}
-    return prob
+    return ModalProblem(md, bases={L: base})
+
+
+def _best_fit_chi2(prob: ModalProblem) -> float:
+    """The lowest chi-square of the baseline and of each single catalog cause (nested fits on the
+    Ritz reduction, as the diagnosis runs them)."""
+    from probedyn.diagnose.engine import Fitter
+
+    F = Fitter(prob)
+    try:
+        b = F.baseline()
+        return float(min([b.chi2, *(f.chi2 for f in F.map_nested([(b, (c,), None) for c in prob.causes]))]))
+    except Exception:  # noqa: BLE001 -- a labelling the model cannot fit at all
+        return math.inf
+    finally:
+        F.close_pool()
