@@ -134,6 +134,7 @@ class ForceState:
     contact: str | None = None  # registry contact model with adhesion (None: Hertz)
     W: float = 0.0  # work of adhesion [J/m^2]
     lam: float | None = None  # Maugis transition parameter (md)
+    alpha: float = 0.0  # cone half-angle [rad] of a conical tip (0: the sphere of radius R)
     transforms: list = field(default_factory=list)
 
 
@@ -144,7 +145,7 @@ def _interaction(st: ForceState, E_t, nu_t):
     """P(delta) for loading and unloading (callables) of the state's contact law (the registry model
     is kept for repeated evaluations with the same law parameters, e.g. finite-difference steps in
     the contact point or the baseline)."""
-    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, E_t, nu_t)
+    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, st.alpha, E_t, nu_t)
     hit = _LAW_CACHE.get(key)
     if hit is None:
         hit = _build_interaction(st, E_t, nu_t)
@@ -157,7 +158,8 @@ def _interaction(st: ForceState, E_t, nu_t):
 def _build_interaction(st: ForceState, E_t, nu_t):
     """(P_loading, P_unloading, registry model or None). The model is evaluated through its
     normalised curve (parametrised by the contact radius) in :func:`registry_polylines`."""
-    if st.contact is None or st.W <= 0:
+    adhesive = st.contact is not None and st.W > 0
+    if not adhesive and st.alpha <= 0:
         f = lambda d: hertz(d, st.E_star, st.R)  # noqa: E731
         return f, f, None
     from probedyn.schemes.contact import get_contact_model
@@ -168,6 +170,12 @@ def _build_interaction(st: ForceState, E_t, nu_t):
         raise ProbedynError("reduced modulus larger than the tip's own")
     E_s = (1 - 0.3**2) / inv
     kw = dict(E_t=E_t, nu_t=nu_t, E_s=E_s, nu_s=0.3, R_t=st.R, R_s=0.0)
+    if st.alpha > 0:  # the registry's blunted cone (no adhesion: monotone, same loading and unloading)
+        if adhesive:
+            raise ProbedynError("adhesion with a conical tip is not in the contact registry")
+        cone = get_contact_model("cone", **kw, alpha=st.alpha)
+        f = lambda d: cone.force(d)  # noqa: E731
+        return f, f, None
     if st.contact == "md":
         lam = st.lam if st.lam is not None else 1.0
         model = get_contact_model("md", **kw, W=st.W, z0=_z0_for_lambda(lam, st.W, st.R, 4.0 / 3.0 * st.E_star))
@@ -425,7 +433,11 @@ class ForceCurveProblem:
         dP = np.empty(self.n)
         if model is None:
             P[:] = Pl(delta)
-            dP[:] = 2.0 * st.E_star * math.sqrt(st.R) * np.sqrt(np.maximum(delta, 0.0))
+            if st.alpha > 0:  # the cone's law: its slope by central differences (smooth in delta > 0)
+                h = 1e-3 * max(float(np.ptp(delta)), 1e-9)
+                dP[:] = (Pl(delta + h) - Pl(delta - h)) / (2 * h)
+            else:
+                dP[:] = 2.0 * st.E_star * math.sqrt(st.R) * np.sqrt(np.maximum(delta, 0.0))
         else:
             lines = registry_polylines(model, float(delta.min()) - 0.05 * self.span, float(delta.max()) + 0.05 * self.span,
                                        n_contact=600, n_tail=200)
