@@ -37,8 +37,8 @@ class TipShape(Cause):
         a = math.radians(v["alpha"])
         if a <= 0:
             return {}
-        from probedyn.schemes.contact.cone import BILODEAU_PYRAMID
+        from probedyn.schemes.contact.cone import BluntedPyramid
 
         R = problem.data.tip_radius
-        return {"pyramid_face_half_angle_deg": math.degrees(math.atan(math.tan(a) / (math.pi / 2 * BILODEAU_PYRAMID))),
+        return {"pyramid_face_half_angle_deg": math.degrees(math.atan(math.tan(a) / BluntedPyramid.cone_factor)),
                 "cap_edge_depth_m": R / math.tan(a) ** 2, "cap_edge_radius_m": R / math.tan(a)}
