@@ -136,6 +136,9 @@ def detectable(r: dict) -> bool:
 def miss_class(r: dict) -> str:
     if not detectable(r):
         return f"below detectability (signal chi2 {r['detectability']['signal_chi2']:.1f} < {r['detectability']['threshold']:.1f})"
+    if r.get("detectability") and r["detectability"].get("identifiable") is False:
+        return (f"not identifiable (a rival law within {r['detectability']['rival_gap_chi2']:.1f} of chi2 on the noise-free "
+                f"record): {r.get('first')} first")
     if r["verdict"] == "no-significant-discrepancy":
         return "not detected (baseline chi-square test passed)"
     if not r["findings"]:
