@@ -15,7 +15,8 @@ contact`` (DMT on a soft lever: the van der Waals gradient exceeds k well before
 ``tip-radius-error`` (the declared radius is wrong; the sample modulus is declared),
 ``deflection-drift`` (a drift of the deflection in time), ``tip-shape`` (the registry's blunted cone,
 half-angle 15-35 deg, on a soft sample indented 1.2-4 times deeper than the cap's edge depth R cot^2(alpha),
-where the flanks carry the load). Noise-only cases: Hertz + the linear
+where the flanks carry the load), ``piezo-hysteresis`` (the retract's true piezo position offset by
+0.5-5 nm from the recorded one). Noise-only cases: Hertz + the linear
 lever only (with the same tilted baseline, formats and noise). The sample modulus is declared in
 half of the other cases, whatever their effect, so the sidecar does not betray the truth.
 """
@@ -30,12 +31,12 @@ import numpy as np
 from diagnose_truth import _continuation_curve
 
 CURVE_EFFECTS = ["adhesion-dmt", "adhesion-jkr", "adhesion-md", "jump-to-contact", "tip-radius-error",
-                 "deflection-drift", "tip-shape"]
+                 "deflection-drift", "tip-shape", "piezo-hysteresis"]
 #: the cause that explains each effect, and its main parameter (for the recovery error)
 EXPECTED = {"adhesion-dmt": ("adhesion-dmt", "W"), "adhesion-jkr": ("adhesion-jkr", "W"),
             "adhesion-md": ("adhesion-md", "W"), "jump-to-contact": ("adhesion-dmt", "W"),
             "tip-radius-error": ("tip-radius-error", "r_ratio"), "deflection-drift": ("deflection-drift", "drift"),
-            "tip-shape": ("tip-shape", "alpha")}
+            "tip-shape": ("tip-shape", "alpha"), "piezo-hysteresis": ("piezo-hysteresis", "dz")}
 E_TIP, NU_TIP, NU_S = 169e9, 0.28, 0.3
 
 
@@ -100,12 +101,16 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     z_far = z_c - max(40e-9, 1.5 * Fmax / k)  # far enough that the retract's pull-off lands out of range
     z_app = np.linspace(z_far, z_top, n)
     z_ret = z_app[::-1]
+    dz = 0.0
+    if effect == "piezo-hysteresis":  # the retract's true position = recorded + dz
+        dz = float(rng.choice([-1, 1]) * 10 ** rng.uniform(-9.3, -8.3))
+        params["dz"] = dz
     if effect == "tip-shape":  # a monotone law without adhesion: one equilibrium per z, no jumps
         F_app = _monotone_curve(z_app - z_c, Pl, k)
         F_ret = _monotone_curve(z_ret - z_c, Pu, k)
     else:
         F_app = _continuation_curve(z_app - z_c, Pl, k, z_far - z_c)
-        F_ret = _continuation_curve(z_ret - z_c, Pu, k, z_top - z_c - F_app[-1] / k)
+        F_ret = _continuation_curve(z_ret + dz - z_c, Pu, k, z_top + dz - z_c - F_app[-1] / k)
     z = np.concatenate([z_app, z_ret])
     F = np.concatenate([F_app, F_ret])
     jumps = np.abs(np.diff(F_app))

@@ -1,7 +1,8 @@
 """Force curves and spectra as instruments record them (truths: tests/diagnose_truth_curves.py).
 
-Default run: one hidden adhesion law and one deflection drift on force curves (nested fits from the
-baseline optimum: the cause recovers its parameter), and a thermal spectrum of the probe's FEM modes
+Default run: one hidden adhesion law, a deflection drift, a conical tip and a piezo hysteresis on force
+curves (nested fits from the baseline optimum: the cause recovers its parameter), the parsimony rule between
+nested adhesion laws, and a thermal spectrum of the probe's FEM modes
 with an electronic spur (class 6: the spur is rejected and reported, the modes identified). The
 rate study over 50 + 50 curves is ``benchmarks/diagnose_rates_curves.py`` (slow test below).
 """
@@ -73,6 +74,19 @@ def test_force_curve_cone_tip_recovered(tmp_path):
     assert fit.chi2 < _chi2_bound(fit.n)
     rep = parameter_report(Fitter(prob), fit, ["alpha"])["alpha"]
     assert abs(fit.values["alpha"] - truth["params"]["alpha"]) < 5 * rep["sigma"]
+
+
+def test_force_curve_piezo_hysteresis_recovered(tmp_path):
+    """The retract's true piezo position offset by dz from the recorded one (truth: the continuation
+    on the shifted positions): the nested piezo-hysteresis fit reaches the noise and recovers dz within
+    5 of its own standard deviations."""
+    from probedyn.diagnose.engine import parameter_report
+
+    path, truth = make_curve_case(tmp_path, 2015, "piezo-hysteresis")
+    prob, base, fit = _nested(path, "piezo-hysteresis")
+    assert fit.chi2 < _chi2_bound(fit.n) < base.chi2
+    rep = parameter_report(Fitter(prob), fit, ["dz"])["dz"]
+    assert abs(fit.values["dz"] - truth["params"]["dz"]) < 5 * rep["sigma"]
 
 
 def test_parsimony_prefers_the_contained_limit():

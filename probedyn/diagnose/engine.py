@@ -704,7 +704,9 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         # 6. greedy extension while the chi-square test still fails
         while len(chosen) < max_causes and current.p_value < alpha:
             ext = []
-            for d in claimed[1:]:
+            # every cause that passed the first likelihood-ratio test is a candidate extension, also one
+            # not cross-validated in the ranking (pruned: its cap could not reach the winner's evidence)
+            for d in claimed[1:] + [x for x in cands if x.get("pruned")]:
                 c = d["cause"]
                 if c in chosen or (confounded and c.key in confounded[0]["causes"]):
                     continue

@@ -135,6 +135,7 @@ class ForceState:
     W: float = 0.0  # work of adhesion [J/m^2]
     lam: float | None = None  # Maugis transition parameter (md)
     alpha: float = 0.0  # cone half-angle [rad] of a conical tip (0: the sphere of radius R)
+    z_shift: float = 0.0  # the retract's true piezo position minus the recorded one [m] (hysteresis)
     transforms: list = field(default_factory=list)
 
 
@@ -412,7 +413,7 @@ class ForceCurveProblem:
     def predict(self, values, causes=()) -> np.ndarray:
         d = self.data
         st = self.state(values, causes)
-        F = self._curve(st, d.z - st.z_c, d.segment, d.k)
+        F = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k)
         F = F + st.b0 + st.b1 * d.z + st.drift * self.tau
         for tf in st.transforms:
             F = tf(self, F)
@@ -427,7 +428,7 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
-        delta = d.z - st.z_c - Fx / d.k
+        delta = d.z + st.z_shift * (d.segment == 1) - st.z_c - Fx / d.k
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)
         dP = np.empty(self.n)
