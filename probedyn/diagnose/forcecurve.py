@@ -34,6 +34,7 @@ import numpy as np
 from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ForceData, _noise, _num, col_error, read_csv
+from probedyn.schemes.contact.cone import ALPHA_MIN
 
 __all__ = ["ForceCurveProblem", "ForceState", "read_force", "lever_curve", "hertz"]
 
@@ -160,7 +161,9 @@ def _build_interaction(st: ForceState, E_t, nu_t):
     """(P_loading, P_unloading, registry model or None). The model is evaluated through its
     normalised curve (parametrised by the contact radius) in :func:`registry_polylines`."""
     adhesive = st.contact is not None and st.W > 0
-    if not adhesive and st.alpha <= 0:
+    # a cone narrower than the registry's smallest half-angle leaves its cap only beyond R cot^2(alpha)
+    # = 1e8 R: the sphere (Hertz) exactly at any depth a force curve reaches
+    if not adhesive and st.alpha < ALPHA_MIN:
         f = lambda d: hertz(d, st.E_star, st.R)  # noqa: E731
         return f, f, None
     from probedyn.schemes.contact import get_contact_model
@@ -171,7 +174,7 @@ def _build_interaction(st: ForceState, E_t, nu_t):
         raise ProbedynError("reduced modulus larger than the tip's own")
     E_s = (1 - 0.3**2) / inv
     kw = dict(E_t=E_t, nu_t=nu_t, E_s=E_s, nu_s=0.3, R_t=st.R, R_s=0.0)
-    if st.alpha > 0:  # the registry's blunted cone (no adhesion: monotone, same loading and unloading)
+    if st.alpha >= ALPHA_MIN:  # the registry's blunted cone (no adhesion: monotone, same loading and unloading)
         if adhesive:
             raise ProbedynError("adhesion with a conical tip is not in the contact registry")
         cone = get_contact_model("cone", **kw, alpha=st.alpha)
@@ -434,7 +437,7 @@ class ForceCurveProblem:
         dP = np.empty(self.n)
         if model is None:
             P[:] = Pl(delta)
-            if st.alpha > 0:  # the cone's law: its slope by central differences (smooth in delta > 0)
+            if st.alpha >= ALPHA_MIN:  # the cone's law: its slope by central differences (smooth in delta > 0)
                 h = 1e-3 * max(float(np.ptp(delta)), 1e-9)
                 dP[:] = (Pl(delta + h) - Pl(delta - h)) / (2 * h)
             else:

@@ -49,6 +49,8 @@ from .base import COMMON_PARAMS, CONTACT_MODELS, ContactModel, ContactScales, _a
 
 #: Bilodeau (1992): sharp four-sided pyramid, ``P = BILODEAU_PYRAMID E* tan(alpha) delta^2``
 BILODEAU_PYRAMID = 0.7453
+#: smallest half-angle [rad]: the cap then ends only at a depth of R cot^2(alpha) = 1e8 R (Hertz at any real depth)
+ALPHA_MIN = 1e-4
 
 _GEOMETRY = [p for p in COMMON_PARAMS if p.name in ("E_t", "nu_t", "E_s", "nu_s", "R_t", "R_s")]
 
@@ -145,7 +147,7 @@ class _Tip(ContactModel):
 
 
 _ALPHA = Param("alpha", math.radians(20.0), "rad", "half-angle between the tip axis and its flank (cone) or face "
-               "(pyramid)", lo=1e-4, hi=math.pi / 2 - 1e-4, positive=True, source="Sneddon (1965); Bilodeau (1992)")
+               "(pyramid)", lo=ALPHA_MIN, hi=math.pi / 2 - ALPHA_MIN, positive=True, source="Sneddon (1965); Bilodeau (1992)")
 
 
 @CONTACT_MODELS.register
