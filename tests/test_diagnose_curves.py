@@ -100,14 +100,17 @@ def test_parsimony_prefers_the_contained_limit():
     class _F:
         values = {"W": 0.1, "lam": 10.0}
 
-    def row(c, ev):
-        return {"cause": c(), "evidence": ev, "fit": _F()}
+    def row(c, ev, dchi2=300.0):
+        return {"cause": c(), "evidence": ev, "fit": _F(), "dchi2": dchi2, "k": len(c.params)}
 
-    claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 0.9 * EVIDENCE_MARGIN)]
+    claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 0.9 * EVIDENCE_MARGIN, 290.0)]
     note = _parsimony(claimed, EVIDENCE_MARGIN)
     assert claimed[0]["cause"].key == "adhesion-jkr" and claimed[1].get("contains_leader")
     assert note["container"] == "adhesion-md"
-    claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 1.1 * EVIDENCE_MARGIN)]
+    # evidence beyond the margin but lambda not supported in sample (Delta chi2 below chi2_1(0.99) = 6.63)
+    claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 10 * EVIDENCE_MARGIN, 300.0 - 6.0)]
+    assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-jkr"
+    claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 1.1 * EVIDENCE_MARGIN, 300.0 - 7.0)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
     claimed = [row(AdhesionMD, 100.0), row(DeflectionDrift, 99.9)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"

@@ -685,7 +685,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             d["method"] = "akaike (fewer than 3 groups)"
     claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
     claimed.sort(key=lambda d: -d["evidence"])
-    parsimony = _parsimony(claimed, margin)
+    parsimony = _parsimony(claimed, margin, alpha)
     findings: list[dict] = []
     confounded: list[dict] = []
     chosen: list[Cause] = []
@@ -791,17 +791,27 @@ def _limit_refits(F: Fitter, causes: list, fits: list) -> list:
     return fits
 
 
-def _parsimony(claimed: list[dict], margin: float) -> dict[str, Any] | None:
+def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict[str, Any] | None:
     """Occam between nested causes: when the leader *contains* a claimed cause as a limit (its
-    ``limits``) and that cause's evidence is within ``margin`` of the leader's, the data do not
-    support the leader's extra parameter: the contained (simpler) cause leads, and the container
-    is not counted as a confounded rival (it is the same explanation plus an unsupported
-    parameter). Reorders ``claimed`` in place; returns the note for the report."""
+    ``limits``) and either that cause's evidence is within ``margin`` of the leader's or the
+    leader's extra parameters fail the likelihood-ratio test against it (in-sample chi-square lower
+    by no more than ``chi2_k(1 - alpha)``, k the extra parameters: the engine's own claim rule,
+    applied between the two nested models), the data do not support the leader's extra parameter:
+    the contained (simpler) cause leads, and the container is not counted as a confounded rival
+    (it is the same explanation plus an unsupported parameter). The LR arm makes the rule immune to
+    the scatter of held-out evidence between models of equal in-sample fit. Reorders ``claimed``
+    in place; returns the note for the report."""
     if not claimed:
         return None
     best = claimed[0]
     lims = set(getattr(best["cause"], "limits", ()))
-    inner = [d for d in claimed[1:] if d["cause"].key in lims and d["evidence"] >= best["evidence"] - margin]
+
+    def unsupported(d):
+        k_extra = max(best["k"] - d["k"], 1)
+        lr = float(chi2_dist.ppf(1 - alpha, k_extra))
+        return d["evidence"] >= best["evidence"] - margin or best["dchi2"] - d["dchi2"] <= lr
+
+    inner = [d for d in claimed[1:] if d["cause"].key in lims and unsupported(d)]
     if not inner:
         return None
     new = max(inner, key=lambda d: d["evidence"])
