@@ -13,7 +13,10 @@ independent of the diagnosis, which locates the equilibria on envelopes of the c
 Hidden effects: ``adhesion-dmt``, ``adhesion-jkr``, ``adhesion-md`` (lambda drawn), ``jump-to-
 contact`` (DMT on a soft lever: the van der Waals gradient exceeds k well before contact),
 ``tip-radius-error`` (the declared radius is wrong; the sample modulus is declared),
-``deflection-drift`` (a drift of the deflection in time). Noise-only cases: Hertz + the linear
+``deflection-drift`` (a drift of the deflection in time), ``tip-shape`` (the registry's blunted cone,
+half-angle 15-35 deg, on a soft sample indented 1.2-4 times deeper than the cap's edge depth R cot^2(alpha),
+where the flanks carry the load), ``piezo-hysteresis`` (the retract's true piezo position offset by
+0.5-5 nm from the recorded one). Noise-only cases: Hertz + the linear
 lever only (with the same tilted baseline, formats and noise). The sample modulus is declared in
 half of the other cases, whatever their effect, so the sidecar does not betray the truth.
 """
@@ -28,12 +31,27 @@ import numpy as np
 from diagnose_truth import _continuation_curve
 
 CURVE_EFFECTS = ["adhesion-dmt", "adhesion-jkr", "adhesion-md", "jump-to-contact", "tip-radius-error",
-                 "deflection-drift"]
+                 "deflection-drift", "tip-shape", "piezo-hysteresis"]
 #: the cause that explains each effect, and its main parameter (for the recovery error)
 EXPECTED = {"adhesion-dmt": ("adhesion-dmt", "W"), "adhesion-jkr": ("adhesion-jkr", "W"),
             "adhesion-md": ("adhesion-md", "W"), "jump-to-contact": ("adhesion-dmt", "W"),
-            "tip-radius-error": ("tip-radius-error", "r_ratio"), "deflection-drift": ("deflection-drift", "drift")}
+            "tip-radius-error": ("tip-radius-error", "r_ratio"), "deflection-drift": ("deflection-drift", "drift"),
+            "tip-shape": ("tip-shape", "alpha"), "piezo-hysteresis": ("piezo-hysteresis", "dz")}
 E_TIP, NU_TIP, NU_S = 169e9, 0.28, 0.3
+
+
+def _monotone_curve(z_rel, P, k: float) -> np.ndarray:
+    """Equilibrium force of a lever on a monotone, non-adhesive law (P >= 0, P' >= 0): the unique
+    root of ``delta + P(delta) / k = z_rel`` by bisection in ``[z_rel - P(z_rel) / k, z_rel]``
+    (P >= 0 puts the root below z_rel; P(root) <= P(z_rel) above the lower end), vectorised."""
+    z_rel = np.asarray(z_rel, float)
+    hi = z_rel.copy()
+    lo = z_rel - np.asarray(P(np.maximum(z_rel, 0.0)), float) / k
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        g = mid + np.asarray(P(mid), float) / k - z_rel
+        lo, hi = np.where(g < 0, mid, lo), np.where(g < 0, hi, mid)
+    return np.asarray(P(0.5 * (lo + hi)), float)
 
 
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300) -> tuple[Path, dict]:
@@ -69,13 +87,30 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         Pl = Pu = lambda d: 4 / 3 * Es_star * math.sqrt(R) * np.maximum(d, 0.0) ** 1.5  # noqa: E731
     Fmax = float(rng.uniform(15e-9, 60e-9))
     dmax = (Fmax / (4 / 3 * Es_star * math.sqrt(R))) ** (2 / 3)
+    if effect == "tip-shape":  # a soft sample indented by the flanks of a blunted cone
+        E_s = float(10 ** rng.uniform(6.0, 7.5))  # 1 - 30 MPa
+        Es_star = 1 / ((1 - NU_TIP**2) / E_TIP + (1 - NU_S**2) / E_s)
+        params["alpha"] = float(rng.uniform(15.0, 35.0))
+        cone = get_contact_model("cone", E_t=E_TIP, nu_t=NU_TIP, E_s=E_s, nu_s=NU_S, R_t=R, R_s=0.0,
+                                 alpha=math.radians(params["alpha"]))
+        dmax = float(rng.uniform(1.2, 4.0)) * R / math.tan(math.radians(params["alpha"])) ** 2
+        Fmax = float(cone.force(dmax))
+        Pl = Pu = lambda d: cone.force(d)  # noqa: E731
     z_c = float(rng.uniform(-5e-9, 5e-9))
     z_top = z_c + dmax + Fmax / k
     z_far = z_c - max(40e-9, 1.5 * Fmax / k)  # far enough that the retract's pull-off lands out of range
     z_app = np.linspace(z_far, z_top, n)
     z_ret = z_app[::-1]
-    F_app = _continuation_curve(z_app - z_c, Pl, k, z_far - z_c)
-    F_ret = _continuation_curve(z_ret - z_c, Pu, k, z_top - z_c - F_app[-1] / k)
+    dz = 0.0
+    if effect == "piezo-hysteresis":  # the retract's true position = recorded + dz
+        dz = float(rng.choice([-1, 1]) * 10 ** rng.uniform(-9.3, -8.3))
+        params["dz"] = dz
+    if effect == "tip-shape":  # a monotone law without adhesion: one equilibrium per z, no jumps
+        F_app = _monotone_curve(z_app - z_c, Pl, k)
+        F_ret = _monotone_curve(z_ret - z_c, Pu, k)
+    else:
+        F_app = _continuation_curve(z_app - z_c, Pl, k, z_far - z_c)
+        F_ret = _continuation_curve(z_ret + dz - z_c, Pu, k, z_top + dz - z_c - F_app[-1] / k)
     z = np.concatenate([z_app, z_ret])
     F = np.concatenate([F_app, F_ret])
     jumps = np.abs(np.diff(F_app))
@@ -88,7 +123,8 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     if effect == "deflection-drift":
         drift = float(rng.choice([-1, 1]) * 10 ** rng.uniform(-9.3, -8.3))  # 0.5 - 5 nN over the recording
         params["drift"] = drift
-    Fm = F + b0 + b1 * z + drift * tau + noise * rng.standard_normal(len(F))
+    clean = F + b0 + b1 * z + drift * tau
+    Fm = clean + noise * rng.standard_normal(len(F))
     seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
     fmt = ["deflection_V", "deflection_m", "force_N"][int(rng.integers(3))]
     sens = float(rng.uniform(20e-9, 100e-9))
@@ -112,7 +148,8 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\n{lever}\n[tip]\nradius = {R_nom!r}\n'
         f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n")
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
-             "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in}
+             "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
+             "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 
 

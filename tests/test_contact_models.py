@@ -14,8 +14,8 @@ from probedyn.core.errors import ParameterError
 from probedyn.schemes.contact import COMMON_PARAMS, get_contact_model, list_models
 
 
-def test_registry_lists_the_three_models():
-    assert set(list_models()) == {"dmt", "jkr", "md"}
+def test_registry_lists_the_models():
+    assert set(list_models()) == {"dmt", "jkr", "md", "cone", "pyramid"}
     assert get_contact_model("Maugis-Dugdale").name == "md"
     for name in list_models():
         m = get_contact_model(name)

@@ -34,6 +34,7 @@ import numpy as np
 from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ForceData, _noise, _num, col_error, read_csv
+from probedyn.schemes.contact.cone import ALPHA_MIN
 
 __all__ = ["ForceCurveProblem", "ForceState", "read_force", "lever_curve", "hertz"]
 
@@ -134,6 +135,8 @@ class ForceState:
     contact: str | None = None  # registry contact model with adhesion (None: Hertz)
     W: float = 0.0  # work of adhesion [J/m^2]
     lam: float | None = None  # Maugis transition parameter (md)
+    alpha: float = 0.0  # cone half-angle [rad] of a conical tip (0: the sphere of radius R)
+    z_shift: float = 0.0  # the retract's true piezo position minus the recorded one [m] (hysteresis)
     transforms: list = field(default_factory=list)
 
 
@@ -144,7 +147,7 @@ def _interaction(st: ForceState, E_t, nu_t):
     """P(delta) for loading and unloading (callables) of the state's contact law (the registry model
     is kept for repeated evaluations with the same law parameters, e.g. finite-difference steps in
     the contact point or the baseline)."""
-    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, E_t, nu_t)
+    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, st.alpha, E_t, nu_t)
     hit = _LAW_CACHE.get(key)
     if hit is None:
         hit = _build_interaction(st, E_t, nu_t)
@@ -157,7 +160,10 @@ def _interaction(st: ForceState, E_t, nu_t):
 def _build_interaction(st: ForceState, E_t, nu_t):
     """(P_loading, P_unloading, registry model or None). The model is evaluated through its
     normalised curve (parametrised by the contact radius) in :func:`registry_polylines`."""
-    if st.contact is None or st.W <= 0:
+    adhesive = st.contact is not None and st.W > 0
+    # a cone narrower than the registry's smallest half-angle leaves its cap only beyond R cot^2(alpha)
+    # = 1e8 R: the sphere (Hertz) exactly at any depth a force curve reaches
+    if not adhesive and st.alpha < ALPHA_MIN:
         f = lambda d: hertz(d, st.E_star, st.R)  # noqa: E731
         return f, f, None
     from probedyn.schemes.contact import get_contact_model
@@ -168,6 +174,12 @@ def _build_interaction(st: ForceState, E_t, nu_t):
         raise ProbedynError("reduced modulus larger than the tip's own")
     E_s = (1 - 0.3**2) / inv
     kw = dict(E_t=E_t, nu_t=nu_t, E_s=E_s, nu_s=0.3, R_t=st.R, R_s=0.0)
+    if st.alpha >= ALPHA_MIN:  # the registry's blunted cone (no adhesion: monotone, same loading and unloading)
+        if adhesive:
+            raise ProbedynError("adhesion with a conical tip is not in the contact registry")
+        cone = get_contact_model("cone", **kw, alpha=st.alpha)
+        f = lambda d: cone.force(d)  # noqa: E731
+        return f, f, None
     if st.contact == "md":
         lam = st.lam if st.lam is not None else 1.0
         model = get_contact_model("md", **kw, W=st.W, z0=_z0_for_lambda(lam, st.W, st.R, 4.0 / 3.0 * st.E_star))
@@ -341,6 +353,11 @@ class ForceCurveProblem:
         self.groups = g
         self.group_labels = [f"{'approach' if i < 4 else 'retract'} points {i % 4 + 1}::4" for i in range(8)]
         self.cv_warm = True  # interleaved groups: folds start from the null and the full-data optimum
+        # ... of every parameter, not only the cause's own: the snap-in and pull-off make the misfit
+        # piecewise (a W warm-started with the fold baseline's contact point, biased by the adhesion,
+        # stalled: a JKR truth got 322 nats less held-out evidence than Maugis-Dugdale at the same
+        # in-sample chi-square, seed 2009); the fold's optimum is still fitted on its training points
+        self.cv_warm_all = True
         # recording time normalised to [-1/2, 1/2] (the row order where no time column is given:
         # uniform sampling), for a drift of the deflection signal in time
         t = d.time if d.time is not None else np.arange(self.n, dtype=float)
@@ -404,7 +421,7 @@ class ForceCurveProblem:
     def predict(self, values, causes=()) -> np.ndarray:
         d = self.data
         st = self.state(values, causes)
-        F = self._curve(st, d.z - st.z_c, d.segment, d.k)
+        F = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k)
         F = F + st.b0 + st.b1 * d.z + st.drift * self.tau
         for tf in st.transforms:
             F = tf(self, F)
@@ -419,13 +436,17 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
-        delta = d.z - st.z_c - Fx / d.k
+        delta = d.z + st.z_shift * (d.segment == 1) - st.z_c - Fx / d.k
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)
         dP = np.empty(self.n)
         if model is None:
             P[:] = Pl(delta)
-            dP[:] = 2.0 * st.E_star * math.sqrt(st.R) * np.sqrt(np.maximum(delta, 0.0))
+            if st.alpha >= ALPHA_MIN:  # the cone's law: its slope by central differences (smooth in delta > 0)
+                h = 1e-3 * max(float(np.ptp(delta)), 1e-9)
+                dP[:] = (Pl(delta + h) - Pl(delta - h)) / (2 * h)
+            else:
+                dP[:] = 2.0 * st.E_star * math.sqrt(st.R) * np.sqrt(np.maximum(delta, 0.0))
         else:
             lines = registry_polylines(model, float(delta.min()) - 0.05 * self.span, float(delta.max()) + 0.05 * self.span,
                                        n_contact=600, n_tail=200)

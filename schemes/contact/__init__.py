@@ -13,6 +13,8 @@ key               model                                         source
 ``dmt``           Derjaguin–Muller–Toporov + vdW tail           (2.20), (2.21)
 ``jkr``           Johnson–Kendall–Roberts                        text of 2.2.2.2 (not the printed 2.22)
 ``md``            Maugis–Dugdale + continuous vdW tail           (2.24)–(2.35), departure 7
+``cone``          Sneddon cone blunted by the tip radius         Sneddon (1965), Briscoe et al. (1994)
+``pyramid``       Bilodeau pyramid (equivalent cone), blunted    Bilodeau (1992)
 ================  ===========================================  =========================
 
 ``get_contact_model(name, **params)`` and ``list_models()`` are the registry's ``create`` and

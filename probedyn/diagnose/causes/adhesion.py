@@ -62,6 +62,9 @@ class AdhesionMD(_Adhesion):
     needs = "a resolved pull-off and the shape of the retract near it"
     params = (_W, CauseParam("lam", "1", 0.05, 10.0, 1.0, "Maugis transition parameter", scale="log", starts=(0.2, 3.0)))
     contact = "md"
+    #: the causes it contains as limits of lambda (JKR: lambda -> infinity, DMT: lambda -> 0); the engine
+    #: fits them from this cause's optimum too, and prefers them within the evidence margin (parsimony)
+    limits = ("adhesion-jkr", "adhesion-dmt")
 
     def start_sets(self):
         return [{"W": 0.03, "lam": 5.0}, {"W": 0.03, "lam": 0.3}, {"W": 0.3, "lam": 1.0}, {"W": 0.003, "lam": 1.0}]
