@@ -368,6 +368,112 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
 
 
 # ------------------------------------------------------------------------------------------
+# The stick-slip loop as recorded: data-derived starting values of the nested fits
+# ------------------------------------------------------------------------------------------
+
+
+def _pt_loop_ratio(eta: np.ndarray, m: int = 1) -> np.ndarray:
+    """Quasi-static PT stick-slip whose slips advance the tip by ``m`` wells (m = 1 on a strongly
+    damped slip; more where the slip's momentum carries it further): the force drop at a slip over
+    the peak force, ``k (x_land - x_c) / (F0 sqrt(1 - 1/eta^2))``, a function of
+    eta = 2 pi F0 / (k a) alone (a = k = 1 here). A calibration factor scales the drop and the peak
+    alike, so their ratio measures eta -- the corrugation in units of k a^2 -- independently of the
+    factor (and of an offset: the drop is a difference)."""
+    out = np.empty(len(eta))
+    q = 2 * math.pi
+    for i, e in enumerate(np.asarray(eta, float)):
+        F0 = e / q
+        xc = math.acos(-1.0 / e) / q
+        Xc = xc + F0 * math.sin(q * xc)
+        x = xc + np.linspace(1e-6, m + 0.5, 20000 * (m + 1))
+        g = (Xc - x) - F0 * np.sin(q * x)  # net force on the tip at the support position X_c
+        down = x[np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]]  # stable equilibria ahead
+        xl = float(down[np.argmin(np.abs(down - m))]) if len(down) else xc + m
+        out[i] = (xl - xc) / (F0 * math.sqrt(1.0 - 1.0 / e**2))
+    return out
+
+
+_ETA_GRID = np.geomspace(1.1, 60.0, 240)
+_RATIO: dict[int, np.ndarray] = {}
+
+
+def _eta_from_ratio(r: float, m: int = 1) -> float:
+    if m not in _RATIO:
+        _RATIO[m] = _pt_loop_ratio(_ETA_GRID, m)
+    # the ratio falls monotonically with eta on the grid (checked in tests/test_diagnose_friction.py)
+    return float(np.interp(r, _RATIO[m][::-1], _ETA_GRID[::-1]))
+
+
+@dataclass
+class LoopEstimate:
+    """Per scan, from the recorded loop only: peak force (half the trace-retrace difference of the
+    peaks: an offset cancels), slip drop, and the quasi-static PT reading of them: eta, the
+    corrugation U0 [J] (independent of a calibration factor) and the calibration factor g;
+    the slip positions of every steady monotone segment (for the scanner's period drift)."""
+
+    peak: np.ndarray
+    drop: np.ndarray
+    eta: np.ndarray
+    U0: np.ndarray
+    g: np.ndarray
+    slips: list  # per scan: list of (direction, slip positions of one segment)
+
+
+def loop_estimate(data: FrictionData, use: np.ndarray, slices: list, a: float, sigma: float) -> LoopEstimate | None:
+    """Read the stick-slip loop of each scan (the samples marked ``use``: steady, after the first slip)."""
+    peaks, drops, slips, wells = [], [], [], []
+    for i, s in enumerate(data.scans):
+        u = use[slices[i]]
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        pk = {1: [], -1: []}
+        dr = []
+        sl = []
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            seg = seg[u[seg]]
+            if len(seg) < 8 or np.any(np.diff(seg) != 1):
+                continue
+            d = int(s.direction[seg[0]])
+            f = d * s.force[seg]
+            x = s.position[seg]
+            thr = max(10.0 * sigma, 0.2 * float(np.percentile(f, 99) - np.percentile(f, 1)))
+            falls = np.nonzero(f[:-1] - f[1:] > 3.0 * sigma)[0]
+            # slip groups: runs of falling samples whose total drop exceeds the threshold
+            groups, cur = [], []
+            for j in falls:
+                if cur and j != cur[-1] + 1:
+                    groups.append(cur)
+                    cur = []
+                cur.append(j)
+            if cur:
+                groups.append(cur)
+            pos = []
+            for grp in groups:
+                j0, j1 = grp[0], grp[-1] + 1
+                if f[j0] - f[j1] < thr or j0 < 1 or j1 + 4 > len(f):
+                    continue
+                # the stick branch after the slip, extrapolated back to the last sample before it
+                c1 = np.polyfit(x[j1:j1 + 4] - x[j0], f[j1:j1 + 4], 1)
+                pk[d].append(float(f[j0]))
+                dr.append(float(f[j0] - np.polyval(c1, 0.0)))
+                pos.append(0.5 * (x[j0] + x[j1]))
+            if len(pos) >= 2:
+                sl.append((d, np.array(pos)))
+        if not pk[1] or not pk[-1] or not dr:
+            return None
+        peaks.append(0.5 * (float(np.median(pk[1])) + float(np.median(pk[-1]))))
+        drops.append(float(np.median(dr)))
+        slips.append(sl)
+        # wells per slip: the median spacing of successive slips in lattice periods
+        sp = np.concatenate([np.abs(np.diff(p)) for _, p in sl]) if sl else np.array([a])
+        wells.append(max(int(round(float(np.median(sp)) / a)), 1))
+    peak, drop = np.array(peaks), np.array(drops)
+    eta = np.array([_eta_from_ratio(r, m) for r, m in zip(drop / np.maximum(peak, 1e-30), wells)])
+    k = data.k_x
+    F0 = eta * k * a / (2 * math.pi)
+    return LoopEstimate(peak, drop, eta, F0 * a / (2 * math.pi), peak / (F0 * np.sqrt(1.0 - 1.0 / eta**2)), slips)
+
+
+# ------------------------------------------------------------------------------------------
 # The problem
 # ------------------------------------------------------------------------------------------
 
@@ -512,9 +618,15 @@ class FrictionProblem:
             F0 = math.sqrt(fmax**2 + (data.k_x / q) ** 2)
             u0s.append(F0 / q / s_.load)
         u0_start = float(np.median(u0s))
+        # the loop read as recorded (peak and slip drop): eta and U0 per scan, independent of a
+        # calibration factor and an offset; its U0 per unit load is a further start of the baseline
+        self.loop = loop_estimate(data, self.use, self.slices, self.a_slip, self.sigma)
+        u0_loop = float(np.median(self.loop.U0 / self.loads)) if self.loop is not None else u0_start
+        u0_starts = tuple(x for x in (0.85 * u0_start, 1.2 * u0_start, u0_loop)
+                          if 1e-2 * u0_start <= x <= 1e2 * u0_start)
         self.base_params = [
             CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
-                       scale="log", starts=(0.85 * u0_start, 1.2 * u0_start)),
+                       scale="log", starts=u0_starts),
             CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period"),
         ]
         self.temperature = data.temperature
@@ -547,6 +659,28 @@ class FrictionProblem:
 
     def supports(self, what: str) -> bool:
         return True
+
+    def nested_starts(self, ref_values: dict, ref_causes: tuple, new: tuple, mask=None) -> list[dict]:
+        """Data-derived starts of the new causes (called by the engine besides the null start and
+        the declared starts): each cause reads what it changes from the recorded loop
+        (``cause.data_starts(problem, ref_values)``, e.g. a calibration factor from the ratio of
+        the slip drop to the peak force). The stick-slip chi^2 surface is rugged: from the null
+        start a factor of 1.9 is not found (the baseline's corrugation has absorbed it)."""
+        if self.loop is None:
+            return []
+        newp = [p for c in new for p in c.params]
+        bounds = {p.name: (p.lo, p.hi) for p in list(self.base_params) + newp}
+        base = {**ref_values, **{p.name: p.null for p in newp}}
+        out = []
+        for c in new:
+            fn = getattr(c, "data_starts", None)
+            for st in (fn(self, dict(ref_values)) if fn is not None else []):
+                v = dict(base)
+                for name, x in st.items():
+                    if name in bounds and np.isfinite(x):
+                        v[name] = min(max(float(x), bounds[name][0]), bounds[name][1])
+                out.append(v)
+        return out
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
