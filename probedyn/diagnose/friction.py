@@ -232,6 +232,80 @@ def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: 
     return max(Xc - Xs, 0.0), tab
 
 
+#: quantiles of the activated slip point carried per slip (the mean and variance of every sample
+#: near a slip are averages over them)
+SLIP_QUANTILES = 32
+
+
+def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float, f0: float):
+    """The distribution of a thermally activated slip point around its median (the stochastic
+    slip-position scatter): the survival ``exp(-H(X))`` of the stick state with the hazard of
+    :func:`thermal_slip_advance` gives the slip point's CDF ``1 - exp(-H)`` (the athermal
+    instability ends the branch: the rest of the probability slips there). Returns the
+    ``SLIP_QUANTILES`` mid-quantiles of the slip point relative to the median, in the direction of
+    motion, and the force drop k (x_after - x_before) at the median (the tip lands in the next
+    well)."""
+    X, dE, Xc, xs = tab
+    rate = f0 * np.exp(-dE / (K_B * T)) / V
+    H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+    C = np.append(1.0 - np.exp(-H), 1.0)
+    Xe = np.append(X, Xc)
+    keep = np.concatenate([[True], np.diff(C) > 0])
+    C, Xe = C[keep], Xe[keep]
+    qs = (np.arange(SLIP_QUANTILES) + 0.5) / SLIP_QUANTILES
+    Xq = np.interp(qs, C, Xe)
+    Xmed = float(np.interp(0.5, C, Xe))
+    q = 2 * math.pi / a
+    F0 = q * U0
+    xm = np.linspace(-0.25 * a, math.acos(-1.0 / (q * F0 / k)) / q * (1 - 1e-6), len(X))
+    xb = float(np.interp(Xmed, X, xm))
+    xx = np.linspace(float(np.interp(Xmed, X, xs)), a + 0.25 * a, 4000)
+    g = k * (Xmed - xx) - F0 * np.sin(q * xx)
+    down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
+    xa = float(xx[down[0]]) if len(down) else xb + a
+    return Xq - Xmed, k * (xa - xb)
+
+
+def _scatter_moments(Xl, seg_of, slips, dq, D, point: bool):
+    """Mean shift and variance of every sample from the stochastic slip points: a slip at Y = X* + d
+    delta instead of the median X* moves the samples between X* and Y from one stick branch to the
+    other (the force differs by the drop D there; the branches' slopes are neglected over delta)."""
+    n = len(Xl)
+    mean = np.zeros(n)
+    var = np.zeros(n)
+    if not slips or D <= 0:
+        return mean, var
+    # sample intervals along the support (interval means) or points
+    lo = np.empty(n)
+    hi = np.empty(n)
+    for sg in np.unique(seg_of):
+        idx = np.nonzero(seg_of == sg)[0]
+        x = Xl[idx]
+        if point or len(x) < 2:
+            lo[idx] = hi[idx] = x
+            continue
+        mid = 0.5 * (x[1:] + x[:-1])
+        lo[idx] = np.concatenate([[x[0] - (mid[0] - x[0])], mid])
+        hi[idx] = np.concatenate([mid, [x[-1] + (x[-1] - mid[-1])]])
+    a_, b_ = np.minimum(lo, hi), np.maximum(lo, hi)
+    w = np.maximum(b_ - a_, 1e-300)
+    reach = float(np.max(np.abs(dq)))
+    for sg, Xs, d in slips:
+        idx = np.nonzero((seg_of == sg) & (b_ >= Xs - reach) & (a_ <= Xs + reach))[0]
+        if not len(idx):
+            continue
+        Y = Xs + d * dq  # (M,)
+        pl, ph = np.minimum(Xs, Y)[:, None], np.maximum(Xs, Y)[:, None]  # the moved stretch
+        if point:
+            frac = ((Xl[idx][None, :] > pl) & (Xl[idx][None, :] < ph)).astype(float)
+        else:
+            frac = np.clip(np.minimum(ph, b_[idx][None, :]) - np.maximum(pl, a_[idx][None, :]), 0.0, None) / w[idx][None, :]
+        dF = d * D * np.sign(dq)[:, None] * frac  # slip later (dq > 0): the before-branch, higher in d F
+        mean[idx] += dF.mean(axis=0)
+        var[idx] += dF.var(axis=0)
+    return mean, var
+
+
 def _centre(scan: FrictionScan) -> float:
     """The support position the lattice registry refers to: the middle of the scan. (Referred to
     one end, a change of the lattice period moves every slip of the scan and the registry with it;
@@ -240,9 +314,11 @@ def _centre(scan: FrictionScan) -> float:
 
 
 def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
-                  train: int = 0) -> np.ndarray:
+                  train: int = 0, var_out: list | None = None) -> np.ndarray:
     """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
-    the scan's samples, for lattice registry ``phis[train]``."""
+    the scan's samples, for lattice registry ``phis[train]``. With thermally activated slips the
+    force is the mean over the slip points' distribution and ``var_out`` (a list) receives its
+    variance per sample (the stochastic slip-position scatter)."""
     X = scan.position
     Xc = _centre(scan)
     if st.bow:
@@ -265,8 +341,9 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     # resolve the stick branches between samples: the step at most half a sample interval
     dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
     hmax = hmax_frac * dX / max(V, 1e-30)
+    slips = None
     if st.thermal is not None and U0 > 0:
-        res = _thermal_path(ffm, turns, V, st, hmax)
+        res, slips, scat = _thermal_path(ffm, turns, V, st, hmax)
     else:
         res = line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
     F = np.empty(len(X))
@@ -288,6 +365,15 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
             Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
             with np.errstate(invalid="ignore", divide="ignore"):
                 F[s0:e0] = np.where(np.abs(width) > 0, (Ihi - Ilo) / np.where(width == 0, 1.0, width), np.interp(xs, b, fz))
+    var = np.zeros(len(X))
+    if slips:
+        seg_of = np.zeros(len(X), int)
+        for j, (s0, e0) in enumerate(zip(starts, ends)):
+            seg_of[s0:e0] = j
+        mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], scat[1], data.sampling == "point")
+        F = F + mean
+    if var_out is not None:
+        var_out.append(var)
     return F
 
 
@@ -322,8 +408,11 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
     U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
     adv, tab = thermal_slip_advance(U0, a, k, V, T, f0)
     if adv <= 0 or tab is None:
-        return line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+        return (line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
+                               atol_v=100 * abs(V)), None, None)
     Xtab, _, Xc, xs_tab = tab
+    scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0)
+    slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
     xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
     y = np.array([turns[0], 0.0, 0.0])
@@ -347,6 +436,7 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
                 n = round(y[0] / a)
             if Xend == Xs and (Xb - Xcur) * d > 0:
                 y = np.array([n * a + d * (xs_slip + 0.02 * a), 0.0, 0.0])  # over the saddle, at rest
+                slips.append((max(len(parts) - 1, 0), Xs, d))  # parts[0] is the pre-roll
                 n += int(d)
         parts.append(seg)
     # flatten into one result; segment boundaries are recovered from the turns by _segments
@@ -363,8 +453,9 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
             toff += r.t[-1]
     base = np.concatenate(base)
     x = np.concatenate(x)
-    return ScanResult(t=np.concatenate(t), base=base, x=x, v=np.concatenate(v), z=np.concatenate(z),
-                      lateral_force=k * (base - x), friction=np.concatenate(F), n_steps=0, n_rejected=0, setup={})
+    return (ScanResult(t=np.concatenate(t), base=base, x=x, v=np.concatenate(v), z=np.concatenate(z),
+                       lateral_force=k * (base - x), friction=np.concatenate(F), n_steps=0, n_rejected=0, setup={}),
+            slips, scat)
 
 
 # ------------------------------------------------------------------------------------------
@@ -574,6 +665,7 @@ class FrictionProblem:
             self.sigma = self.sigma_scatter
         self.force = np.concatenate([s.force for s in sc])
         self.n = len(self.force)
+        self.model_var = np.zeros(self.n)  # the model's own variance per sample (set by predict)
         gid, labels, pos = [], [], 0
         self.slices = []
         for i, s in enumerate(sc):
@@ -754,12 +846,15 @@ class FrictionProblem:
         out = np.empty(self.n)
         trains = [0] + ([1] if st.theta > 1e-6 else [])
         nu = self.fixed_nuisance if self.fixed_nuisance is not None else self.nuisance(values, causes)
+        self.model_var = np.zeros(self.n)
         for i, s in enumerate(self.data.scans):
             parts = []
+            vs: list = []
             for tr in trains:
-                parts.append(simulate_scan(self.data, st, s, nu[i], train=tr))
+                parts.append(simulate_scan(self.data, st, s, nu[i], train=tr, var_out=vs))
             w = [math.cos(st.theta), math.sin(st.theta)]
             F = st.gain * sum(w[tr] * p for tr, p in zip(trains, parts))
+            self.model_var[self.slices[i]] = st.gain**2 * sum(w[tr] ** 2 * v for tr, v in zip(trains, vs))
             F = F + st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
             for tf in st.transforms:
                 F = tf(self, s, F)
@@ -771,7 +866,8 @@ class FrictionProblem:
             m = self.predict(values, causes)
         except ProbedynError:
             return np.full(int(self.use.sum()), 1e6)
-        return ((self.force - m) / self.sigma)[self.use]
+        # the stochastic slip-position scatter (thermal activation) adds its variance sample by sample
+        return ((self.force - m) / np.sqrt(self.sigma**2 + self.model_var))[self.use]
 
     def physical_rms(self, r) -> float:
         return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
