@@ -479,8 +479,8 @@ def _pt_loop_ratio(eta: np.ndarray, m: int = 1) -> np.ndarray:
         x = xc + np.linspace(1e-6, m + 0.5, 20000 * (m + 1))
         g = (Xc - x) - F0 * np.sin(q * x)  # net force on the tip at the support position X_c
         down = x[np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]]  # stable equilibria ahead
-        xl = float(down[np.argmin(np.abs(down - m))]) if len(down) else xc + m
-        out[i] = (xl - xc) / (F0 * math.sqrt(1.0 - 1.0 / e**2))
+        near = down[np.abs(down - m) < 0.5]  # the m-th well ahead holds a stable equilibrium at X_c
+        out[i] = (float(near[0]) - xc) / (F0 * math.sqrt(1.0 - 1.0 / e**2)) if len(near) else np.nan
     return out
 
 
@@ -491,8 +491,10 @@ _RATIO: dict[int, np.ndarray] = {}
 def _eta_from_ratio(r: float, m: int = 1) -> float:
     if m not in _RATIO:
         _RATIO[m] = _pt_loop_ratio(_ETA_GRID, m)
-    # the ratio falls monotonically with eta on the grid (checked in tests/test_diagnose_friction.py)
-    return float(np.interp(r, _RATIO[m][::-1], _ETA_GRID[::-1]))
+    # the ratio falls monotonically with eta where the m-th well exists at the instability
+    # (checked in tests/test_diagnose_friction.py)
+    ok = np.isfinite(_RATIO[m])
+    return float(np.interp(r, _RATIO[m][ok][::-1], _ETA_GRID[ok][::-1]))
 
 
 @dataclass
