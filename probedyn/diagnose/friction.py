@@ -213,7 +213,7 @@ def _barrier_table(U0: float, a: float, k: float, n: int = 400):
     E = lambda x, Xi: -U0 * np.cos(q * x) + 0.5 * k * (Xi - x) ** 2  # noqa: E731
     dE = E(xs, X) - E(xm, X)
     Xc = xc + (F0 / k) * math.sin(q * xc)
-    return X, np.maximum(dE, 0.0), Xc, xs
+    return X, np.maximum(dE, 0.0), Xc, xs, xm
 
 
 def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: float) -> tuple[float, Any]:
@@ -223,7 +223,7 @@ def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: 
     tab = _barrier_table(U0, a, k)
     if tab is None or T <= 0 or f0 <= 0:
         return 0.0, tab
-    X, dE, Xc, xs = tab
+    X, dE, Xc, xs, _ = tab
     rate = f0 * np.exp(-dE / (K_B * T)) / V
     H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
     if H[-1] < math.log(2.0):
@@ -245,7 +245,7 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     ``SLIP_QUANTILES`` mid-quantiles of the slip point relative to the median, in the direction of
     motion, and the force drop k (x_after - x_before) at the median (the tip lands in the next
     well)."""
-    X, dE, Xc, xs = tab
+    X, dE, Xc, xs, xm = tab
     rate = f0 * np.exp(-dE / (K_B * T)) / V
     H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
     C = np.append(1.0 - np.exp(-H), 1.0)
@@ -257,7 +257,6 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     Xmed = float(np.interp(0.5, C, Xe))
     q = 2 * math.pi / a
     F0 = q * U0
-    xm = np.linspace(-0.25 * a, math.acos(-1.0 / (q * F0 / k)) / q * (1 - 1e-6), len(X))
     xb = float(np.interp(Xmed, X, xm))
     xx = np.linspace(float(np.interp(Xmed, X, xs)), a + 0.25 * a, 4000)
     g = k * (Xmed - xx) - F0 * np.sin(q * xx)
@@ -410,7 +409,7 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
     if adv <= 0 or tab is None:
         return (line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
                                atol_v=100 * abs(V)), None, None)
-    Xtab, _, Xc, xs_tab = tab
+    Xtab, _, Xc, xs_tab, _ = tab
     scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0)
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x

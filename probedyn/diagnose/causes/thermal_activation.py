@@ -83,8 +83,7 @@ class ThermalActivation(Cause):
                 if tab is None:
                     row.append(None)
                     continue
-                X, dE, Xc, _ = tab
-                xm = np.linspace(-0.25 * a, math.acos(-1.0 / (q * q * U0 / d.k_x)) / q * (1 - 1e-6), len(X))
+                X, dE, _, _, xm = tab
                 row.append((X, dE, q * U0 * np.sin(q * xm)))
             tabs.append(row)
 
