@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from diagnose_truth import make_friction_case  # noqa: E402
 
+from probedyn.diagnose.causes import Cause, CauseParam  # noqa: E402
 from probedyn.diagnose.engine import Fitter, diagnose  # noqa: E402
 from probedyn.diagnose.problems import make_problem  # noqa: E402
 
@@ -125,3 +126,58 @@ def test_loop_reads_a_calibration_factor_and_the_corrugation(tmp_path):
     U0_true = truth["u0"] * prob.loads
     assert np.all(np.abs(L.g / truth["params"]["g"] - 1) < 0.08), (L.g, truth["params"])
     assert np.all(np.abs(L.U0 / U0_true - 1) < 0.08), (L.U0, U0_true)
+
+
+# ---- the baseline at its own optimum (engine) -----------------------------------------------
+
+
+class _Inert(Cause):
+    key = "inert"
+    kind = "friction"
+    params = (CauseParam("c", "1", -1.0, 1.0, 0.0, "a parameter without effect"),)
+
+    def effect(self, values, state):
+        pass
+
+
+class _StalledBaseline:
+    """y = exp(b t) with 1 % noise; the least-squares cap (nfev_per_param = 1) stops the baseline fit
+    from b = 0 far from its optimum b = 2, as a rugged stick-slip chi^2 stopped a friction null's."""
+
+    kind, unit, path, reduced = "toy", "1", "toy", False
+    nfev_per_param = 1
+
+    def __init__(self):
+        rng = np.random.default_rng(0)
+        self.t = np.linspace(0.0, 1.0, 200)
+        self.y = np.exp(2.0 * self.t) + 0.01 * rng.standard_normal(len(self.t))
+        self.groups = np.arange(len(self.t)) % 4
+        self.base_params = [CauseParam("b", "1", -5.0, 5.0, 0.0, "rate")]
+        self.causes = [_Inert()]
+
+    def residuals(self, values, causes=()):
+        return (self.y - np.exp(values["b"] * self.t)) / 0.01
+
+    def physical_rms(self, r):
+        return float(np.sqrt(np.mean(np.asarray(r) ** 2))) * 0.01
+
+    def structure(self, r):
+        return {}
+
+    def describe(self):
+        return {}
+
+    def model_description(self):
+        return {}
+
+
+def test_a_stalled_baseline_is_refitted_not_explained_by_a_cause():
+    """A cause without any effect must not be claimed because the baseline it nests stopped short of
+    its optimum: the engine re-fits the baseline from the candidate's own baseline parameters when
+    they fit better by more than a one-parameter likelihood-ratio threshold."""
+    prob = _StalledBaseline()
+    stalled = Fitter(prob).baseline()
+    thr = float(chi2.ppf(1 - 0.01, 1))
+    res = diagnose(prob)
+    assert not res["findings"], res["findings"]
+    assert res["baseline"]["chi2"] < stalled.chi2 - thr, (res["baseline"]["chi2"], stalled.chi2)
