@@ -19,6 +19,14 @@ half is estimated from the other half only). The model enters the data on its st
 cycle (a pre-roll in the scan direction); the data before their own first slip, which depend on
 the unrecorded history, are not used.
 
+Nested fits also start where the recorded loop puts each cause (:func:`loop_estimate`: the slip
+drop over the peak force gives eta, hence the corrugation, independently of a calibration factor
+and an offset; each cause's ``data_starts``): on a rugged stick-slip chi^2 the baseline's
+corrugation absorbs a calibration factor or an adhesion load, and a fit from the null stalls there.
+Thermally activated slips carry their stochastic slip-position scatter: the model of every sample
+is its mean over the activated slip point's distribution and the residual is weighted by its
+variance (:func:`thermal_slip_scatter`).
+
 Cost (one evaluation = one FFM integration per scan): every start of a multi-start fit is
 screened with ``SCREEN_NFEV`` evaluations and only the best continued; candidate causes and
 cross-validation folds are fitted in ``WORKERS`` forked processes; the folds start from the null
