@@ -2,7 +2,11 @@
 Langevin cases (issue 11).
 
 Usage: ``python benchmarks/diagnose_rates_friction.py N_EFFECT N_NULL [OUT.json]`` (resumable: the
-cases already in OUT.json are skipped; the file is rewritten after every case).
+cases already in OUT.json are skipped; the file is rewritten after every case), or
+``python benchmarks/diagnose_rates_friction.py --seeds 2005,6022 OUT.json`` (a subset, for development).
+The Langevin truths are cached under ``~/.cache/probedyn-truths/friction/<hash>/`` (``PROBEDYN_TRUTH_CACHE``
+overrides the root), keyed by the case seed and a hash of the truth code, so that a rerun after a
+change of the diagnosis only reruns the diagnosis.
 
 Truth (``tests/diagnose_truth.py``, its own code path, not the diagnosis integrator): a Langevin
 Prandtl-Tomlinson tip with inertia and thermal noise (Gronbech-Jensen-Farago integrator, 60
@@ -18,16 +22,20 @@ Reported: correct cause first (the first finding is the hidden effect), in its c
 false discoveries on the nulls (any finding), the median |fit - truth| / |truth - null| of the
 effect's main parameter where the cause is right (thermal activation has no truth value: the
 attempt frequency is not a parameter of the Langevin truth), every miss with its class, wall
-and CPU time per case (the machine is shared: CPU time is the comparable number).
+and CPU time per case (the machine is shared: CPU time is the comparable number). Detectability
+(one criterion for every data kind): a hidden-effect case is detectable when the baseline fails its
+chi-square test at the diagnosis' alpha; correct-first is reported over all cases and over the
+detectable ones (an undetectable case is listed, not dropped).
 """
 
 from __future__ import annotations
 
+import hashlib
+import inspect
 import json
 import os
 import resource
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -35,10 +43,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+import diagnose_truth  # noqa: E402
 from diagnose_truth import FRICTION_EFFECTS, make_friction_case  # noqa: E402
 
 from probedyn.core.io import write_json  # noqa: E402
-from probedyn.diagnose.engine import diagnose  # noqa: E402
+from probedyn.diagnose.engine import ALPHA, diagnose  # noqa: E402
 from probedyn.diagnose.problems import make_problem  # noqa: E402
 
 #: cause -> (fitted parameter, truth key, null value)
@@ -53,8 +62,27 @@ def _cpu() -> float:
     return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
 
 
-def run_case(folder: Path, seed: int, effect: str | None) -> dict:
+def truth_cache() -> Path:
+    """The cache folder of this truth code: a hash of the friction truth's source and constants."""
+    src = "".join(inspect.getsource(f) for f in (diagnose_truth._langevin_kernel, diagnose_truth.langevin_scan,
+                                                  diagnose_truth.draw_friction_effect, make_friction_case))
+    src += repr((diagnose_truth.LEVER_FFM, diagnose_truth.T_COLD, diagnose_truth.LANGEVIN_STEPS_PER_PERIOD))
+    root = Path(os.environ.get("PROBEDYN_TRUTH_CACHE", Path.home() / ".cache" / "probedyn-truths"))
+    return root / "friction" / hashlib.sha256(src.encode()).hexdigest()[:16]
+
+
+def cached_case(seed: int, effect: str | None) -> tuple[Path, dict]:
+    folder = truth_cache() / f"{seed}_{effect}"
+    meta = folder / "truth.json"
+    if meta.exists():
+        return folder / f"friction_{seed}.toml", json.loads(meta.read_text())
     path, truth = make_friction_case(folder, seed, effect)
+    meta.write_text(json.dumps(truth))
+    return path, truth
+
+
+def run_case(folder: Path | None, seed: int, effect: str | None) -> dict:
+    path, truth = cached_case(seed, effect) if folder is None else make_friction_case(folder, seed, effect)
     t0, c0 = time.perf_counter(), _cpu()
     res = diagnose(make_problem(path))
     wall, cpu = time.perf_counter() - t0, _cpu() - c0
@@ -68,6 +96,10 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
            "candidates": {c["cause"]: {"delta_chi2": c["delta_chi2"], "evidence": c["evidence"]}
                           for c in res["candidates"]}}
     if effect is not None:
+        # detectability (the same criterion for every data kind): a hidden effect is detectable when
+        # the baseline fails its chi-square test at the diagnosis' alpha; below that no method can
+        # claim it from these data, and the case counts as undetectable, not as a miss
+        row["detectable"] = bool(res["baseline"]["p_value"] < ALPHA)
         row["correct_first"] = bool(findings and findings[0] == effect)
         row["in_group"] = bool(findings and (findings[0] == effect or effect in conf))
         if row["correct_first"] and effect in MAIN:
@@ -101,6 +133,8 @@ def summary(rows: list[dict]) -> dict:
                                                    if any("param" in r for r in rs) else None)}
     return {
         "n_effect": len(eff), "n_null": len(nul),
+        "detectable": sum(r.get("detectable", True) for r in eff),
+        "correct_first_of_detectable": sum(r["correct_first"] for r in eff if r.get("detectable", True)),
         "correct_first": sum(r["correct_first"] for r in eff), "in_confounded_group": sum(r["in_group"] for r in eff),
         "correct_first_rate": (sum(r["correct_first"] for r in eff) / len(eff)) if eff else None,
         "false_discoveries": sum(r["false_discovery"] for r in nul),
@@ -115,35 +149,46 @@ def summary(rows: list[dict]) -> dict:
     }
 
 
-def main(n_eff: int, n_null: int, out: Path) -> dict:
+def effect_of(seed: int) -> str | None:
+    return FRICTION_EFFECTS[(seed - 2000) % len(FRICTION_EFFECTS)] if seed < 6000 else None
+
+
+def main(n_eff: int, n_null: int, out: Path, seeds: list[int] | None = None) -> dict:
     rows = json.loads(out.read_text())["rows"] if out.exists() else []
     done = {r["seed"] for r in rows}
     # effects and nulls interleaved, so that a partial run has both
     plan = []
     for i in range(max(n_eff, n_null)):
         if i < n_eff:
-            plan.append((2000 + i, FRICTION_EFFECTS[i % len(FRICTION_EFFECTS)]))
+            plan.append((2000 + i, effect_of(2000 + i)))
         if i < n_null:
             plan.append((6000 + i, None))
-    with tempfile.TemporaryDirectory() as tmp:
-        for seed, effect in plan:
-            if seed in done:
-                continue
-            rows.append(run_case(Path(tmp), seed, effect))
-            write_json(out, {"rows": rows, "summary": summary(rows)}, defer=False)
-            r = rows[-1]
-            print(f"{seed} {effect} -> {r['findings']} {r['verdict']} {r['wall_s']:.0f} s wall {r['cpu_s']:.0f} s cpu",
-                  flush=True)
+    if seeds is not None:
+        plan = [(s, effect_of(s)) for s in seeds]
+    for seed, effect in plan:
+        if seed in done:
+            continue
+        rows.append(run_case(None, seed, effect))
+        write_json(out, {"rows": rows, "summary": summary(rows)}, defer=False)
+        r = rows[-1]
+        print(f"{seed} {effect} -> {r['findings']} {r['verdict']} {r['wall_s']:.0f} s wall {r['cpu_s']:.0f} s cpu",
+              flush=True)
     res = {"rows": rows, "summary": summary(rows)}
     write_json(out, res, defer=False)
     return res
 
 
 if __name__ == "__main__":
-    n_e = int(sys.argv[1]) if len(sys.argv) > 1 else 50
-    n_n = int(sys.argv[2]) if len(sys.argv) > 2 else 50
-    path = Path(sys.argv[3]) if len(sys.argv) > 3 else Path(__file__).parent / "results" / "diagnose_rates_friction.json"
-    s = main(n_e, n_n, path)["summary"]
+    if len(sys.argv) > 2 and sys.argv[1] == "--seeds":
+        sel = [int(x) for x in sys.argv[2].split(",")]
+        n_e = n_n = 0
+        path = Path(sys.argv[3])
+    else:
+        sel = None
+        n_e = int(sys.argv[1]) if len(sys.argv) > 1 else 50
+        n_n = int(sys.argv[2]) if len(sys.argv) > 2 else 50
+        path = Path(sys.argv[3]) if len(sys.argv) > 3 else Path(__file__).parent / "results" / "diagnose_rates_friction.json"
+    s = main(n_e, n_n, path, sel)["summary"]
     print(json.dumps({k: v for k, v in s.items() if k != "misses"}, indent=1))
     for m in s["misses"]:
         print("miss", m["seed"], m["class"])

@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from diagnose_truth import make_friction_case  # noqa: E402
 
+from probedyn.diagnose.causes import Cause, CauseParam  # noqa: E402
 from probedyn.diagnose.engine import Fitter, diagnose  # noqa: E402
 from probedyn.diagnose.problems import make_problem  # noqa: E402
 
@@ -74,3 +75,109 @@ def test_hidden_viscous_friction_is_named(tmp_path):
     g_true = truth["params"]["gvisc"]
     tol = max(4 * (p["sigma"] or 0.0), 0.02 * g_true)
     assert abs(p["value"] - g_true) < tol, (p, g_true)
+
+
+# ---- the stick-slip loop as recorded: data-derived starts -----------------------------------
+
+
+def test_loop_ratio_is_monotone_and_has_its_stiff_contact_limit():
+    """The slip drop over the peak force of a quasi-static PT loop falls monotonically with eta
+    (so it can be inverted) wherever the m-th well ahead holds an equilibrium at the instability,
+    and for eta >> 1 (a = k = 1: instability at x_c = 1/4 + O(1/eta), the tip lands near the next
+    well's own edge, x = 5/4 - eps with 2 pi^2 F0 eps^2 + eps = 1, eps -> 1 / sqrt(pi eta)) it is
+    (1 - 1/sqrt(pi eta) + O(1/eta)) / F0 with F0 = eta / (2 pi)."""
+    from probedyn.diagnose.friction import _ETA_GRID, _pt_loop_ratio
+
+    for m in (1, 2):
+        r = _pt_loop_ratio(_ETA_GRID, m)
+        ok = np.isfinite(r)
+        assert ok.sum() > 100 and np.all(np.diff(r[ok]) < 0), m
+    eta = 2000.0
+    lim = (1.0 - 1.0 / math.sqrt(math.pi * eta)) * 2 * math.pi / eta
+    assert abs(_pt_loop_ratio(np.array([eta]))[0] / lim - 1.0) < 2.0 / eta
+
+
+def test_slip_scatter_moments_are_the_two_branch_mixture():
+    """A slip at Y = X* + delta (delta uniform on (-1, 1)) between two stick branches a drop D apart:
+    a point sample at x > 0 is on the upper branch with probability p = (1 - x) / 2, so its mean
+    is shifted by D p and its variance is D^2 p (1 - p) (exact for the quantile grid up to its
+    discreteness, 1/M)."""
+    from probedyn.diagnose.friction import _scatter_moments
+
+    M = 4000
+    dq = -1.0 + (np.arange(M) + 0.5) * 2.0 / M
+    x = np.array([-0.5, 0.25, 0.5, 0.75, 2.0])
+    mean, var = _scatter_moments(x, np.zeros(len(x), int), [(0, 0.0, 1.0)], dq, 2.0, point=True)
+    p = np.where(np.abs(x) < 1, (1 - np.abs(x)) / 2, 0.0)
+    sign = np.where(x > 0, 1.0, -1.0)  # before X*: a slip earlier puts the sample on the lower branch
+    assert np.allclose(mean, sign * 2.0 * p, atol=2.0 / M)
+    assert np.allclose(var, 4.0 * p * (1 - p), atol=4.0 / M)
+
+
+def test_loop_reads_a_calibration_factor_and_the_corrugation(tmp_path):
+    """On a Langevin truth with a hidden lateral-force calibration factor g: the slip drop / peak
+    ratio gives eta independently of g, so the corrugation U0 and g are read from the loop.
+    Tolerance 8 %: the quasi-static reading of interval means (the peak sample ends up to a
+    sample interval, a/40, before the slip, where the stick slope is ~k eta/(1+eta); the drop is
+    extrapolated over 1-2 samples) -- a start for the fit, not its result."""
+    path, truth = make_friction_case(tmp_path, 2048, "force-calibration", length_periods=6)
+    prob = make_problem(path)
+    L = prob.loop
+    U0_true = truth["u0"] * prob.loads
+    assert np.all(np.abs(L.g / truth["params"]["g"] - 1) < 0.08), (L.g, truth["params"])
+    assert np.all(np.abs(L.U0 / U0_true - 1) < 0.08), (L.U0, U0_true)
+
+
+# ---- the baseline at its own optimum (engine) -----------------------------------------------
+
+
+class _Inert(Cause):
+    key = "inert"
+    kind = "friction"
+    params = (CauseParam("c", "1", -1.0, 1.0, 0.0, "a parameter without effect"),)
+
+    def effect(self, values, state):
+        pass
+
+
+class _StalledBaseline:
+    """y = exp(b t) with 1 % noise; the least-squares cap (nfev_per_param = 1) stops the baseline fit
+    from b = 0 far from its optimum b = 2, as a rugged stick-slip chi^2 stopped a friction null's."""
+
+    kind, unit, path, reduced = "toy", "1", "toy", False
+    nfev_per_param = 1
+
+    def __init__(self):
+        rng = np.random.default_rng(0)
+        self.t = np.linspace(0.0, 1.0, 200)
+        self.y = np.exp(2.0 * self.t) + 0.01 * rng.standard_normal(len(self.t))
+        self.groups = np.arange(len(self.t)) % 4
+        self.base_params = [CauseParam("b", "1", -5.0, 5.0, 0.0, "rate")]
+        self.causes = [_Inert()]
+
+    def residuals(self, values, causes=()):
+        return (self.y - np.exp(values["b"] * self.t)) / 0.01
+
+    def physical_rms(self, r):
+        return float(np.sqrt(np.mean(np.asarray(r) ** 2))) * 0.01
+
+    def structure(self, r):
+        return {}
+
+    def describe(self):
+        return {}
+
+    def model_description(self):
+        return {}
+
+
+def test_a_stalled_baseline_is_refitted_not_explained_by_a_cause():
+    """A cause without any effect must not be claimed because the baseline it nests stopped short of
+    its optimum: the engine re-fits the baseline from the candidate's own baseline parameters when
+    they fit better by more than a one-parameter likelihood-ratio threshold."""
+    prob = _StalledBaseline()
+    stalled = Fitter(prob).baseline()
+    thr = float(chi2.ppf(1 - 0.01, 1))
+    res = diagnose(prob)
+    assert not res["findings"], res["findings"]
+    assert res["baseline"]["chi2"] < stalled.chi2 - thr, (res["baseline"]["chi2"], stalled.chi2)

@@ -649,13 +649,32 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     # 1-2. baseline and its chi-square test
     base = F.baseline()
     _check_baseline_identifiable(base)
-    p_base = base.p_value
-    significant = p_base < alpha
-    cv = CrossValidation(F, folds, n) if use_cv else None
     # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
     F.open_pool()
-    fits = _limit_refits(F, causes, F.map_nested([(base, (c,), None) for c in causes]))
+    fits = F.map_nested([(base, (c,), None) for c in causes])
+    # the baseline is nested in every candidate: where the baseline at a candidate's own baseline
+    # parameters fits better than the baseline optimum by more than a one-parameter LR threshold
+    # (the baseline fit stopped in a shallower basin or at its evaluation cap: a rugged chi^2), the
+    # baseline is re-fitted from there and the candidates are fitted again from it (at most 3 rounds)
+    thr1 = float(chi2_dist.ppf(1 - alpha / n_causes, 1))
+    for _round in range(3):
+        bf = min(fits, key=lambda f: f.chi2) if fits and base.k else None
+        if bf is None or not bf.chi2 < base.chi2 - thr1:
+            break
+        bv = {p.name: bf.values[p.name] for p in base.plist}
+        if not float(np.sum(F.residuals(bv, ()) ** 2)) < base.chi2 - thr1:
+            break
+        b2 = F.fit((), [bv])
+        if not b2.chi2 < base.chi2 - thr1:
+            break
+        base = b2
+        fits = F.map_nested([(base, (c,), None) for c in causes])
+    # a contained limit law (a cause's ``limits``) re-fitted from its container's optimum where worse
+    fits = _limit_refits(F, causes, fits)
+    p_base = base.p_value
+    significant = p_base < alpha
+    cv = CrossValidation(F, folds, n) if use_cv else None
     for c, fit in zip(causes, fits):
         k = len(c.params)
         dchi2 = max(base.chi2 - fit.chi2, 0.0)

@@ -9,6 +9,8 @@ smooth function of the corrugation once slips skip wells).
 
 from __future__ import annotations
 
+import numpy as np
+
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 
@@ -31,6 +33,20 @@ class AdhesionLoad(Cause):
                                      starts=(0.5 * hi, 3.0 * hi)),))
         c.N_ref = float(problem.N_mean)
         return c
+
+    def data_starts(self, problem, ref: dict) -> list[dict]:
+        """From the recorded loop: the corrugation U0 of each scan (from the ratio of the slip drop to
+        the peak force, :func:`probedyn.diagnose.friction.loop_estimate`) against its load,
+        ``U0 = u0 (N + N_adh)``: a straight line whose intercept over slope is N_adh."""
+        L = problem.loop
+        N = problem.loads
+        if np.ptp(N) <= 0:
+            return []
+        B, A = np.polyfit(N, L.U0, 1)
+        if not B > 0:
+            return []
+        n_ref = getattr(self, "N_ref", None) or float(np.mean(N))
+        return [{"n_adh": float(A / B), "u0": float((A + B * n_ref) / n_ref)}]
 
     def effect(self, v, s):
         n_ref = getattr(self, "N_ref", None)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 
@@ -16,6 +18,17 @@ class ForceCalibration(Cause):
     needs = "stick-slip with resolved stick branches"
     changes = ("detector",)
     params = (CauseParam("g", "1", 0.2, 5.0, 1.0, "measured / true lateral force", starts=(0.7, 1.4)),)
+
+    def data_starts(self, problem, ref: dict) -> list[dict]:
+        """From the recorded loop: a factor g scales the peak force and the slip drop alike, so their
+        ratio gives eta (the corrugation in units of k a^2) and then the peak gives g (quasi-static PT,
+        :func:`probedyn.diagnose.friction.loop_estimate`); the corrugation per unit load goes with it
+        (the baseline's has absorbed the factor)."""
+        L = problem.loop
+        st = {"g": float(np.median(L.g))}
+        if "n_adh" not in ref:
+            st["u0"] = float(np.median(L.U0 / problem.loads))
+        return [st]
 
     def effect(self, v, s):
         s.gain *= v["g"]

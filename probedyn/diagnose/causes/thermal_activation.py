@@ -15,6 +15,8 @@ scan speeds: the null value).
 
 from __future__ import annotations
 
+import numpy as np
+
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 
@@ -50,6 +52,63 @@ class ThermalActivation(Cause):
         if "u0" not in ref:
             return [{"log10_f0": 5.0}, {"log10_f0": 8.0}]
         return [{"log10_f0": lf, "u0": ref["u0"] * fac} for lf, fac in ((5.0, 1.6), (5.0, 1.3), (8.0, 1.6), (5.0, 2.0))]
+
+    def data_starts(self, problem, ref: dict) -> list[dict]:
+        """From the recorded loop: the peak force of every scan (half the trace-retrace difference
+        of the peaks) against the quasi-static activated slip point. For each attempt frequency on
+        a grid (1e2-1e13 Hz) the corrugation per unit load that gives the slowest scan's peak, then
+        the misfit of all the scans' peaks (the other speed and load): the best two frequencies.
+        Activation lowers the peak, the more the slower the scan; the athermal fit's corrugation is
+        too low by the lowering (up to 40 %) and its slips misplaced, too far from this basin."""
+        import math
+
+        from probedyn.diagnose.friction import K_B, _barrier_table
+
+        L = problem.loop
+        d = problem.data
+        T = getattr(self, "T", 295.0)
+        a = float(ref.get("a", problem.a_slip))
+        q = 2 * math.pi / a
+        n_adh = float(ref.get("n_adh", 0.0))
+        i0 = int(np.argmin(problem.speeds / problem.loads))
+        u_ath = float(L.U0[i0] / (problem.loads[i0] + n_adh))
+        ugrid = u_ath * np.geomspace(1.0, 4.0, 41)  # activation only lowers the peak
+        # per scan and corrugation: the stick branch (support X, force) and its barrier to the next well
+        tabs = []
+        for N in problem.loads:
+            row = []
+            for u in ugrid:
+                U0 = u * (N + n_adh)
+                tab = _barrier_table(U0, a, d.k_x, 200)
+                if tab is None:
+                    row.append(None)
+                    continue
+                X, dE, _, _, xm = tab
+                row.append((X, dE, q * U0 * np.sin(q * xm)))
+            tabs.append(row)
+
+        def peak(i: int, j: int, f0: float) -> float:
+            """Median activated peak force of scan i at corrugation ugrid[j]."""
+            t = tabs[i][j]
+            if t is None:
+                return 0.0
+            X, dE, Fb = t
+            rate = f0 * np.exp(-dE / (K_B * T)) / problem.speeds[i]
+            H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+            return float(Fb[-1] if H[-1] < math.log(2.0) else np.interp(math.log(2.0), H, Fb))
+
+        scored = []
+        for lf in np.arange(2.0, 13.01, 0.5):
+            f0 = 10.0**lf
+            P = np.array([[peak(i, j, f0) for j in range(len(ugrid))] for i in range(len(problem.loads))])
+            p0 = P[i0]
+            if not (p0[0] <= L.peak[i0] <= p0[-1]) or np.any(np.diff(p0) <= 0):
+                continue
+            lu = float(np.interp(L.peak[i0], p0, np.log(ugrid)))
+            pred = np.array([np.interp(lu, np.log(ugrid), P[i]) for i in range(len(P))])
+            scored.append((float(np.sum((pred / L.peak - 1.0) ** 2)), float(lf), math.exp(lu)))
+        scored.sort()
+        return [{"log10_f0": lf, "u0": u0} for _, lf, u0 in scored[:2]]
 
     def effect(self, v, s):
         s.thermal = (getattr(self, "T", 295.0), 10.0 ** v["log10_f0"])

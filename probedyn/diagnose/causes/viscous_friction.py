@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 
@@ -20,6 +22,19 @@ class ViscousFriction(Cause):
         g_hi = 10.0 * problem.data.k_x * problem.a_est / problem.v_max
         return ViscousFriction((CauseParam("gamma", "N s/m", 0.0, g_hi, 0.0, "viscous coefficient",
                                            starts=(1e-3 * g_hi, 1e-2 * g_hi)),))
+
+    def data_starts(self, problem, ref: dict) -> list[dict]:
+        """From the recorded loop: the peak force of scans at one load and different speeds grows by
+        gamma (V2 - V1)."""
+        L = problem.loop
+        out = []
+        for i in range(len(L.peak)):
+            for j in range(len(L.peak)):
+                if problem.loads[i] == problem.loads[j] and problem.speeds[j] > problem.speeds[i]:
+                    g = (L.peak[j] - L.peak[i]) / (problem.speeds[j] - problem.speeds[i])
+                    if g > 0:
+                        out.append(g)
+        return [{"gamma": float(np.median(out))}] if out else []
 
     def effect(self, v, s):
         s.gamma += v["gamma"]
