@@ -57,6 +57,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from probedyn.core.errors import SolverError
+from probedyn.fem.kernels import upper_triangle as _upper_triangle
 
 SOLVERS = ("auto", "pardiso", "superlu")
 METHODS = ("block", "arpack")
@@ -211,7 +212,7 @@ _PARDISO_ERRORS = {-1: "input inconsistent", -2: "not enough memory", -3: "reord
 class _Pardiso:
     """One PARDISO handle with its matrix (upper triangle, 1-based int32 indices kept)."""
 
-    def __init__(self, U: sp.csr_matrix, mtype: int, opts: dict) -> None:
+    def __init__(self, upper: tuple[np.ndarray, np.ndarray, np.ndarray], mtype: int, opts: dict) -> None:
         self.fn = _mkl_pardiso()
         self.pt = np.zeros(64, dtype=np.int64)
         self.iparm = np.zeros(64, dtype=np.int32)
@@ -231,13 +232,12 @@ class _Pardiso:
         ip[36] = int(opts.get("vbsr", 0))
         ip[59] = int(opts["ooc"])
         self.mtype = int(mtype)
-        self.n = U.shape[0]
-        self.data = np.ascontiguousarray(U.data, dtype=np.float64)
+        self.ia, self.ja, data = upper  # 1-based int32 CSR of the upper triangle
+        self.n = self.ia.size - 1
+        self.data = np.ascontiguousarray(data, dtype=np.float64)
         if opts["single"]:
             # PARDISO's mixed-precision mode reads the matrix values in single precision
             self.data32 = self.data.astype(np.float32)
-        self.ia = (U.indptr + 1).astype(np.int32)
-        self.ja = (U.indices + 1).astype(np.int32)
         self.perm = np.zeros(0, dtype=np.int32)
         self.single = bool(opts["single"])
 
@@ -293,9 +293,10 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
     on small models (7.5k-12k DOFs: 10-15 sweeps) and the refinement stalls (SolverError) on
     the 265k and 509k P2 cantilevers (benchmarks/results/modal-s4.txt)."""
     single = bool(opts["single"])
-    U = sp.triu(A, format="csr")
-    U.sort_indices()
-    ps = _Pardiso(U, mtype, opts)
+    # A is canonical (sorted rows, no duplicates: factorize); its upper triangle in one compiled pass
+    if A.nnz >= 2**31 - 1:
+        raise SolverError(f"matrix too large for PARDISO's 32-bit indices ({A.nnz} non-zeros)")
+    ps = _Pardiso(_upper_triangle(A.indptr, A.indices, A.data), mtype, opts)
     t0 = time.perf_counter()
     ps.call(11)
     t1 = time.perf_counter()

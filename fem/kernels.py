@@ -3,6 +3,7 @@ cache is per source file, so editing the drivers does not recompile these).
 
 * :func:`pattern` - node adjacency (block-CSR pattern) and the position of every element block;
 * :func:`principal_submatrix` - ``A[keep][:, keep]`` of a CSR matrix (the free-DOF matrices);
+* :func:`upper_triangle` - PARDISO's 1-based int32 upper triangle of a symmetric CSR matrix;
 * :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
 * :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
 """
@@ -107,6 +108,35 @@ def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover -
                 val[p] = data[k]
                 p += 1
     return ptr, ind, val
+
+
+@njit(cache=True)
+def upper_triangle(indptr, indices, data):  # pragma: no cover - compiled
+    """PARDISO's input for a symmetric CSR matrix with sorted rows: the upper triangle
+    (diagonal included) as 1-based int32 ``ia``, ``ja`` and its values; one pass per row from
+    its first entry at or right of the diagonal (scipy's ``triu`` goes through COO and a sort)."""
+    n = indptr.size - 1
+    start = np.empty(n, np.int64)
+    ia = np.empty(n + 1, np.int32)
+    ia[0] = 1
+    tot = 0
+    for i in range(n):
+        k = indptr[i]
+        hi = indptr[i + 1]
+        while k < hi and indices[k] < i:
+            k += 1
+        start[i] = k
+        tot += hi - k
+        ia[i + 1] = 1 + tot
+    ja = np.empty(tot, np.int32)
+    val = np.empty(tot, data.dtype)
+    p = 0
+    for i in range(n):
+        for k in range(start[i], indptr[i + 1]):
+            ja[p] = indices[k] + 1
+            val[p] = data[k]
+            p += 1
+    return ia, ja, val
 
 
 # ---------------------------------------------------------------------------------------
@@ -223,4 +253,4 @@ def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
 
 
 
-__all__ = ["pattern", "principal_submatrix", "jacobian", "stiffness_kernel", "mass_kernel"]
+__all__ = ["pattern", "principal_submatrix", "upper_triangle", "jacobian", "stiffness_kernel", "mass_kernel"]

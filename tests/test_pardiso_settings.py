@@ -75,3 +75,29 @@ def test_block_solver_with_thick_restarts_matches_arpack(KM):
     assert info["residuals"].max() < 1e-8 or info.get("floor")
     np.testing.assert_allclose(w, ref.eigenvalues, rtol=1e-8)
     assert np.abs(V.T @ (M @ V) - np.eye(6)).max() < 1e-10
+
+
+def test_upper_triangle_is_scipy_triu_one_based(KM):
+    """PARDISO's input (compiled pass) equals scipy's triu with 1-based int32 indices, also for
+    a row whose diagonal is not stored and for an empty row."""
+    import scipy.sparse as sp
+
+    from probedyn.fem.kernels import upper_triangle
+
+    K, _ = KM
+    R = sp.random(60, 60, density=0.1, random_state=np.random.default_rng(2), format="csr")
+    R = (R + R.T).tolil()
+    R[7, 7] = 0.0
+    R[11, :] = 0.0
+    R[:, 11] = 0.0
+    for A in (K, sp.csr_matrix(R)):
+        A = sp.csr_matrix(A)
+        A.eliminate_zeros()
+        A.sort_indices()
+        U = sp.triu(A, format="csr")
+        U.sort_indices()
+        ia, ja, val = upper_triangle(A.indptr, A.indices, A.data)
+        assert ia.dtype == ja.dtype == np.int32
+        np.testing.assert_array_equal(ia, U.indptr + 1)
+        np.testing.assert_array_equal(ja, U.indices + 1)
+        np.testing.assert_array_equal(val, U.data)
