@@ -225,7 +225,7 @@ class ElasticModel:
     def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
         if self._K is None:
-            check_model(self.dofs, self.name or "model", element=self.element)  # announce a large model, refuse one too large
+            self._check_size()
             t0 = time.perf_counter()
             with progress.stage(f"assembling K and M ({self.dofs} DOFs)"):
                 K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations,
@@ -254,6 +254,12 @@ class ElasticModel:
                                 assemble_s=time.perf_counter() - t0)
         return self._K, self._M
 
+    def _check_size(self) -> None:
+        """Announce a large model and refuse one too large (once per model: its DOFs are fixed)."""
+        if not getattr(self, "_size_checked", False):
+            check_model(self.dofs, self.name or "model", element=self.element)
+            self._size_checked = True
+
     def start_analysis(self, options: dict | None = None) -> Analysis | None:
         """PARDISO's analysis of the free stiffness started in a background thread from the
         pattern the mesh implies (all 3 x 3 blocks of the node adjacency, clamped nodes removed),
@@ -262,6 +268,7 @@ class ElasticModel:
         exactly that pattern).  None without PARDISO.  The caller releases it."""
         if not have_pardiso():
             return None
+        self._check_size()  # before any memory is committed to a model that cannot fit
         _, pat = el.pattern_of(self.mesh, self.element, self.basis)
         free_nodes = self.free_dofs[::3] // 3  # clamping fixes whole nodes: free DOFs come in triples
         node_new = np.full(self.n_nodes, -1, dtype=np.int64)
