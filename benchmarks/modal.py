@@ -15,7 +15,9 @@ the same matrices:
   10 modes; its error-bound history is printed), same frequencies required to 1e-8.
 
 "End to end" for probedyn = mesh + assembly + free-DOF extraction (since session 5) +
-factorisation + block solve.
+factorisation + block solve; since session 6 PARDISO's analysis runs beside the assembly (as in
+``ElasticModel.modes``; ``--no-overlap``: after it) and the extra measurements (assembly again,
+numpy assembly, ARPACK, PARDISO settings) come after the end-to-end phases.
 
 Part 2, accuracy per second: the default mesh (hex-s2, graded) against P2 tetrahedra, with the
 errors of all 10 frequencies against the converged values (Richardson, docs/fem.md).
@@ -39,6 +41,12 @@ Usage::
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-265k.txt
     .venv/bin/python benchmarks/modal.py --match 6.35:1.35e-6 --variants-at 0 --no-accuracy \\
         --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s5-509k.txt
+    # session 6 (PARDISO's analysis beside the assembly, the default): the quiet peer run, and the
+    # A/B of the overlap (--no-overlap: the session-5 order, analysis after the assembly)
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s6-265k-quiet.txt
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --no-overlap --out benchmarks/results/modal-s6-265k-quiet-nooverlap.txt
 
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
@@ -99,8 +107,13 @@ def rss() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: bool = True) -> dict:
-    """Mesh + assemble + solve one tetrahedral size in this process (wall and CPU times)."""
+def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: bool = True,
+        overlap: bool = True) -> dict:
+    """Mesh + assemble + solve one tetrahedral size in this process (wall and CPU times).
+
+    ``overlap`` (default, as ``ElasticModel.modes``): PARDISO's analysis of the free stiffness'
+    pattern starts before the assembly and runs beside it; the extra measurements (compiled
+    and numpy assembly again, ARPACK, PARDISO settings) come after the end-to-end phases."""
     sys.path.insert(0, str(HERE))
     import _numpy_assembly as old
 
@@ -116,27 +129,11 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["mesh_s"], out["mesh_cpu_s"] = since(c0)
     out["elements"] = int(model.mesh.t.shape[1])
     c0 = clock()
+    analysis = model.start_analysis() if overlap else None
     K_full, M_full = model.assemble()
-    # includes the numba pattern and the first-call overhead
+    # includes the numba pattern and the first-call overhead (and starting the analysis)
     out["assemble_s"], out["assemble_cpu_s"] = since(c0)
-    t0 = time.perf_counter()
-    Kc = el.assemble_stiffness(model.mesh, model.elem_region, model.materials, model.orientations,
-                               basis=model.basis)
-    t1 = time.perf_counter()
-    Mc = el.assemble_mass(model.mesh, model.elem_density, basis=model.basis)
-    t2 = time.perf_counter()
-    out.update(compiled_K_s=t1 - t0, compiled_M_s=t2 - t1)
-    if numpy_asm:
-        t0 = time.perf_counter()
-        Ko = old.assemble_stiffness_numpy(model.mesh, model.elem_region, model.materials, model.orientations)
-        t1 = time.perf_counter()
-        Mo = old.assemble_mass_numpy(model.mesh, model.elem_density)
-        t2 = time.perf_counter()
-        out.update(numpy_K_s=t1 - t0, numpy_M_s=t2 - t1,
-                   K_max_rel_diff=float(abs(Ko - Kc).max() / abs(Ko).max()),
-                   M_max_rel_diff=float(abs(Mo - Mc).max() / abs(Mo).max()))
-        del Ko, Mo
-    del Kc, Mc
+    out["overlap"] = overlap
     c0 = clock()
     K, M = model.free_matrices()  # the clamped DOFs eliminated (part of every modal solve)
     out["free_s"], out["free_cpu_s"] = since(c0)
@@ -144,14 +141,24 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["nnz_K"] = int(K.nnz)
     # ---- eigen-solvers on one factorisation ---------------------------------------------------
     c0 = clock()
-    fac = E.factorize(K)
+    fac = E.factorize(K, analysis=analysis)
     out["factor_s"], out["factor_cpu_s"] = since(c0)
     out["factor_nnz"] = fac.info.get("factor_nnz")
     out["analysis_s"] = fac.info.get("analysis_s")
+    out["numeric_s"] = fac.info.get("numeric_s")
+    out["analysis_overlapped"] = fac.info.get("analysis_overlapped")
     try:
         c0 = clock()
         w, V, n_solved, info = E.block_eigsh(K, M, N_MODES, 0.0, fac)
         out["block_s"], out["block_cpu_s"] = since(c0)
+    except BaseException:
+        fac.release()
+        raise
+    out["probedyn_total_s"] = out["mesh_s"] + out["assemble_s"] + out["free_s"] + out["factor_s"] + out["block_s"]
+    out["probedyn_total_cpu_s"] = (out["mesh_cpu_s"] + out["assemble_cpu_s"] + out["free_cpu_s"] + out["factor_cpu_s"]
+                                   + out["block_cpu_s"])
+    # ---- extra measurements (after the end-to-end phases) ---------------------------------------
+    try:
         out["block_vectors"] = n_solved
         out["block_size"] = info["block"]
         out["block_history"] = info.get("history")
@@ -187,10 +194,26 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
         out["single_solve_s"], out["single_solve_cpu_s"] = since(c0)
     finally:
         fac.release()
-    out["probedyn_total_s"] = out["mesh_s"] + out["assemble_s"] + out["free_s"] + out["factor_s"] + out["block_s"]
-    out["probedyn_total_cpu_s"] = (out["mesh_cpu_s"] + out["assemble_cpu_s"] + out["free_cpu_s"] + out["factor_cpu_s"]
-                                   + out["block_cpu_s"])
     out["peak_rss_gib_solve"] = rss()
+    # ---- assembly: compiled again and the numpy path (after the factor is released: memory) ----
+    t0 = time.perf_counter()
+    Kc = el.assemble_stiffness(model.mesh, model.elem_region, model.materials, model.orientations,
+                               basis=model.basis)
+    t1 = time.perf_counter()
+    Mc = el.assemble_mass(model.mesh, model.elem_density, basis=model.basis)
+    t2 = time.perf_counter()
+    out.update(compiled_K_s=t1 - t0, compiled_M_s=t2 - t1)
+    if numpy_asm:
+        t0 = time.perf_counter()
+        Ko = old.assemble_stiffness_numpy(model.mesh, model.elem_region, model.materials, model.orientations)
+        t1 = time.perf_counter()
+        Mo = old.assemble_mass_numpy(model.mesh, model.elem_density)
+        t2 = time.perf_counter()
+        out.update(numpy_K_s=t1 - t0, numpy_M_s=t2 - t1,
+                   K_max_rel_diff=float(abs(Ko - Kc).max() / abs(Ko).max()),
+                   M_max_rel_diff=float(abs(Mo - Mc).max() / abs(Mo).max()))
+        del Ko, Mo
+    del Kc, Mc
     # ---- PARDISO settings ------------------------------------------------------------------------
     if variants:
         rows = []
@@ -279,6 +302,8 @@ def main() -> None:
     ap.add_argument("--no-variants", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--lean", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--hex", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--no-overlap", action="store_true",
+                    help="PARDISO's analysis after the assembly (the session-5 order), not beside it")
     ap.add_argument("--quick", action="store_true", help="two small sizes only")
     ap.add_argument("--sizes", default=None, help="divisors n of h = t/n (default 1.5,2,3,4,5,6.5)")
     ap.add_argument("--match", default=None,
@@ -292,7 +317,8 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="also write the table to this file (and .json beside it)")
     a = ap.parse_args()
     if a.one is not None:
-        print(json.dumps(one(a.one, not a.no_variants, numpy_asm=not a.lean, arpack=not a.lean)))
+        print(json.dumps(one(a.one, not a.no_variants, numpy_asm=not a.lean, arpack=not a.lean,
+                             overlap=not a.no_overlap)))
         return
     if a.hex:
         print(json.dumps(hex_default()))
@@ -322,7 +348,7 @@ def main() -> None:
         for rep in range(a.repeat):
             first = rep == 0
             args = ["--one", str(d)] + ([] if (first and d in variants_at) else ["--no-variants"])
-            r = run_sub(args + ([] if first else ["--lean"]))
+            r = run_sub(args + ([] if first else ["--lean"]) + (["--no-overlap"] if a.no_overlap else []))
             runs.append(r)
             data.setdefault("runs", []).append(r)
             checkpoint(a.out, data)
@@ -360,6 +386,10 @@ def main() -> None:
         say(f"{'':>7} CPU s: mesh {r['mesh_cpu_s']:.1f}, assembly {r['assemble_cpu_s']:.1f}, free DOFs "
             f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, block {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
             f"ARPACK {r['arpack_cpu_s']:.1f}")
+        if r.get("numeric_s") is not None:
+            say(f"{'':>7} PARDISO: analysis {r['analysis_s']:.2f} s "
+                f"({'beside the assembly' if r.get('analysis_overlapped') else 'after the assembly'}), "
+                f"numeric {r['numeric_s']:.2f} s, factor nnz {r['factor_nnz']} (VBSR units)")
         say(f"{'':>7} block solver: largest eigenvalue error bound {r['block_error_bound']:.1e}, residual "
             f"{r['block_residual']:.1e}; (vectors, bound) per Rayleigh-Ritz step: "
             + ", ".join(f"({h[0]}, {h[1]:.0e})" for h in r["block_history"]))

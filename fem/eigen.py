@@ -47,6 +47,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import hashlib
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
@@ -57,6 +58,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from probedyn.core.errors import SolverError
+from probedyn.fem.kernels import upper_triangle as _upper_triangle
 
 SOLVERS = ("auto", "pardiso", "superlu")
 METHODS = ("block", "arpack")
@@ -135,11 +137,22 @@ def reuse_factorizations() -> Iterator[dict]:
             f.info.get("_release", lambda: None)()
 
 
-def factorize(A: sp.spmatrix, spd: bool = True, solver: str = "auto", options: dict | None = None) -> Factorization:
+def factorize(A: sp.spmatrix, spd: bool = True, solver: str = "auto", options: dict | None = None,
+              analysis: Analysis | None = None) -> Factorization:
     """Factorise symmetric ``A`` with PARDISO (``solver='pardiso'`` or 'auto' when available)
     or SuperLU.  ``spd`` selects PARDISO's SPD type 2 (else symmetric indefinite -2); if the
     SPD factorisation fails (a zero or negative pivot), the indefinite type is tried.
-    ``options``: PARDISO settings overriding :data:`PARDISO_OPTIONS`."""
+    ``options``: PARDISO settings overriding :data:`PARDISO_OPTIONS`.  ``analysis``: an
+    :class:`Analysis` of ``A``'s predicted pattern started earlier (used if it fits; always
+    released)."""
+    try:
+        return _factorize(A, spd, solver, options, analysis)
+    finally:
+        if analysis is not None:
+            analysis.release()
+
+
+def _factorize(A, spd, solver, options, analysis) -> Factorization:
     if solver not in SOLVERS:
         raise SolverError(f"unknown linear solver '{solver}' (known: {', '.join(SOLVERS)})")
     A = sp.csr_matrix(A, dtype=float)
@@ -159,7 +172,7 @@ def factorize(A: sp.spmatrix, spd: bool = True, solver: str = "auto", options: d
         last: Exception | None = None
         for mtype in ((2, -2) if spd else (-2,)):
             try:
-                f = _pardiso(A, mtype, {**PARDISO_OPTIONS, **(options or {})})
+                f = _pardiso(A, mtype, {**PARDISO_OPTIONS, **(options or {})}, analysis if mtype == 2 else None)
                 f.seconds = time.perf_counter() - t0
                 break
             except Exception as exc:  # zero pivot in SPD mode, PARDISO error codes
@@ -211,7 +224,7 @@ _PARDISO_ERRORS = {-1: "input inconsistent", -2: "not enough memory", -3: "reord
 class _Pardiso:
     """One PARDISO handle with its matrix (upper triangle, 1-based int32 indices kept)."""
 
-    def __init__(self, U: sp.csr_matrix, mtype: int, opts: dict) -> None:
+    def __init__(self, upper: tuple[np.ndarray, np.ndarray, np.ndarray], mtype: int, opts: dict) -> None:
         self.fn = _mkl_pardiso()
         self.pt = np.zeros(64, dtype=np.int64)
         self.iparm = np.zeros(64, dtype=np.int32)
@@ -231,13 +244,12 @@ class _Pardiso:
         ip[36] = int(opts.get("vbsr", 0))
         ip[59] = int(opts["ooc"])
         self.mtype = int(mtype)
-        self.n = U.shape[0]
-        self.data = np.ascontiguousarray(U.data, dtype=np.float64)
+        self.ia, self.ja, data = upper  # 1-based int32 CSR of the upper triangle
+        self.n = self.ia.size - 1
+        self.data = np.ascontiguousarray(data, dtype=np.float64)
         if opts["single"]:
             # PARDISO's mixed-precision mode reads the matrix values in single precision
             self.data32 = self.data.astype(np.float32)
-        self.ia = (U.indptr + 1).astype(np.int32)
-        self.ja = (U.indices + 1).astype(np.int32)
         self.perm = np.zeros(0, dtype=np.int32)
         self.single = bool(opts["single"])
 
@@ -279,7 +291,61 @@ class _Pardiso:
             self.pt[:] = 0
 
 
-def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
+class Analysis:
+    """PARDISO's analysis (phase 11: fill-reducing ordering and symbolic factorisation) of a
+    pattern known before the matrix values, run in a background thread.
+
+    Phase 11 of an SPD matrix needs only the pattern (``ia``, ``ja``); a model knows the pattern
+    of its free stiffness from the mesh (:func:`probedyn.fem.kernels.free_upper_pattern`)
+    before the element kernels compute a value, so the ordering runs while the matrices are
+    assembled (the ctypes call releases the GIL).  :func:`factorize` (``analysis=...``) takes the
+    analysed handle only if the matrix's upper triangle has exactly this pattern (else, e.g.
+    after springs added entries, it is released and the matrix analysed as usual): the
+    factorisation is the one the plain path computes.  Not used with single precision."""
+
+    def __init__(self, ia: np.ndarray, ja: np.ndarray, options: dict | None = None) -> None:
+        self.opts = {**PARDISO_OPTIONS, **(options or {})}
+        self.ia, self.ja = ia, ja
+        self.ps: _Pardiso | None = _Pardiso((ia, ja, np.zeros(ja.size)), 2, self.opts)
+        self.error: Exception | None = None
+        self.seconds = float("nan")
+        self._thread = threading.Thread(target=self._run, name="pardiso-analysis", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        t0 = time.perf_counter()
+        try:
+            self.ps.call(11)
+        except Exception as exc:  # reported by take(): the matrix is then analysed as usual
+            self.error = exc
+        self.seconds = time.perf_counter() - t0
+
+    def take(self, upper: tuple[np.ndarray, np.ndarray, np.ndarray], mtype: int, opts: dict) -> "_Pardiso | None":
+        """The analysed handle holding ``upper``'s values if it fits (same pattern, SPD type,
+        settings), else None (and the handle is released).  Waits for the analysis."""
+        t0 = time.perf_counter()
+        self._thread.join()
+        self.waited = time.perf_counter() - t0
+        ps, self.ps = self.ps, None
+        if ps is None:
+            return None
+        ia, ja, data = upper
+        if (self.error is None and mtype == 2 and opts == self.opts and ia.size == self.ia.size
+                and ja.size == self.ja.size and np.array_equal(ia, self.ia) and np.array_equal(ja, self.ja)):
+            ps.data = np.ascontiguousarray(data, dtype=np.float64)
+            return ps
+        ps.free()
+        return None
+
+    def release(self) -> None:
+        """Free the handle if :func:`factorize` did not take it."""
+        self._thread.join()
+        if self.ps is not None:
+            self.ps.free()
+            self.ps = None
+
+
+def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict, analysis: Analysis | None = None) -> Factorization:
     """PARDISO factorisation of ``A``.  With ``opts["single"]`` the factor is single precision
     (``iparm[27] = 1``: matrix, right-hand sides and factor all float32; symmetric diagonal
     scaling made it worse for hex-s2, 5.6 vs 0.16 error with SuperLU float32, so none), and every
@@ -293,11 +359,18 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
     on small models (7.5k-12k DOFs: 10-15 sweeps) and the refinement stalls (SolverError) on
     the 265k and 509k P2 cantilevers (benchmarks/results/modal-s4.txt)."""
     single = bool(opts["single"])
-    U = sp.triu(A, format="csr")
-    U.sort_indices()
-    ps = _Pardiso(U, mtype, opts)
+    # A is canonical (sorted rows, no duplicates: factorize); its upper triangle in one compiled pass
+    if A.nnz >= 2**31 - 1:
+        raise SolverError(f"matrix too large for PARDISO's 32-bit indices ({A.nnz} non-zeros)")
+    upper = _upper_triangle(A.indptr, A.indices, A.data)
+    ps = analysis.take(upper, mtype, opts) if analysis is not None and not single else None
     t0 = time.perf_counter()
-    ps.call(11)
+    if ps is None:
+        ps = _Pardiso(upper, mtype, opts)
+        ps.call(11)
+        analysis_s = time.perf_counter() - t0
+    else:  # analysed in the background while the matrix was assembled
+        analysis_s = analysis.seconds
     t1 = time.perf_counter()
     try:
         ps.call(22)
@@ -310,8 +383,9 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict) -> Factorization:
         raise SolverError("zero or negative pivot in SPD factorisation")
     n = A.shape[0]
     norm_A = float(abs(A).sum(axis=0).max()) if single else 1.0
-    info = {"analysis_s": t1 - t0, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
-            "mflops": int(ps.iparm[18]), "options": dict(opts)}
+    info = {"analysis_s": analysis_s, "numeric_s": t2 - t1, "factor_nnz": int(ps.iparm[17]),
+            "mflops": int(ps.iparm[18]), "options": dict(opts),
+            "analysis_overlapped": t1 - t0 < analysis_s}
 
     def solve(b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=float)
@@ -544,13 +618,15 @@ def shift_invert_eigsh(
     tol: float = 0.0,
     method: str = "block",
     options: dict | None = None,
+    analysis: Analysis | None = None,
 ) -> EigenResult:
     """Lowest ``n_modes`` eigenpairs of ``K phi = lambda M phi`` nearest ``sigma``.
 
     ``sigma`` [rad^2/s^2]: shift; default ``-1e-12 * mean(diag K)/mean(diag M)`` (slightly below
     zero, so ``K - sigma M`` is SPD also for a free-floating model; a constrained model passes
     ``sigma = 0``).  ``method``: "block" (block shift-invert Lanczos) or "arpack" (module
-    docstring); ``options``: PARDISO settings.  Raises :class:`SolverError` for too few DOFs
+    docstring); ``options``: PARDISO settings; ``analysis``: PARDISO's analysis of the pattern
+    of ``K`` started before assembly (:class:`Analysis`, used for ``sigma = 0``).  Raises :class:`SolverError` for too few DOFs
     (fewer than 10 per requested mode), non-convergence, or non-finite / negative eigenvalues.
     """
     n = K.shape[0]
@@ -570,7 +646,7 @@ def shift_invert_eigsh(
         # which can be ~1e-9 of diag(K)/diag(M) for a long beam with small elements
         sigma = -1e-12 * float(np.mean(np.abs(dK)) / np.mean(np.abs(dM)))
     A = K if sigma == 0 else (K - sigma * M).tocsr()  # sigma = 0: K itself (a reusable factorisation)
-    fac = factorize(A, spd=sigma <= 0, solver=solver, options=options)
+    fac = factorize(A, spd=sigma <= 0, solver=solver, options=options, analysis=analysis if sigma == 0 else None)
     t0 = time.perf_counter()
     info: dict[str, Any] = dict(fac.info)
     info.pop("_release", None)

@@ -3,6 +3,8 @@ cache is per source file, so editing the drivers does not recompile these).
 
 * :func:`pattern` - node adjacency (block-CSR pattern) and the position of every element block;
 * :func:`principal_submatrix` - ``A[keep][:, keep]`` of a CSR matrix (the free-DOF matrices);
+* :func:`upper_triangle` - PARDISO's 1-based int32 upper triangle of a symmetric CSR matrix;
+* :func:`free_upper_pattern` - the same pattern predicted from the node adjacency (no values);
 * :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
 * :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
 """
@@ -107,6 +109,80 @@ def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover -
                 val[p] = data[k]
                 p += 1
     return ptr, ind, val
+
+
+@njit(cache=True)
+def upper_triangle(indptr, indices, data):  # pragma: no cover - compiled
+    """PARDISO's input for a symmetric CSR matrix with sorted rows: the upper triangle
+    (diagonal included) as 1-based int32 ``ia``, ``ja`` and its values; one pass per row from
+    its first entry at or right of the diagonal (scipy's ``triu`` goes through COO and a sort)."""
+    n = indptr.size - 1
+    start = np.empty(n, np.int64)
+    ia = np.empty(n + 1, np.int32)
+    ia[0] = 1
+    tot = 0
+    for i in range(n):
+        k = indptr[i]
+        hi = indptr[i + 1]
+        while k < hi and indices[k] < i:
+            k += 1
+        start[i] = k
+        tot += hi - k
+        ia[i + 1] = 1 + tot
+    ja = np.empty(tot, np.int32)
+    val = np.empty(tot, data.dtype)
+    p = 0
+    for i in range(n):
+        for k in range(start[i], indptr[i + 1]):
+            ja[p] = indices[k] + 1
+            val[p] = data[k]
+            p += 1
+    return ia, ja, val
+
+
+@njit(cache=True)
+def free_upper_pattern(indptr, indices, node_new, n_free_nodes):  # pragma: no cover - compiled
+    """The pattern PARDISO will see for the free stiffness, from the scalar node adjacency
+    (``indptr``, ``indices``, sorted rows) before any value is computed: 1-based int32 ``ia``,
+    ``ja`` of the upper triangle of the interleaved 3 x 3 block matrix restricted to the free
+    nodes (``node_new[s]`` = free index of node s, or -1; monotone on the free nodes)."""
+    old_of = np.empty(n_free_nodes, np.int64)
+    for s in range(node_new.size):
+        if node_new[s] >= 0:
+            old_of[node_new[s]] = s
+    n = 3 * n_free_nodes
+    ia = np.empty(n + 1, np.int32)
+    ia[0] = 1
+    tot = 0
+    for sn in range(n_free_nodes):
+        s = old_of[sn]
+        right = 0
+        diag = 0
+        for k in range(indptr[s], indptr[s + 1]):
+            tn = node_new[indices[k]]
+            if tn > sn:
+                right += 1
+            elif tn == sn:
+                diag = 1
+        for c in range(3):
+            tot += 3 * right + diag * (3 - c)
+            ia[3 * sn + c + 1] = 1 + tot
+    ja = np.empty(tot, np.int32)
+    p = 0
+    for sn in range(n_free_nodes):
+        s = old_of[sn]
+        for c in range(3):
+            for k in range(indptr[s], indptr[s + 1]):
+                tn = node_new[indices[k]]
+                if tn == sn:
+                    for j in range(3 * sn + c, 3 * sn + 3):
+                        ja[p] = j + 1
+                        p += 1
+                elif tn > sn:
+                    for j in range(3 * tn, 3 * tn + 3):
+                        ja[p] = j + 1
+                        p += 1
+    return ia, ja
 
 
 # ---------------------------------------------------------------------------------------
@@ -223,4 +299,4 @@ def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
 
 
 
-__all__ = ["pattern", "principal_submatrix", "jacobian", "stiffness_kernel", "mass_kernel"]
+__all__ = ["pattern", "principal_submatrix", "upper_triangle", "free_upper_pattern", "jacobian", "stiffness_kernel", "mass_kernel"]

@@ -31,7 +31,8 @@ from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.assembly import element_kind, element_volumes
-from probedyn.fem.eigen import factorize, shift_invert_eigsh
+from probedyn.fem.eigen import Analysis, factorize, have_pardiso, shift_invert_eigsh
+from probedyn.fem.kernels import free_upper_pattern as _free_upper_pattern
 from probedyn.fem.kernels import principal_submatrix as _principal_submatrix
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.modes import DIRS, ModalResult, Mode, classify_shapes
@@ -224,7 +225,7 @@ class ElasticModel:
     def assemble(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """Full (unconstrained) K and M [N/m, kg] including springs and point masses."""
         if self._K is None:
-            check_model(self.dofs, self.name or "model", element=self.element)  # announce a large model, refuse one too large
+            self._check_size()
             t0 = time.perf_counter()
             with progress.stage(f"assembling K and M ({self.dofs} DOFs)"):
                 K = el.assemble_stiffness(self.mesh, self.elem_region, self.materials, self.orientations,
@@ -253,6 +254,28 @@ class ElasticModel:
                                 assemble_s=time.perf_counter() - t0)
         return self._K, self._M
 
+    def _check_size(self) -> None:
+        """Announce a large model and refuse one too large (once per model: its DOFs are fixed)."""
+        if not getattr(self, "_size_checked", False):
+            check_model(self.dofs, self.name or "model", element=self.element)
+            self._size_checked = True
+
+    def start_analysis(self, options: dict | None = None) -> Analysis | None:
+        """PARDISO's analysis of the free stiffness started in a background thread from the
+        pattern the mesh implies (all 3 x 3 blocks of the node adjacency, clamped nodes removed),
+        before any value is assembled (:class:`probedyn.fem.eigen.Analysis`; pass it to
+        ``factorize`` / ``shift_invert_eigsh`` with ``K_ff``, which use it only if ``K_ff`` has
+        exactly that pattern).  None without PARDISO.  The caller releases it."""
+        if not have_pardiso():
+            return None
+        self._check_size()  # before any memory is committed to a model that cannot fit
+        _, pat = el.pattern_of(self.mesh, self.element, self.basis)
+        free_nodes = self.free_dofs[::3] // 3  # clamping fixes whole nodes: free DOFs come in triples
+        node_new = np.full(self.n_nodes, -1, dtype=np.int64)
+        node_new[free_nodes] = np.arange(free_nodes.size)
+        ia, ja = _free_upper_pattern(pat.indptr, pat.indices, node_new, int(free_nodes.size))
+        return Analysis(ia, ja, options)
+
     def free_matrices(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
         """K and M restricted to the free DOFs (clamped ones eliminated), kept until the model's
         matrices change; canonical CSR (sorted indices), so equal matrices have equal arrays."""
@@ -280,13 +303,19 @@ class ElasticModel:
         if int(n_modes) != n_modes or n_modes < 1:
             raise ParameterError(f"n_modes must be a positive integer, got {n_modes}")
         self.check_resolution(int(n_modes))
-        K, M = self.assemble()
-        free = self.free_dofs
-        Kf, Mf = self.free_matrices()
         if sigma is None and self.clamp:
             sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
-        with progress.stage(f"solving for {int(n_modes)} modes ({self.dofs} DOFs)"):
-            res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver)
+        # K_ff is factorised as it is (sigma = 0): its ordering can run while K and M are assembled
+        analysis = self.start_analysis() if (sigma == 0 and self._K is None and solver in ("auto", "pardiso")) else None
+        try:
+            K, M = self.assemble()
+            free = self.free_dofs
+            Kf, Mf = self.free_matrices()
+            with progress.stage(f"solving for {int(n_modes)} modes ({self.dofs} DOFs)"):
+                res = shift_invert_eigsh(Kf, Mf, int(n_modes), sigma=sigma, solver=solver, analysis=analysis)
+        finally:
+            if analysis is not None:
+                analysis.release()
         t0 = time.perf_counter()
         Phi = np.zeros((self.ndofs_total, res.vectors.shape[1]))
         Phi[free] = res.vectors

@@ -34,6 +34,7 @@ from skfem.quadrature import get_quadrature
 
 from probedyn.core.errors import GeometryError
 from probedyn.core.io import atomic_path
+from probedyn.meshes.entities import ensure_entities
 
 _LOCK = threading.RLock()
 
@@ -115,6 +116,7 @@ class RawMesh:
         p = np.ascontiguousarray(self.points.T, dtype=float)
         t = np.ascontiguousarray(self.tets.T, dtype=np.int64)
         mesh = MeshTet(p, t)
+        ensure_entities(mesh)
         # fix orientation-independent facet lookup: encode sorted vertex triples
         fac = np.sort(mesh.facets, axis=0).astype(np.int64)
         n = np.int64(mesh.p.shape[1])
@@ -132,7 +134,11 @@ class RawMesh:
                 raise GeometryError(f"boundary group '{name}': {np.count_nonzero(~ok)} triangles are not mesh facets")
             boundaries[name] = np.sort(order[pos])
         subdomains = {k: np.sort(np.asarray(v, dtype=np.int64)) for k, v in self.subdomains.items()}
-        return MeshTet(p, t, _boundaries=boundaries or None, _subdomains=subdomains or None)
+        out = MeshTet(p, t, _boundaries=boundaries or None, _subdomains=subdomains or None)
+        for attr in ("_facets", "_t2f", "_edges", "_t2e"):  # same p and t: the entities carry over
+            if hasattr(mesh, attr):
+                setattr(out, attr, getattr(mesh, attr))
+        return out
 
 
 def extract_tet_mesh() -> RawMesh:

@@ -15,7 +15,7 @@ import scipy.sparse.linalg as spla
 
 from probedyn.fem.eigen import block_eigsh, factorize, have_pardiso, shift_invert_eigsh
 from probedyn.fem.materials import get_material
-from probedyn.fem.model import ElasticModel
+from probedyn.fem.model import ElasticModel, Spring
 from probedyn.meshes.hexmeshes import HexDivisions, cantilever_hex
 
 pytestmark = pytest.mark.skipif(not have_pardiso(), reason="pypardiso not installed")
@@ -75,3 +75,77 @@ def test_block_solver_with_thick_restarts_matches_arpack(KM):
     assert info["residuals"].max() < 1e-8 or info.get("floor")
     np.testing.assert_allclose(w, ref.eigenvalues, rtol=1e-8)
     assert np.abs(V.T @ (M @ V) - np.eye(6)).max() < 1e-10
+
+
+def test_upper_triangle_is_scipy_triu_one_based(KM):
+    """PARDISO's input (compiled pass) equals scipy's triu with 1-based int32 indices, also for
+    a row whose diagonal is not stored and for an empty row."""
+    import scipy.sparse as sp
+
+    from probedyn.fem.kernels import upper_triangle
+
+    K, _ = KM
+    R = sp.random(60, 60, density=0.1, random_state=np.random.default_rng(2), format="csr")
+    R = (R + R.T).tolil()
+    R[7, 7] = 0.0
+    R[11, :] = 0.0
+    R[:, 11] = 0.0
+    for A in (K, sp.csr_matrix(R)):
+        A = sp.csr_matrix(A)
+        A.eliminate_zeros()
+        A.sort_indices()
+        U = sp.triu(A, format="csr")
+        U.sort_indices()
+        ia, ja, val = upper_triangle(A.indptr, A.indices, A.data)
+        assert ia.dtype == ja.dtype == np.int32
+        np.testing.assert_array_equal(ia, U.indptr + 1)
+        np.testing.assert_array_equal(ja, U.indices + 1)
+        np.testing.assert_array_equal(val, U.data)
+
+
+def _hex_model(**kw):
+    b = cantilever_hex(300e-6, 30e-6, 10e-6, HexDivisions(2), "hex-s2")
+    return ElasticModel(b, {"body": get_material("silicon")}, clamp=["clamp"], **kw)
+
+
+def test_analysis_from_the_mesh_pattern_is_the_same_factorisation():
+    """PARDISO's analysis started from the pattern the mesh implies (before assembly, in a
+    background thread) is taken for K_ff and gives the solutions of the plain path bit for bit
+    (same ordering, same numeric factorisation); the predicted pattern is K_ff's upper triangle."""
+    from probedyn.fem.kernels import upper_triangle
+
+    model = _hex_model()
+    an = model.start_analysis()
+    K, _ = model.free_matrices()
+    ia, ja, _ = upper_triangle(K.indptr, K.indices, K.data)
+    np.testing.assert_array_equal(an.ia, ia)
+    np.testing.assert_array_equal(an.ja, ja)
+    f1 = factorize(K, analysis=an)
+    f0 = factorize(K)
+    B = np.random.default_rng(5).standard_normal((K.shape[0], 3))
+    try:
+        assert f1.info["analysis_overlapped"] and not f0.info["analysis_overlapped"]
+        np.testing.assert_array_equal(f1.solve(B), f0.solve(B))
+    finally:
+        f0.release()
+        f1.release()
+    assert an.ps is None  # taken (and the factorisation owns it)
+
+
+def test_analysis_not_fitting_the_matrix_is_released_and_redone():
+    """A spring on a face couples nodes the mesh does not: K_ff's pattern differs from the
+    predicted one, the background analysis is dropped and the matrix analysed as usual, with
+    the same eigenvalues as the plain path; modes() with and without the overlap agree exactly."""
+    spring = Spring("free_end", None, 5.0, (0, 0, 1))
+    model = _hex_model(springs=[spring])
+    an = model.start_analysis()
+    K, M = model.free_matrices()
+    r1 = shift_invert_eigsh(K, M, 4, sigma=0.0, analysis=an)
+    r0 = shift_invert_eigsh(K, M, 4, sigma=0.0)
+    assert not r1.info["analysis_overlapped"]
+    assert an.ps is None
+    np.testing.assert_array_equal(r1.eigenvalues, r0.eigenvalues)
+    plain = _hex_model()
+    K, M = plain.free_matrices()
+    ref = shift_invert_eigsh(K, M, 4, sigma=0.0)
+    np.testing.assert_array_equal(_hex_model().modes(4).frequencies_hz, np.sqrt(ref.eigenvalues) / (2 * np.pi))
