@@ -84,6 +84,8 @@ def _run(scheduler, out=None, **kw):
 @pytest.mark.parametrize("kind", ["silent", "http"])
 def test_listener_that_is_not_dask_fails_within_the_timeout(kind, silent_listener, http_server, tmp_path):
     addr = silent_listener if kind == "silent" else http_server
+    import distributed  # noqa: F401  (imported before the clock starts: the bound is on the connection, not on an import under load)
+
     t0 = time.perf_counter()
     with pytest.raises(sw.SchedulerError, match="not .*Dask scheduler|did not answer as a Dask scheduler") as exc:
         _run(addr, tmp_path / "a.nc")
