@@ -23,12 +23,17 @@
    scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
    Q or amplitude implausible).
    The predictions are those of a *hypothesis*: the nominal probe, or the probe carrying one catalog
-   cause at a grid of its parameters (:func:`_hypotheses`, on the Ritz reduction). A hidden effect
-   moves the families differently (a width error moves lateral and torsional modes only), so the
-   nearest nominal mode after one common scale may be another family's; the labels are those of the
-   hypothesis placing the most resolved peaks (the nominal probe's unless a cause places more), and
-   labellings that tie are decided by their modal fit, the peaks they disagree on left out when the
-   fits are within the evidence margin (reported as ambiguous).
+   cause at parameter values refined where the modes move (:func:`_refined_grids`: neighbouring
+   hypotheses move no mode by more than 2 x the window, however non-linear the frequencies are in
+   the parameter -- near buckling, a heavy tip mass), on the Ritz reduction. A hidden effect moves
+   the families differently (a width error moves lateral and torsional modes only, a length error
+   flapwise and lateral as 1/L^2 but torsion as 1/L), so the nearest nominal mode after one common
+   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings
+   (the nominal probe's among them when it places as many), and distinct labellings are decided by
+   their modal fit -- the baseline's chi-square or a single cause's plus its likelihood-ratio
+   threshold (:func:`_labelling_score`). Labellings within the evidence margin whose best models
+   differ leave the peaks they disagree on out (reported as ambiguous); if one cause explains them
+   all, the best labelling is kept and the other's parameters reported.
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
    declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
 """
@@ -54,8 +59,9 @@ __all__ = ["spectrum_problem", "fit_line", "detect_peaks", "sho_psd"]
 K_B = 1.380649e-23
 MATCH_TOL = 0.03
 Q_FACTOR = 3.0
+Q_SPREAD = 10.0  # the Qs of one lever's modes lie within this factor of each other (an unresolved line beyond: a spur)
 AREA_FACTOR = 100.0
-MAX_GRID_1D = 48  # values per parameter of a one-parameter cause's hypotheses (refined where the modes move)
+MAX_GRID_1D = 96  # values per parameter of a one-parameter cause's hypotheses (refined where the modes move)
 MAX_GRID_2D = 24  # per parameter of a two-parameter cause (a product grid)
 MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
 CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
@@ -234,14 +240,14 @@ def _refined_grids(params, move, max_values: int) -> list[list[float]]:
     """Values of a cause's parameters for the identification hypotheses, refined where the modes move.
 
     Each parameter starts at its null and its bounds; an interval between neighbouring values is
-    bisected (in the parameter's fitted coordinate: linear, or log10 for a log-scaled one) while the
+    subdivided (in the parameter's fitted coordinate: linear, or log10 for a log-scaled one) while the
     hypotheses at its ends -- at every combination of the other parameters' current values -- place
     some mode more than ``2 MATCH_TOL`` apart in frequency (``move``: the largest |ln f_a / f_b| over
     the modes), so that a peak passed by a mode between two neighbours lies within MATCH_TOL of one of
     them. The frequencies are not linear in a parameter -- a compressive stress lowers flapwise 1 as
     sqrt(1 - sigma / sigma_cr), steeply near buckling; a tip mass as 1 / sqrt(1 + m / m_eff) -- so a
     fixed grid is either too coarse where they move fast or wasteful where they do not. At most
-    ``max_values`` values per parameter (the widest moves are bisected first)."""
+    ``max_values`` values per parameter (the widest moves are refined first)."""
     grids = []
     for p in params:
         g = sorted({p.lo, p.null, p.hi})
@@ -262,9 +268,15 @@ def _refined_grids(params, move, max_values: int) -> list[list[float]]:
                 if worst > 2 * MATCH_TOL:
                     gaps.append((worst, a, b))
             room = max_values - len(grids[j])
-            for _, a, b in sorted(gaps, reverse=True)[:room]:
+            for worst, a, b in sorted(gaps, reverse=True):
+                # as many evenly spaced values as the move needs at its average rate (the next round
+                # refines where the rate is not even)
+                m = min(int(math.ceil(worst / (2 * MATCH_TOL))) - 1, room)
+                if m <= 0:
+                    break
                 ua, ub = p.to_u(a), p.to_u(b)
-                grids[j].append(float(p.from_u(0.5 * (ua + ub))))
+                grids[j] += [float(p.from_u(ua + (ub - ua) * q / (m + 1))) for q in range(1, m + 1)]
+                room -= m
                 added = True
             grids[j].sort()
         if not added:
@@ -388,14 +400,15 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     cands = sorted((x for x in scored[1:] if x[0] == top), key=lambda x: x[1])
     if scored[0][0] == top:
         cands = [scored[0], *cands]
-    options = []
+    # only labellings accepting the most peaks compete (a chi-square over fewer peaks is lower: a
+    # labelling must not win by leaving a peak out)
+    distinct: dict[tuple, tuple] = {}
     for _, _, h, sh in cands:
         tab = _label_table(meas, fits, [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])], sh, df)
         lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
-        if lab not in [o[0] for o in options]:
-            options.append((lab, tab, h, sh))
-        if len(options) >= MAX_LABELLINGS:
-            break
+        distinct.setdefault(lab, (lab, tab, h, sh))
+    n_acc = max(sum(x is not None for x in lab) for lab in distinct)
+    options = [o for lab, o in distinct.items() if sum(x is not None for x in lab) == n_acc][:MAX_LABELLINGS]
     scores: list[tuple[float, str | None, dict]] = []
     ambiguous = []
     if len(options) > 1:
@@ -479,6 +492,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     each peak's nearest mode, accepted or rejected with its reasons (see the module docstring)."""
     seen: set = set()
     table = []
+    # the highest Q among the resolved lines: the loss mechanisms of one lever (thermoelastic, clamp,
+    # surface, the medium) give its modes Qs within about an order of magnitude of each other, so an
+    # unresolved line -- Q above f0 / (2 bins) -- whose least possible Q exceeds Q_SPREAD times every
+    # resolved line's is not a mode of that lever but a sinusoid (a spur that fell near a predicted
+    # mode: high in the band the modes are dense, lateral 2, torsion 2 and axial 1 of a short lever
+    # within 7 %)
+    q_res = [ft["Q"] for ft in fits if ft["fwhm_bins"] >= 2.0]
+    q_res_max = max(q_res) if q_res else math.inf
     for ft in fits:
         reasons = []
         near = min(preds, key=lambda p: abs(math.log(ft["f0_Hz"] / (s * p["f_Hz"]))))
@@ -491,10 +512,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
             # a sinusoid (spur) or a resonance narrower than the resolution: only the second is
             # possible where the model's damping would also leave the line unresolved
             wide = np.isfinite(near["Q_fluid"]) and s * near["f_Hz"] / near["Q_fluid"] / df > 3.0
-            if wide or abs(dev) > MATCH_TOL:
+            q_min = ft["f0_Hz"] / (2.0 * df)
+            sharp = q_min > Q_SPREAD * q_res_max
+            if wide or sharp or abs(dev) > MATCH_TOL:
                 reasons.append(f"unresolved line ({ft['fwhm_bins']:.2g} bins wide)"
                                + (f" where the {meas.medium_name}-damped mode would be {s * near['f_Hz'] / near['Q_fluid'] / df:.2g} bins wide"
-                                  if wide else "") + ": an electronic spur")
+                                  if wide else "")
+                               + (f": Q > {q_min:.3g}, over {Q_SPREAD:g} x the highest Q of the resolved lines ({q_res_max:.3g})"
+                                  if sharp and not wide else "") + ": an electronic spur")
             else:
                 ft = {**ft, "Q": math.nan, "Q_sigma": math.nan, "note": "unresolved: frequency only"}
         elif np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
