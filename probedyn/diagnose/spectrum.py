@@ -409,13 +409,22 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
         distinct.setdefault(lab, (lab, tab, h, sh))
     n_acc = max(sum(x is not None for x in lab) for lab in distinct)
     options = [o for lab, o in distinct.items() if sum(x is not None for x in lab) == n_acc][:MAX_LABELLINGS]
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN
+
     scores: list[tuple[float, str | None, dict]] = []
     ambiguous = []
+    nominal_first = options[0][2]["cause"] is None
     if len(options) > 1:
         for lab, tab, h, sh in options:
             scores.append(_labelling_score(_modal_problem(meas, tab, base, L)))
         order_ = np.argsort([x[0] for x in scores])
         k = int(order_[0])
+        # the declared probe is prior information: labels that contradict its nominal ones must be
+        # demanded by the data (a better score by more than twice the evidence margin), not merely
+        # allowed (with two peaks a heavy point mass relabels flapwise 1 as lateral 1 and fits too)
+        if nominal_first and scores[0][0] - scores[k][0] < 2 * EVIDENCE_MARGIN:
+            k = 0
+            order_ = [0]
     else:
         k = 0
     _, table, best, s = options[k]
@@ -426,9 +435,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
         # by the same model (both by a width error: lateral 1 and torsion 1 swapped, at two width
         # ratios), the cause does not depend on the labels: the best labelling is kept and the
         # ambiguity reported with the other labelling's parameters
-        from probedyn.diagnose.engine import EVIDENCE_MARGIN
-
-        close = [j for j in order_[1:] if scores[j][0] - scores[k][0] < 2 * EVIDENCE_MARGIN]
+        close = [int(j) for j in order_[1:] if scores[j][0] - scores[k][0] < 2 * EVIDENCE_MARGIN]
         same = all(scores[j][1] == scores[k][1] for j in close)
         for j in close:
             diff = [(i, lab_j) for i, (t, lab_j) in enumerate(zip(table, options[j][0]))
