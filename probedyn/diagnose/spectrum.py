@@ -23,12 +23,17 @@
    scales all thermal peaks alike, a spur or a pick-up line does not). Everything else is rejected *and reported* with the reason (spur, unmatched,
    Q or amplitude implausible).
    The predictions are those of a *hypothesis*: the nominal probe, or the probe carrying one catalog
-   cause at a grid of its parameters (:func:`_hypotheses`, on the Ritz reduction). A hidden effect
-   moves the families differently (a width error moves lateral and torsional modes only), so the
-   nearest nominal mode after one common scale may be another family's; the labels are those of the
-   hypothesis placing the most resolved peaks (the nominal probe's unless a cause places more), and
-   labellings that tie are decided by their modal fit, the peaks they disagree on left out when the
-   fits are within the evidence margin (reported as ambiguous).
+   cause at parameter values refined where the modes move (:func:`_refined_grids`: neighbouring
+   hypotheses move no mode by more than 2 x the window, however non-linear the frequencies are in
+   the parameter -- near buckling, a heavy tip mass), on the Ritz reduction. A hidden effect moves
+   the families differently (a width error moves lateral and torsional modes only, a length error
+   flapwise and lateral as 1/L^2 but torsion as 1/L), so the nearest nominal mode after one common
+   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings
+   (the nominal probe's among them when it places as many), and distinct labellings are decided by
+   their modal fit -- the baseline's chi-square or a single cause's plus its likelihood-ratio
+   threshold (:func:`_labelling_score`). Labellings within the evidence margin whose best models
+   differ leave the peaks they disagree on out (reported as ambiguous); if one cause explains them
+   all, the best labelling is kept and the other's parameters reported.
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
    declared calibration uncertainty, Q with its fit error) for :class:`~probedyn.diagnose.modal.ModalProblem`.
 """
@@ -54,11 +59,12 @@ __all__ = ["spectrum_problem", "fit_line", "detect_peaks", "sho_psd"]
 K_B = 1.380649e-23
 MATCH_TOL = 0.03
 Q_FACTOR = 3.0
+Q_SPREAD = 10.0  # the Qs of one lever's modes lie within this factor of each other (an unresolved line beyond: a spur)
 AREA_FACTOR = 100.0
-GRID_FRACTIONS = (0.002, 0.005, 0.01, 0.015, 0.02, 0.03, 0.04, 0.05, 0.065, 0.08, 0.1, 0.125, 0.15, 0.2, 0.25,
-                  0.3, 0.4, 0.55, 0.75, 1.0)
-MAX_LABELLINGS = 4
-CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)  # distinct labellings compared by their modal fit
+MAX_GRID_1D = 96  # values per parameter of a one-parameter cause's hypotheses (refined where the modes move)
+MAX_GRID_2D = 24  # per parameter of a two-parameter cause (a product grid)
+MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
+CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
 
 
 def sho_psd(f, f0, Q, A):
@@ -230,31 +236,63 @@ def _matches(fits: list[dict], f_pred: list[float], s: float) -> tuple[int, int,
     return n_res, len(taken), float(sum(v * v for v in taken.values()))
 
 
-def _grid(p) -> list[float]:
-    """Values of one cause parameter for the identification hypotheses: its null and, towards each
-    bound, GRID_FRACTIONS of the way (geometric over a log-scaled range). Successive values must move
-    a mode by less than twice MATCH_TOL, or a mode that the effect moved between two grid values is
-    within the window of neither (a width ratio of 1.165 between 1.12 and 1.21 left the lateral mode
-    3.7 % from both; a tensile stress of 24 MPa between 17 and 35 MPa -- the range reaches 30 times
-    the buckling stress -- left flapwise 1 5-7 % from both): the fractions step by <= 0.05 of the
-    range up to 0.3 of it and by ~1.5x below 0.1, coarser beyond 0.3 where the catalog's effects are rare."""
-    if p.scale == "log":
-        return [float(x) for x in np.geomspace(p.lo, p.hi, 9)]
-    out = [p.null]
-    for b in (p.lo, p.hi):
-        if b != p.null:
-            out += [p.null + (b - p.null) * x for x in GRID_FRACTIONS]
-    return out
+def _refined_grids(params, move, max_values: int) -> list[list[float]]:
+    """Values of a cause's parameters for the identification hypotheses, refined where the modes move.
+
+    Each parameter starts at its null and its bounds; an interval between neighbouring values is
+    subdivided (in the parameter's fitted coordinate: linear, or log10 for a log-scaled one) while the
+    hypotheses at its ends -- at every combination of the other parameters' current values -- place
+    some mode more than ``2 MATCH_TOL`` apart in frequency (``move``: the largest |ln f_a / f_b| over
+    the modes), so that a peak passed by a mode between two neighbours lies within MATCH_TOL of one of
+    them. The frequencies are not linear in a parameter -- a compressive stress lowers flapwise 1 as
+    sqrt(1 - sigma / sigma_cr), steeply near buckling; a tip mass as 1 / sqrt(1 + m / m_eff) -- so a
+    fixed grid is either too coarse where they move fast or wasteful where they do not. At most
+    ``max_values`` values per parameter (the widest moves are refined first)."""
+    grids = []
+    for p in params:
+        g = sorted({p.lo, p.null, p.hi})
+        grids.append([x for x in g])
+    for _round in range(12):
+        added = False
+        for j, p in enumerate(params):
+            if len(grids[j]) >= max_values:
+                continue
+            others = [grids[i] if i != j else [None] for i in range(len(params))]
+            gaps = []
+            for a, b in zip(grids[j][:-1], grids[j][1:]):
+                worst = 0.0
+                for combo in itertools.product(*others):
+                    va = [a if x is None else x for x in combo]
+                    vb = [b if x is None else x for x in combo]
+                    worst = max(worst, move(va, vb))
+                if worst > 2 * MATCH_TOL:
+                    gaps.append((worst, a, b))
+            room = max_values - len(grids[j])
+            for worst, a, b in sorted(gaps, reverse=True):
+                # as many evenly spaced values as the move needs at its average rate (the next round
+                # refines where the rate is not even)
+                m = min(int(math.ceil(worst / (2 * MATCH_TOL))) - 1, room)
+                if m <= 0:
+                    break
+                ua, ub = p.to_u(a), p.to_u(b)
+                grids[j] += [float(p.from_u(ua + (ub - ua) * q / (m + 1))) for q in range(1, m + 1)]
+                room -= m
+                added = True
+            grids[j].sort()
+        if not added:
+            break
+    return grids
 
 
 def _hypotheses(meas: SpectrumData, base: FEMBaseline, preds: list[dict]) -> list[dict]:
     """Mode frequencies of the nominal probe (``preds``) and of the probe carrying each catalog cause
-    the declared conditions allow, on a grid of its parameters (:func:`_grid`, products for two
-    parameters), from the Ritz reduction of the FEM as ratios to its nominal solution (exact at the
-    null). A hidden effect moves the families differently -- a width error moves lateral and
-    torsional modes only, a clamp compliance or a compressive stress mostly the first flapwise
-    mode -- so one common scale cannot place every peak, and the nearest nominal mode may be
-    another family's; the labels are those of the hypothesis that makes the most peaks modes."""
+    the declared conditions allow, at parameter values refined where the modes move
+    (:func:`_refined_grids`, products for two parameters), from the Ritz reduction of the FEM as ratios
+    to its nominal solution (exact at the null). A hidden effect moves the families differently -- a
+    width error moves lateral and torsional modes only, a clamp compliance or a compressive stress
+    mostly the first flapwise mode -- so one common scale cannot place every peak, and the nearest
+    nominal mode may be another family's; the labels are those of the hypothesis that makes the most
+    peaks modes."""
     out = [{"cause": None, "values": {}, "f_Hz": [p["f_Hz"] for p in preds]}]
     idx = [i for i, p in enumerate(preds) if p["family"] in FAMILIES]
     if not idx:
@@ -276,22 +314,38 @@ def _hypotheses(meas: SpectrumData, base: FEMBaseline, preds: list[dict]) -> lis
     except Exception:  # noqa: BLE001 -- a probe the reduction cannot handle: nominal labels only
         return out
     for c in prob.causes:
-        grids = [_grid(p) for p in c.params]
+        cache: dict[tuple, np.ndarray | None] = {}
+
+        def ratios(vals, _c=c, _cache=cache):
+            key = tuple(float(x) for x in vals)
+            if key not in _cache:
+                v = {p.name: x for p, x in zip(_c.params, key)}
+                try:
+                    fh, _ = prob.predict(v, (_c,))
+                    r = fh / ref
+                    _cache[key] = r if np.all(np.isfinite(r)) and np.all(r > 0) else None
+                except Exception:  # noqa: BLE001 -- a value outside what the reduction solves
+                    _cache[key] = None
+            return _cache[key]
+
+        def move(va, vb):
+            ra, rb = ratios(va), ratios(vb)
+            if ra is None or rb is None:
+                return 0.0
+            return float(np.max(np.abs(np.log(ra / rb))))
+
+        grids = _refined_grids(list(c.params), move, MAX_GRID_1D if len(c.params) == 1 else MAX_GRID_2D)
         nulls = [p.null for p in c.params]
         for vals in itertools.product(*grids):
             if list(vals) == nulls:
                 continue
-            v = {p.name: float(x) for p, x in zip(c.params, vals)}
-            try:
-                fh, _ = prob.predict(v, (c,))
-            except Exception:  # noqa: BLE001 -- a grid point outside what the reduction solves
-                continue
-            if not np.all(np.isfinite(fh)) or np.any(fh <= 0):
+            r = ratios(vals)
+            if r is None:
                 continue
             f_all = [p["f_Hz"] for p in preds]
             for k, i in enumerate(idx):
-                f_all[i] = preds[i]["f_Hz"] * fh[k] / ref[k]
-            out.append({"cause": c.key, "values": v, "f_Hz": f_all})
+                f_all[i] = preds[i]["f_Hz"] * r[k]
+            out.append({"cause": c.key, "values": {p.name: float(x) for p, x in zip(c.params, vals)}, "f_Hz": f_all})
     return out
 
 
@@ -337,53 +391,91 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
         scored.append(((n_res,), (round(abs(math.log(sh)) / 0.01), round(dev2 / MATCH_TOL**2, 2),
                                          h["cause"] is not None), h, sh))
     top = max(k for k, *_ in scored)
-    # the nominal probe's labels stand unless a cause hypothesis places more peaks: with few peaks
-    # many hypotheses (a cause near its bound) place them all too, under other labels, and fit them
-    # exactly -- the data cannot prefer them, the declared probe can
-    cands = [scored[0]] if scored[0][0] == top else sorted((x for x in scored if x[0] == top), key=lambda x: x[1])
-    # distinct labellings among the hypotheses that place the most peaks: where they differ (a peak
-    # that is torsion 1 under one hypothesis and lateral 2 under another), frequencies alone cannot
-    # decide; the labelling whose modal fit (the baseline or one catalog cause, Q included) has the
-    # lowest chi-square is taken -- the likelihood of the whole spectrum's modes decides the labels
-    options = []
+    # every hypothesis placing the most resolved peaks proposes a labelling; the nominal probe's is
+    # always among them when it places as many (first), then the causes' by how closely they place
+    # the peaks. Where labellings differ (a peak that is torsion 1 under a length error and lateral 2
+    # under the nominal probe after a common scale), frequencies alone cannot decide: the labelling
+    # whose modal fit is best -- the baseline, or one catalog cause penalised by its likelihood-ratio
+    # threshold -- is taken (see _labelling_score)
+    cands = sorted((x for x in scored[1:] if x[0] == top), key=lambda x: x[1])
+    if scored[0][0] == top:
+        cands = [scored[0], *cands]
+    # only labellings accepting the most peaks compete (a chi-square over fewer peaks is lower: a
+    # labelling must not win by leaving a peak out)
+    distinct: dict[tuple, tuple] = {}
     for _, _, h, sh in cands:
         tab = _label_table(meas, fits, [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])], sh, df)
         lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
-        if lab not in [o[0] for o in options]:
-            options.append((lab, tab, h, sh))
-        if len(options) >= MAX_LABELLINGS:
-            break
-    chi2s = []
+        distinct.setdefault(lab, (lab, tab, h, sh))
+    n_acc = max(sum(x is not None for x in lab) for lab in distinct)
+    options = [o for lab, o in distinct.items() if sum(x is not None for x in lab) == n_acc][:MAX_LABELLINGS]
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN
+
+    scores: list[tuple[float, str | None, dict]] = []
+    ambiguous = []
+    nominal_first = options[0][2]["cause"] is None
     if len(options) > 1:
         for lab, tab, h, sh in options:
-            chi2s.append(_best_fit_chi2(_modal_problem(meas, tab, base, L)))
-        order_ = np.argsort(chi2s)
+            scores.append(_labelling_score(_modal_problem(meas, tab, base, L)))
+        order_ = np.argsort([x[0] for x in scores])
         k = int(order_[0])
+        # the declared probe is prior information: labels that contradict its nominal ones must be
+        # demanded by the data (a better score by more than twice the evidence margin), not merely
+        # allowed (with two peaks a heavy point mass relabels flapwise 1 as lateral 1 and fits too)
+        if nominal_first and scores[0][0] - scores[k][0] < 2 * EVIDENCE_MARGIN:
+            k = 0
+            order_ = [0]
     else:
         k = 0
     _, table, best, s = options[k]
     if len(options) > 1:
-        # labellings whose best fits are within the engine's evidence margin of the best one are
-        # as likely: the peaks they label differently are ambiguous and left out (a wrong label
-        # would be "explained" by a wrong cause)
-        from probedyn.diagnose.engine import EVIDENCE_MARGIN
-
-        for j in order_[1:]:
-            if chi2s[j] - chi2s[k] < 2 * EVIDENCE_MARGIN:
-                for t, lab_j in zip(table, options[j][0]):
-                    here = (t["family"], t["order"]) if t["accepted"] else None
-                    if here is not None and lab_j != here:
-                        t["accepted"] = False
-                        other = f"{lab_j[0]} {lab_j[1]}" if lab_j else "not a mode"
-                        t["reasons"] = [f"ambiguous: {here[0]} {here[1]} or {other} (the modal fits of the two labellings "
-                                        f"differ by chi2 {chi2s[j] - chi2s[k]:.3g} < {2 * EVIDENCE_MARGIN:g})"]
-                        t["family"] = t["order"] = None
+        # labellings whose scores are within twice the engine's evidence margin of the best one are
+        # as likely. If their best models differ, the peaks they label differently are left out (a
+        # wrong label would be explained by a wrong cause). If every such labelling is best explained
+        # by the same model (both by a width error: lateral 1 and torsion 1 swapped, at two width
+        # ratios), the cause does not depend on the labels: the best labelling is kept and the
+        # ambiguity reported with the other labelling's parameters
+        close = [int(j) for j in order_[1:] if scores[j][0] - scores[k][0] < 2 * EVIDENCE_MARGIN]
+        same = all(scores[j][1] == scores[k][1] for j in close)
+        for j in close:
+            diff = [(i, lab_j) for i, (t, lab_j) in enumerate(zip(table, options[j][0]))
+                    if ((t["family"], t["order"]) if t["accepted"] else None) != lab_j]
+            if not diff:
+                continue
+            ambiguous.append({"labels": [(f"{x[0]} {x[1]}" if x else None) for x in options[j][0]],
+                              "score": scores[j][0], "best_model": scores[j][1] or "baseline",
+                              "parameters": scores[j][2]})
+            for i, lab_j in diff:
+                t = table[i]
+                here = (t["family"], t["order"]) if t["accepted"] else None
+                other = f"{lab_j[0]} {lab_j[1]}" if lab_j else "not a mode"
+                if here is None:
+                    continue
+                msg = (f"ambiguous: {here[0]} {here[1]} or {other} (the modal fits of the two labellings "
+                       f"differ by {scores[j][0] - scores[k][0]:.3g} < {2 * EVIDENCE_MARGIN:g})")
+                if same:
+                    t.setdefault("notes", []).append(msg + f"; both best explained by {scores[k][1] or 'the baseline'}: "
+                                                     "label kept")
+                else:
+                    t["accepted"] = False
+                    t["reasons"] = [msg]
+                    t["family"] = t["order"] = None
     acc = [t for t in table if t["accepted"]]
     if not acc:
         raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
                               f"({'; '.join(r for t in table for r in t['reasons'][:1])})")
     prob = _modal_problem(meas, table, base, L)
     prob.kind = meas.kind
+    # the folds of the cross-validation (one mode left out) start from the null and from the full-data
+    # optimum of the cause's parameters (engine: ``cv_warm``). A cause located by several modes (a point
+    # mass: mass and position) has several (mass, position) pairs that fit four of five modes about
+    # equally well; started from the null only, a fold ends in whichever the optimizer reaches (or
+    # stalls short of any), and the held-out mode then condemns the cause for the optimizer's path,
+    # not for its physics: a point mass fitting five modes to chi2 5.9 lost its held-out evidence
+    # to a modulus error at chi2 162. The fold's optimum is still fitted on its training modes only
+    # (the held-out mode can only choose between training-optimal basins); single-basin causes are
+    # unaffected (both starts reach the same optimum).
+    prob.cv_warm = True
     c_cal = table[0].get("_c_cal") if table else None
     for t in table:
         t.pop("_c_cal", None)
@@ -393,7 +485,9 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s_nominal, "peaks": table,
                   "labels_from": {"hypothesis": best["cause"] or "nominal probe", "values": best["values"], "scale": s,
                                   "hypotheses_tried": len(hyps), "labellings_compared": len(options),
-                                  "labelling_chi2": chi2s or None,
+                                  "labelling_scores": [x[0] for x in scores] or None,
+                                  "labelling_models": [x[1] or "baseline" for x in scores] or None,
+                                  "ambiguous_labellings": ambiguous or None,
                                   "note": "the hypothesis that placed the peaks on modes (labels only, not a diagnosis)"},
                   "thermal_area_factor": c_cal}
     prob.extra_report = lambda: {"peaks": prob.peaks}
@@ -405,6 +499,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     each peak's nearest mode, accepted or rejected with its reasons (see the module docstring)."""
     seen: set = set()
     table = []
+    # the highest Q among the resolved lines: the loss mechanisms of one lever (thermoelastic, clamp,
+    # surface, the medium) give its modes Qs within about an order of magnitude of each other, so an
+    # unresolved line -- Q above f0 / (2 bins) -- whose least possible Q exceeds Q_SPREAD times every
+    # resolved line's is not a mode of that lever but a sinusoid (a spur that fell near a predicted
+    # mode: high in the band the modes are dense, lateral 2, torsion 2 and axial 1 of a short lever
+    # within 7 %)
+    q_res = [ft["Q"] for ft in fits if ft["fwhm_bins"] >= 2.0]
+    q_res_max = max(q_res) if q_res else math.inf
     for ft in fits:
         reasons = []
         near = min(preds, key=lambda p: abs(math.log(ft["f0_Hz"] / (s * p["f_Hz"]))))
@@ -417,10 +519,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
             # a sinusoid (spur) or a resonance narrower than the resolution: only the second is
             # possible where the model's damping would also leave the line unresolved
             wide = np.isfinite(near["Q_fluid"]) and s * near["f_Hz"] / near["Q_fluid"] / df > 3.0
-            if wide or abs(dev) > MATCH_TOL:
+            q_min = ft["f0_Hz"] / (2.0 * df)
+            sharp = q_min > Q_SPREAD * q_res_max
+            if wide or sharp or abs(dev) > MATCH_TOL:
                 reasons.append(f"unresolved line ({ft['fwhm_bins']:.2g} bins wide)"
                                + (f" where the {meas.medium_name}-damped mode would be {s * near['f_Hz'] / near['Q_fluid'] / df:.2g} bins wide"
-                                  if wide else "") + ": an electronic spur")
+                                  if wide else "")
+                               + (f": Q > {q_min:.3g}, over {Q_SPREAD:g} x the highest Q of the resolved lines ({q_res_max:.3g})"
+                                  if sharp and not wide else "") + ": an electronic spur")
             else:
                 ft = {**ft, "Q": math.nan, "Q_sigma": math.nan, "note": "unresolved: frequency only"}
         elif np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
@@ -475,16 +581,27 @@ def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) 
     return ModalProblem(md, bases={L: base})
 
 
-def _best_fit_chi2(prob: ModalProblem) -> float:
-    """The lowest chi-square of the baseline and of each single catalog cause (nested fits on the
-    Ritz reduction, as the diagnosis runs them)."""
-    from probedyn.diagnose.engine import Fitter
+def _labelling_score(prob: ModalProblem) -> tuple[float, str | None, dict]:
+    """How well a labelling's peaks are explained: the lowest of the baseline's chi-square and each
+    single catalog cause's chi-square plus its likelihood-ratio threshold chi2_k(1 - alpha / N) (the
+    engine's claim rule: a cause with k parameters must buy at least that much), with the best model
+    and its cause parameters. Without the penalty, with few peaks a labelling that needs a cause at
+    some value fits them exactly and always beats the nominal labels' baseline."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from probedyn.diagnose.engine import ALPHA, Fitter
 
     F = Fitter(prob)
     try:
         b = F.baseline()
-        return float(min([b.chi2, *(f.chi2 for f in F.map_nested([(b, (c,), None) for c in prob.causes]))]))
+        best = (float(b.chi2), None, {})
+        n_c = max(len(prob.causes), 1)
+        for c, f in zip(prob.causes, F.map_nested([(b, (c,), None) for c in prob.causes])):
+            sc = float(f.chi2) + float(chi2_dist.ppf(1 - ALPHA / n_c, len(c.params)))
+            if sc < best[0]:
+                best = (sc, c.key, {p.name: float(f.values[p.name]) for p in c.params})
+        return best
     except Exception:  # noqa: BLE001 -- a labelling the model cannot fit at all
-        return math.inf
+        return math.inf, None, {}
     finally:
         F.close_pool()

@@ -63,6 +63,12 @@ def summary(res: dict[str, Any]) -> str:
         lines.append("peaks: " + ", ".join(f"{p['family']} {p['order']} at {p['f0_Hz']:.6g} Hz" for p in acc))
         for p in rej:
             lines.append(f"  rejected peak at {p['f0_Hz']:.6g} Hz: {'; '.join(p['reasons'])}")
+        for p in acc:
+            for note in p.get("notes", []):
+                lines.append(f"  peak at {p['f0_Hz']:.6g} Hz: {note}")
+        for a in (res["peaks"].get("labels_from") or {}).get("ambiguous_labellings") or []:
+            vals = ", ".join(f"{k} = {v:.4g}" for k, v in a["parameters"].items())
+            lines.append(f"  another labelling fits as well: best model {a['best_model']}" + (f" ({vals})" if vals else ""))
     v = res["verdict"]
     if v == "no-significant-discrepancy":
         lines.append("no significant discrepancy: the residual is consistent with the stated noise; nothing is claimed")
