@@ -1,7 +1,8 @@
 """Every shipped measurement of ``examples/measurements`` through ``probedyn diagnose`` end to end.
 
-Usage: ``python benchmarks/diagnose_examples.py [OUT.json]`` (default
-``benchmarks/results/diagnose_examples.json``). Each example runs in a fresh process through the
+Usage: ``python benchmarks/diagnose_examples.py [OUT.json] [NAME ...]`` (default
+``benchmarks/results/diagnose_examples.json``; names select examples by file stem, e.g.
+``afm_cantilever_modes``). Each example runs in a fresh process through the
 CLI (``probedyn diagnose FILE --json``), as a user would; recorded per example: the verdict, the
 findings in order, the confounded group, the baseline chi-square and dof, the held-out RMS before
 and after where the result carries them, and wall and CPU time of the whole process (the machine
@@ -59,8 +60,11 @@ def run_one(toml: Path) -> dict:
 
 def main(argv: list[str]) -> int:
     out = Path(argv[0]) if argv else ROOT / "benchmarks" / "results" / "diagnose_examples.json"
+    names = set(argv[1:])
     rows = []
     for toml in sorted(EXAMPLES.glob("*.toml")):
+        if names and toml.stem not in names:
+            continue
         row = run_one(toml)
         rows.append(row)
         print(json.dumps(row), flush=True)
