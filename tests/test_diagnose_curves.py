@@ -114,6 +114,12 @@ def test_parsimony_prefers_the_contained_limit():
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
     claimed = [row(AdhesionMD, 100.0), row(DeflectionDrift, 99.9)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
+    # two contained limits, both unsupported against the container: the better in-sample fit leads (equal
+    # parameter counts), whatever their held-out evidence, and the other is no longer ahead of it
+    from probedyn.diagnose.causes.adhesion import AdhesionDMT
+
+    claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionJKR, 99.0, 296.0), row(AdhesionDMT, 97.0, 300.5)]
+    assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
 
 
 def test_spectrum_spur_rejected_modes_identified(tmp_path):
