@@ -638,21 +638,28 @@ def _continuation_curve(z, P, k, start_delta):
         if not ok or abs(x - d) > 2e-9:
             # jump: scan in the direction of motion for the nearest stable root
             sgn = 1.0 if (i == 0 or zz >= z[i - 1]) else -1.0
-            grid = d + sgn * np.linspace(0, 60e-9, 60001)
-            gv = grid + np.asarray(P(grid), float) / k - zz
-            cross = np.nonzero(np.sign(gv[1:]) != np.sign(gv[:-1]))[0]
+            # the jump's length is not bounded by a fixed window: a pull-off lands where the lever
+            # has relaxed its deflection, |P(d)| / k further (85 nm for 6 nN on a 0.07 N/m lever), plus
+            # the piezo step: a 1 pm grid over the first 60 nm, then a 10 pm grid out to twice that
+            reach = 2.0 * (abs(zz - d) + abs(float(np.asarray(P(d)).ravel()[0])) / k) + 60e-9
             x = None
-            for c in cross:
-                lo, hi = grid[c], grid[c + 1]
-                for _ in range(80):
-                    mid = 0.5 * (lo + hi)
-                    if np.sign(g(mid)) == np.sign(g(lo)):
-                        lo = mid
-                    else:
-                        hi = mid
-                xr = 0.5 * (lo + hi)
-                if (g(xr + 1e-12) - g(xr - 1e-12)) > 0:
-                    x = xr
+            for grid in (d + sgn * np.linspace(0, 60e-9, 60001),
+                         d + sgn * np.linspace(60e-9, max(reach, 61e-9), int(max(reach - 60e-9, 1e-9) / 1e-11) + 2)):
+                gv = grid + np.asarray(P(grid), float) / k - zz
+                cross = np.nonzero(np.sign(gv[1:]) != np.sign(gv[:-1]))[0]
+                for c in cross:
+                    lo, hi = grid[c], grid[c + 1]
+                    for _ in range(80):
+                        mid = 0.5 * (lo + hi)
+                        if np.sign(g(mid)) == np.sign(g(lo)):
+                            lo = mid
+                        else:
+                            hi = mid
+                    xr = 0.5 * (lo + hi)
+                    if (g(xr + 1e-12) - g(xr - 1e-12)) > 0:
+                        x = xr
+                        break
+                if x is not None:
                     break
             if x is None:
                 x = d

@@ -75,3 +75,40 @@ def test_report_section_quick(tmp_path):
     assert "contact_fig_2_19.png" in md and "coupling_fig_2_22.png" in md
     assert (tmp_path / "contact_fig_2_19.png").exists() and (tmp_path / "coupling_fig_2_22.png").exists()
     assert "Verdict" in md
+
+
+def test_model_help_lists_every_registry_law():
+    """``--model``'s help is built from the contact registry, so a law added as one file is offered."""
+    from probedyn.schemes.contact import list_models
+
+    proc = subprocess.run([sys.executable, "-m", "probedyn.cli", "contact", "--help"], capture_output=True, text=True,
+                          timeout=120, env={**__import__("os").environ, "COLUMNS": "400"})
+    assert proc.returncode == 0
+    text = " ".join(proc.stdout.split())
+    for key in list_models():
+        assert f"{key} (" in text, key
+
+
+@pytest.mark.parametrize("model", ["cone", "pyramid"])
+def test_non_adhesive_law_prints_only_what_it_defines(model, capsys, tmp_path):
+    """A law without attraction has no W, lambda, pull-off, jump-out or Maugis units: the command prints none
+    of them; the load at the cap edge depth R cot^2(alpha) is Hertz's there (the cap is a paraboloid of the
+    tip radius up to its edge; Briscoe et al.), an independent check of the number printed."""
+    from probedyn.schemes.contact import CONTACT_MODELS
+
+    adhesive = {c.key: c.adhesive for c in CONTACT_MODELS}
+    assert adhesive == {"cone": False, "pyramid": False, "dmt": True, "jkr": True, "md": True}
+    res = _run_json(["--model", model, "--set", "alpha=0.5"], capsys)
+    assert res["adhesive"] is False
+    for key in ("lam", "pull_off_n", "pull_off_normalized", "jump_out_load_normalized", "contact_transition",
+                "pull_off_published_fit"):
+        assert key not in res
+    p = res["parameters"]
+    E, R, d = p["E_star_pa"], p["R_m"], p["cap_edge_depth_m"]
+    assert d == pytest.approx(R / math.tan(p["equivalent_cone_half_angle_rad"]) ** 2, rel=1e-12)
+    assert res["cap_edge_load_n"] == pytest.approx(4.0 / 3.0 * E * math.sqrt(R) * d**1.5, rel=1e-9)
+    assert main(["contact", "--model", model, "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.lower()
+    assert "pull-off force" not in out and "lambda" not in out and "jump-out:" not in out
+    assert "no pull-off" in out and "cap edge" in out
+    assert (tmp_path / f"contact_{model}.png").stat().st_size > 10000

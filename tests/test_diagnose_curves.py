@@ -114,6 +114,12 @@ def test_parsimony_prefers_the_contained_limit():
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
     claimed = [row(AdhesionMD, 100.0), row(DeflectionDrift, 99.9)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
+    # two contained limits, both unsupported against the container: the better in-sample fit leads (equal
+    # parameter counts), whatever their held-out evidence, and the other is no longer ahead of it
+    from probedyn.diagnose.causes.adhesion import AdhesionDMT
+
+    claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionJKR, 99.0, 296.0), row(AdhesionDMT, 97.0, 300.5)]
+    assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
 
 
 def test_spectrum_spur_rejected_modes_identified(tmp_path):
@@ -168,3 +174,32 @@ def test_spectrum_identification_rates():
     assert s["correct_rate"] >= 0.95
     assert s["false_discovery_rate"] <= 0.05
     assert s["median_recovery_error"] <= 0.10
+
+
+def test_truth_continuation_pulls_off_however_far_the_lever_springs_back():
+    """The truth generator's continuation (tests/diagnose_truth.py) on a soft lever with DMT adhesion: the
+    retract's contact branch ends at delta = 0 (the Hertz slope vanishes there and the van der Waals tail's
+    gradient H R / (3 z0^3) exceeds k), at the force -2 pi W R and the piezo position z_po = -2 pi W R / k
+    (85 nm for 6 nN on 0.07 N/m: a jump longer than any fixed search window); the tip then lands on the
+    tail's far root, so far from the sample the retract returns to the approach's force (no interaction
+    hysteresis out of range: a record whose retract stays at the pull-off force is a drift, not adhesion)."""
+    from diagnose_truth import _continuation_curve
+
+    from probedyn.schemes.contact import get_contact_model
+
+    k, W, R = 0.07, 0.0317, 30e-9
+    model = get_contact_model("dmt", E_t=169e9, nu_t=0.28, E_s=1e9, nu_s=0.3, R_t=R, R_s=0.0, W=W)
+    P = lambda d: model.force(d, "unloading")  # noqa: E731
+    dz = 1e-9
+    z = np.arange(20e-9, -200e-9, -dz)
+    F_top = _continuation_curve(z[:1], P, k, 10e-9)[0]  # the equilibrium in contact at the top of the ramp
+    F = _continuation_curve(z, P, k, z[0] - F_top / k)
+    F_po = 2 * math.pi * W * R
+    z_po = -F_po / k
+    # the deepest force is the fold's, -2 pi W R, to within one piezo step along the contact branch (slope < k)
+    assert abs(F.min() + F_po) <= k * dz
+    j = int(np.argmax(np.abs(np.diff(F))))  # the jump: between the last contact sample and the first free one
+    assert z[j + 1] - dz <= z_po <= z[j] + dz
+    # after the jump: the tail's stable root, |F| = H R / (6 g^2) <= k g / 2 at a gap g beyond the fold's
+    # (H R / (3 k))^(1/3) ~ 3 nm: a small fraction of the pull-off force, at every later sample
+    assert np.all(np.abs(F[j + 1:]) < 0.05 * F_po)

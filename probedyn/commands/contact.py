@@ -3,6 +3,7 @@ Fig 2.19, the pull-off table and the adhesion–friction coupling is :mod:`probe
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any, List, Optional
 
@@ -13,7 +14,28 @@ from probedyn.commands._common import JSON_OPT, OUT_OPT, SET_OPT, emit, format_t
 from probedyn.commands._probe import PROBE_MODES_OPT, PROBE_OPT, PROBE_Q_OPT, PROBE_SET_OPT, load_probe, probe_line
 
 
+def _human_indenter(res: dict[str, Any]) -> list[dict[str, str]]:
+    """Rows of a non-adhesive law: what it defines (no pull-off, lambda or jumps: it has no attraction)."""
+    p = res["parameters"]
+    rows = [dict(q="model", v=f"{res['title']} ({res['model']}), {res['equations']}"),
+            dict(q="adhesion", v="none: no pull-off, no jump-to-contact or jump-out (monotone load, loading = unloading)"),
+            dict(q="reduced modulus E* [Pa] / tip radius R [m]", v=f"{p['E_star_pa']:.4g} / {p['R_m']:.4g}"),
+            dict(q="half-angle / equivalent cone half-angle [deg]",
+                 v=f"{math.degrees(p['alpha_rad']):.3f} / {math.degrees(p['equivalent_cone_half_angle_rad']):.3f}"),
+            dict(q="cap edge: contact radius R cot / depth R cot^2 [m]",
+                 v=f"{p['cap_edge_radius_m']:.4e} / {p['cap_edge_depth_m']:.4e}"),
+            dict(q="load at the cap edge depth [N]", v=f"{res['cap_edge_load_n']:.4e}")]
+    fc = res.get("force_curve")
+    if fc:
+        rows.append(dict(q="normal stiffness of the probe [N/m]", v=f"{fc['k']:.4g}"))
+        rows.append(dict(q="force curve", v="no jumps (the force gradient is never negative)"))
+    return rows
+
+
 def _human(res: dict[str, Any]) -> str:
+    if not res.get("adhesive", True):
+        text = format_table(_human_indenter(res), [("q", "quantity", ""), ("v", "value", "")])
+        return text + ("\n" + probe_line(res["probe"]) if res.get("probe") else "")
     rows = [
         dict(q="model", v=f"{res['title']} ({res['model']}), {res['equations']}"),
         dict(q="lambda (2.24)", v=f"{res['lam']:.6g}"),
@@ -41,9 +63,19 @@ def _human(res: dict[str, Any]) -> str:
     return text + ("\n" + probe_line(res["probe"]) if res.get("probe") else "")
 
 
+def _model_list() -> str:
+    """The registry's contact laws, '<key> (<title>)' (imports the model modules: numpy only)."""
+    from probedyn.schemes.contact import CONTACT_MODELS
+
+    return "; ".join(f"{c.key} ({c.title})" for c in CONTACT_MODELS)
+
+
+_MODELS = _model_list()
+
+
 @app.command("contact")
 def contact(
-    model: str = typer.Option("md", "--model", help="Contact model: dmt, jkr or md (Maugis-Dugdale)."),
+    model: str = typer.Option("md", "--model", help=f"Contact model, a key of the contact registry: {_MODELS}."),
     lam: Optional[float] = typer.Option(None, "--lambda", help="Maugis transition parameter (2.24); sets W."),
     sets: Optional[List[str]] = SET_OPT,
     probe: Optional[str] = PROBE_OPT,
@@ -69,8 +101,12 @@ def contact(
         kw = dict(params)
         if lam is not None:
             kw["lam"] = lam
-        fc = force_curve(get_contact_model(model, **kw), normal_stiffness(rp))
-        res["force_curve"] = {k: v for k, v in fc.items() if k not in ("delta", "P", "s")}
+        m = get_contact_model(model, **kw)
+        if m.adhesive:
+            fc = force_curve(m, normal_stiffness(rp))
+            res["force_curve"] = {k: v for k, v in fc.items() if k not in ("delta", "P", "s")}
+        else:  # no attraction: the equilibrium is unique at every base position, nothing jumps
+            res["force_curve"] = {"k": normal_stiffness(rp), "jump_in": None, "jump_out": None}
         res["probe"] = rp.summary()
     if out is not None:
         from probedyn.core.io import write_json

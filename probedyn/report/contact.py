@@ -29,6 +29,17 @@ def plot_load_penetration(res: dict[str, Any], path: Path) -> Path:
     D = np.asarray(c["penetration_normalized"], float)
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.2))
+    if not res.get("adhesive", True):  # a non-adhesive indenter: one monotone branch in E* R^2 and R units
+        ax.plot(D, np.asarray(c["load_normalized_loading"], float), "C0-", label="loading = unloading")
+        edge = res["parameters"].get("cap_edge_depth_m")
+        if edge:
+            ax.axvline(edge / res["units"]["penetration_m"], color="0.6", lw=0.8, label="cap edge depth R cot$^2$")
+        ax.set_xlabel(r"penetration $\delta / R$")
+        ax.set_ylabel(r"load $P / (E^* R^2)$")
+        ax.set_title(f"{res['title']}", fontsize=9)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        return savefig(fig, path)
     ax.plot(D, np.asarray(c["load_normalized_unloading"], float), "C0-", label="unloading (stable branch + tail)")
     ax.plot(D, np.asarray(c["load_normalized_loading"], float), "C1--", label="loading (tail + stable branch)")
     un = np.asarray([np.nan if v is None else v for v in c["load_normalized_unstable"]], float)

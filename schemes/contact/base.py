@@ -60,8 +60,6 @@ from typing import Any, ClassVar, Literal, Mapping
 
 import numpy as np
 
-from scipy.interpolate import CubicSpline
-
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset
@@ -190,6 +188,10 @@ class ContactModel(Model, ABC):
     """
 
     params: ClassVar[ParamSet] = COMMON_PARAMS
+
+    #: the law has an attraction (a work of adhesion W, Maugis' units, a pull-off, jumps on a spring);
+    #: False for a non-adhesive law (a bare elastic indenter): its reports give only what it defines
+    adhesive: ClassVar[bool] = True
 
     #: table resolution of the parametric curve (points in A)
     n_table: ClassVar[int] = 600
@@ -533,6 +535,8 @@ class ContactModel(Model, ABC):
             raise ParameterError(f"delta_max must exceed the contact edge {edge * s.d_unit:.3g} m")
         u = np.linspace(0.0, math.sqrt(Dmax - edge), n)
         st = self.nd_state(edge + u * u + np.r_[1e-15, np.zeros(n - 1)], "stable")
+        from scipy.interpolate import CubicSpline  # here, not at import: the registry's keys are listed by the CLI
+
         spline = CubicSpline(u, st["P"])
         dspline = spline.derivative()
 

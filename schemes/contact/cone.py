@@ -86,6 +86,7 @@ class _Tip(ContactModel):
 
     #: tan(alpha_cone) / tan(alpha) of the equivalent cone
     cone_factor: ClassVar[float] = 1.0
+    adhesive: ClassVar[bool] = False
 
     def __init__(self, **overrides: Any) -> None:
         for name in ("W", "H", "lam", "z0"):
