@@ -65,6 +65,8 @@ SCREEN_NFEV = 4
 NOISE_EXCESS = 1.25
 #: processes for the independent fits (candidate causes, cross-validation folds)
 WORKERS = 2
+#: registries of the y train of a misaligned scan tried over one lattice period (FrictionProblem._profile_two_trains)
+Y_GRID = 16
 #: registries remembered per problem (model, scan, training mask): ~ the evaluations of a diagnosis
 REGISTRY_MEMORY = 200_000
 
@@ -906,6 +908,8 @@ class FrictionProblem:
                     den = sse[0] - 2 * sse[1] + sse[2]
                     if den > 0:
                         phis[0] += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
+            else:
+                phis = self._profile_two_trains(i, st, phis)
             known = self._registry.get((mkey, i, mk)) if mkey is not None else None
             if known is not None:
                 c2 = self._scan_chi2(i, *self._scan_model(i, st, phis))
@@ -915,6 +919,54 @@ class FrictionProblem:
                     self._remember((mkey, i, mk), phis, c2)
             out.append(phis)
         return out
+
+    def _profile_two_trains(self, i: int, st: FrictionState, phis) -> list[float]:
+        """Registries of the two lattice trains of a misaligned scan. The y train has the period
+        a / sin(theta) along the scan: a scan of a few lattice periods holds one or two of its
+        periods, too few for the phase of its fundamental (the steady parts are empty); its registry
+        is the best of ``Y_GRID`` registries over one period, polished by parabolas; then the x
+        train's registry (from the fundamental) is polished the same way."""
+        s = self.data.scans[i]
+        mask = self._fit_mask(i)
+        w = (math.cos(st.theta), math.sin(st.theta))
+        a = st.a
+        trend = st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
+
+        def train(tr: int, ph: float):
+            vs: list = []
+            f = simulate_scan(self.data, st, s, [ph, ph], train=tr, var_out=vs)
+            return f, vs[0]
+
+        def chi2(fx, fy) -> float:
+            F = st.gain * (w[0] * fx[0] + w[1] * fy[0]) + trend
+            for tf in st.transforms:
+                F = tf(self, s, F)
+            var = st.gain**2 * (w[0] ** 2 * fx[1] + w[1] ** 2 * fy[1])
+            r = (s.force - F) / np.sqrt(self.sigma**2 + var)
+            return float(np.sum(r[mask] ** 2))
+
+        def polish(fun, x: float, cx: float, steps) -> tuple[float, float]:
+            for h in steps:
+                cm, cp = fun(x - h), fun(x + h)
+                den = cm - 2 * cx + cp
+                if den > 0:
+                    xn = x + float(np.clip(0.5 * h * (cm - cp) / den, -2 * h, 2 * h))
+                    cn = fun(xn)
+                    if cn < cx:
+                        x, cx = xn, cn
+                elif min(cm, cp) < cx:
+                    x, cx = (x - h, cm) if cm < cp else (x + h, cp)
+            return x, cx
+
+        fx = train(0, phis[0])
+        grid = phis[1] + a * np.arange(Y_GRID) / Y_GRID
+        fys = [train(1, g) for g in grid]
+        c = [chi2(fx, fy) for fy in fys]
+        j = int(np.argmin(c))
+        p1, c1 = polish(lambda x: chi2(fx, train(1, x)), float(grid[j]), c[j], (a / (2 * Y_GRID), a / (8 * Y_GRID), 1e-3 * a))
+        fy = train(1, p1)
+        p0, _ = polish(lambda x: chi2(train(0, x), fy), float(phis[0]), c1, (4e-3 * a, 1e-3 * a))
+        return [p0, p1]
 
     def _fit_mask(self, i: int) -> np.ndarray:
         """Samples of scan i that the fit uses (start transient out; training samples during CV)."""
