@@ -66,7 +66,7 @@ NOISE_EXCESS = 1.25
 #: processes for the independent fits (candidate causes, cross-validation folds)
 WORKERS = 2
 #: registries of the y train of a misaligned scan tried over one lattice period (FrictionProblem._profile_two_trains)
-Y_GRID = 16
+Y_GRID = 8
 #: registries remembered per problem (model, scan, training mask): ~ the evaluations of a diagnosis
 REGISTRY_MEMORY = 200_000
 
@@ -830,15 +830,14 @@ class FrictionProblem:
             return None
         th = st.thermal
         if th is not None:
+            # the hazard of an activated slip before the instability is below f0 / V times the stick
+            # branch's support span (< 3a/4 + F0/k; the Boltzmann factor <= 1): below ln 2 on every
+            # scan the slips stay athermal (thermal_slip_advance), the model is the athermal one
             ws = [math.cos(st.theta)] + ([math.sin(st.theta)] if st.theta > 1e-6 else [])
-            active = False
-            for s in self.data.scans:
-                U0 = st.u0 * max(s.load + st.n_adh, 0.0)
-                if U0 > 0 and any(thermal_slip_advance(U0, st.a, self.data.k_x, s.speed * w, th[0], th[1])[0] > 0
-                                  for w in ws):
-                    active = True
-                    break
-            th = (float(th[0]), float(th[1])) if active else None
+            k = self.data.k_x
+            bound = max(th[1] * (0.75 * st.a + 2 * math.pi * st.u0 * max(s.load + st.n_adh, 0.0) / (k * st.a))
+                        / max(s.speed * w, 1e-300) for s in self.data.scans for w in ws)
+            th = (float(th[0]), float(th[1])) if bound >= math.log(2.0) else None
         return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.offset), float(st.drift),
                 float(st.bow), float(st.theta), float(st.gain), th)
 
