@@ -34,7 +34,7 @@ from skfem.quadrature import get_quadrature
 
 from probedyn.core.errors import GeometryError
 from probedyn.core.io import atomic_path
-from probedyn.meshes.entities import ensure_entities
+from probedyn.meshes.entities import ensure_entities, tuple_keys
 
 _LOCK = threading.RLock()
 
@@ -118,15 +118,14 @@ class RawMesh:
         mesh = MeshTet(p, t)
         ensure_entities(mesh)
         # fix orientation-independent facet lookup: encode sorted vertex triples
-        fac = np.sort(mesh.facets, axis=0).astype(np.int64)
-        n = np.int64(mesh.p.shape[1])
-        keys = (fac[0] * n + fac[1]) * n + fac[2]
+        n = int(mesh.p.shape[1])
+        keys = tuple_keys(np.sort(mesh.facets, axis=0), n)
         order = np.argsort(keys)
         sk = keys[order]
         boundaries: dict[str, np.ndarray] = {}
         for name, tris in self.boundary_tris.items():
             tr = np.sort(np.asarray(tris, dtype=np.int64), axis=1)
-            q = (tr[:, 0] * n + tr[:, 1]) * n + tr[:, 2]
+            q = tuple_keys(tr.T, n)
             pos = np.searchsorted(sk, q)
             pos = np.clip(pos, 0, len(sk) - 1)
             ok = sk[pos] == q

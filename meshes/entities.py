@@ -23,15 +23,23 @@ from __future__ import annotations
 import numpy as np
 
 
+def tuple_keys(s: np.ndarray, n: int) -> np.ndarray:
+    """One int64 key ``(a n + b) n + c`` per column of sorted vertex tuples ``s`` (k, m): the
+    integer order of the keys is the lexicographic order of the tuples (``n`` > every index)."""
+    s = np.asarray(s, dtype=np.int64)
+    key = s[0].copy()
+    for r in s[1:]:
+        key *= n
+        key += r
+    return key
+
+
 def _entities(t: np.ndarray, indices, n: int) -> tuple[np.ndarray, np.ndarray]:
     """(sorted entity vertex tuples (k, m), element-to-entity map (len(indices), nel)) as
     scikit-fem's ``Mesh.build_entities(t, indices, sort=True)``."""
     idx = np.hstack(tuple(t[ix] for ix in indices))  # (k, len(indices) * nel)
     s = np.sort(idx, axis=0).astype(np.int64)
-    key = s[0].copy()
-    for r in s[1:]:
-        key *= n
-        key += r
+    key = tuple_keys(s, n)
     # the stable (merge) sort of np.unique with return_index: first occurrences, as unique(axis=1)
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     ents = np.ascontiguousarray(s[:, first].astype(t.dtype, copy=False))
@@ -63,4 +71,4 @@ def ensure_entities(mesh) -> None:
         setattr(mesh, maps, m)
 
 
-__all__ = ["ensure_entities"]
+__all__ = ["ensure_entities", "tuple_keys"]
