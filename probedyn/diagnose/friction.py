@@ -853,9 +853,16 @@ class FrictionProblem:
         vs: list = []
         for tr in trains:
             parts.append(simulate_scan(self.data, st, s, phis, train=tr, var_out=vs))
+        return self._combine(i, st, parts, vs)
+
+    def _combine(self, i: int, st: FrictionState, parts, vs) -> tuple[np.ndarray, np.ndarray]:
+        """Lateral force of scan i and its variance from the simulated trains ``parts`` (x, then y
+        for a misaligned scan) and their slip-point variances ``vs``: weights cos/sin theta, gain,
+        offset, drift and transforms."""
+        s = self.data.scans[i]
         w = [math.cos(st.theta), math.sin(st.theta)]
-        F = st.gain * sum(w[tr] * p for tr, p in zip(trains, parts))
-        var = st.gain**2 * sum(w[tr] ** 2 * v for tr, v in zip(trains, vs))
+        F = st.gain * sum(wt * p for wt, p in zip(w, parts))
+        var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
         F = F + st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
         for tf in st.transforms:
             F = tf(self, s, F)
@@ -926,10 +933,7 @@ class FrictionProblem:
         is the best of ``Y_GRID`` registries over one period, polished by parabolas; then the x
         train's registry (from the fundamental) is polished the same way."""
         s = self.data.scans[i]
-        mask = self._fit_mask(i)
-        w = (math.cos(st.theta), math.sin(st.theta))
         a = st.a
-        trend = st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
 
         def train(tr: int, ph: float):
             vs: list = []
@@ -937,12 +941,7 @@ class FrictionProblem:
             return f, vs[0]
 
         def chi2(fx, fy) -> float:
-            F = st.gain * (w[0] * fx[0] + w[1] * fy[0]) + trend
-            for tf in st.transforms:
-                F = tf(self, s, F)
-            var = st.gain**2 * (w[0] ** 2 * fx[1] + w[1] ** 2 * fy[1])
-            r = (s.force - F) / np.sqrt(self.sigma**2 + var)
-            return float(np.sum(r[mask] ** 2))
+            return self._scan_chi2(i, *self._combine(i, st, (fx[0], fy[0]), (fx[1], fy[1])))
 
         def polish(fun, x: float, cx: float, steps) -> tuple[float, float]:
             for h in steps:
