@@ -45,6 +45,12 @@ TRUTH_ETT = 4  # hex-s2 layers through the thickness of the truth meshes (the di
 E_SI, NU_SI, RHO_SI = 169e9, 0.28, 2330.0
 
 
+def lever_geometry(lever) -> dict:
+    """The geometry of ``lever``: a name of :data:`LEVERS` or a dict (length, width, thickness) of its own
+    (the shipped examples, ``examples/make_examples.py``)."""
+    return dict(LEVERS[lever]) if isinstance(lever, str) else dict(lever)
+
+
 # ------------------------------------------------------------------------------------------
 # Hydrodynamic function (own copy; Sader 1998 eqs 20-21)
 # ------------------------------------------------------------------------------------------
@@ -157,7 +163,7 @@ def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT
     from probedyn.fem.model import PointMass
 
     probe = _probe()
-    geo = dict(LEVERS[lever])
+    geo = lever_geometry(lever)
     over = dict(geo, elements_through_thickness=ett)
     if effect == "thickness-error":
         over["thickness"] = geo["thickness"] * params["t_ratio"]
@@ -246,13 +252,13 @@ def cached_fem_truth(lever, effect, params, ett=TRUTH_ETT, compute: bool = True)
 
 
 def probe_mass(lever):
-    g = LEVERS[lever]
+    g = lever_geometry(lever)
     return RHO_SI * g["length"] * g["width"] * g["thickness"]
 
 
 def draw_modal_effect(effect: str, lever: str, rng) -> dict:
     """A random magnitude from about the detection limit up (1e-3 frequency noise)."""
-    g = LEVERS[lever]
+    g = lever_geometry(lever)
     sgn = rng.choice([-1.0, 1.0])
     if effect == "point-mass":
         return {"mass": float(probe_mass(lever) * 10 ** rng.uniform(np.log10(0.005), np.log10(0.2))),
@@ -281,18 +287,24 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
 
 def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, noise: float = 1e-3,
                     q_noise: float = 0.05, with_Q: bool | None = None, declared_medium: str | None = "vacuum",
-                    truth_kind: str = "fem", compute: bool = True) -> tuple[Path, dict]:
-    """Write a modal measurement of lever ``lever`` with a hidden ``effect`` (None: noise only)."""
+                    truth_kind: str = "fem", compute: bool = True, params: dict | None = None,
+                    name: str | None = None) -> tuple[Path, dict]:
+    """Write a modal measurement of lever ``lever`` (a name of LEVERS or a geometry dict, whose truth is
+    solved uncached) with a hidden ``effect`` (None: noise only); ``params``: the effect's parameters
+    (default: drawn from ``seed``); ``name``: the file stem (default ``modal_<seed>``)."""
     rng = np.random.default_rng(seed)
-    params = draw_modal_effect(effect, lever, rng) if effect else {}
-    g = LEVERS[lever]
+    if params is None:
+        params = draw_modal_effect(effect, lever, rng) if effect else {}
+    g = lever_geometry(lever)
     if truth_kind == "timoshenko":
         tr = timoshenko_truth(lever)
         modes = MODES[:5]
         f = np.array(tr["freqs"][:5])
     else:
         fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
-        tr = cached_fem_truth(lever, effect if effect != "fluid-loading" else None, fem_params, compute=compute)
+        fem_effect = effect if effect != "fluid-loading" else None
+        tr = (cached_fem_truth(lever, fem_effect, fem_params, compute=compute) if isinstance(lever, str)
+              else fem_truth(lever, fem_effect, fem_params))
         modes = MODES
         f = np.array(tr["freqs"])
     Q_int = float(10 ** rng.uniform(3, 4.5))
@@ -312,7 +324,7 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
     Q_meas = Q * np.exp(q_noise * rng.standard_normal(len(f)))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    name = f"modal_{seed}"
+    name = name or f"modal_{seed}"
     rows = ["family,order,frequency_Hz" + (",Q" if with_Q else "")]
     for (fa, o), ff, qq in zip(modes, f_meas, Q_meas):
         if np.isfinite(ff):
@@ -563,11 +575,15 @@ def draw_friction_effect(effect: str | None, rng) -> dict:
 
 
 def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 5e-12,
-                       sampling: str = "interval-mean", length_periods: int = 8) -> tuple[Path, dict]:
+                       sampling: str = "interval-mean", length_periods: int = 8, params: dict | None = None,
+                       name: str | None = None) -> tuple[Path, dict]:
     """Three scans (two speeds a decade apart at one load, and the lower speed at twice the load) of a
-    Langevin PT truth with a hidden effect, trace and retrace, written as a friction measurement."""
+    Langevin PT truth with a hidden effect, trace and retrace, written as a friction measurement.
+    ``params``: the effect's parameters (default: drawn from ``seed``); ``name``: the file stem
+    (default ``friction_<seed>``)."""
     rng = np.random.default_rng(seed)
-    params = draw_friction_effect(effect, rng)
+    drawn = draw_friction_effect(effect, rng)
+    params = drawn if params is None else dict(params)
     a = 0.5e-9 * rng.uniform(0.97, 1.03)
     k, m, Q = LEVER_FFM["k_x"], LEVER_FFM["m_x"], LEVER_FFM["Q_x"]
     eta = rng.uniform(3.0, 6.0)
@@ -596,7 +612,7 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
         tom.append(f"[[scans]]\nid = {sid}\nspeed = {v!r}\nload = {N!r}\n")
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    name = f"friction_{seed}"
+    name = name or f"friction_{seed}"
     (outdir / f"{name}.csv").write_text("\n".join(rows) + "\n")
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "{sampling}"\n\n'

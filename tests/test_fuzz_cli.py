@@ -84,7 +84,17 @@ def _sidecar(name: str, source: str, edit=None, data: str | None = None, csv_edi
 
 
 def _sub(pattern: str, repl: str):
-    return lambda s: re.sub(pattern, repl, s, count=1, flags=re.M)
+    """Replace the first match of ``pattern`` (multi-line); an edit that no longer applies (the example
+    was regenerated) fails loudly instead of silently testing the unedited file."""
+    def edit(s: str) -> str:
+        out, n = re.subn(pattern, repl, s, count=1, flags=re.M)
+        assert n == 1, f"fuzz edit {pattern!r} matches nothing in the example"
+        return out
+    return edit
+
+
+#: the first flapwise row of a modal example's CSV: (family and order,)(frequency)
+FLAP1 = r"^(flap\w*,1,)([^,\n]+)"
 
 
 # --------------------------------------------------------------------------------------------
@@ -154,10 +164,10 @@ CASES: list[Case] = [
          match=r"nmae.*did you mean 'name'"),
     Case("c6-negative-frequency", 6, ["diagnose", "{tmp}/m.toml"], timeout=60,
          setup=_sidecar("m.toml", "afm_cantilever_modes.toml",
-                        csv_edit=lambda c: c.replace("flap,1,66082.7701", "flap,1,-66082.7701"))),
+                        csv_edit=_sub(FLAP1, r"\g<1>-\g<2>"))),
     Case("c6-huge-frequency", 6, ["diagnose", "{tmp}/m.toml"], timeout=60,
          setup=_sidecar("m.toml", "afm_cantilever_modes.toml",
-                        csv_edit=lambda c: c.replace("flap,1,66082.7701", "flap,1,1e308"))),
+                        csv_edit=_sub(FLAP1, r"\g<1>1e308"))),
     Case("c6-psi-huge", 6, ["stickslip", "equilibria", "--u0", "3", "--psi", "1e308"], match=r"psi = 1e\+308"),
 
     # ---- class 7: outputs ------------------------------------------------------------------
@@ -212,7 +222,7 @@ CASES: list[Case] = [
          setup=_sidecar("m.toml", "tip_motion_timeseries.toml", csv_edit=lambda c: "\n".join(c.splitlines()[:2]) + "\n")),
     Case("c9-order-huge", 9, ["diagnose", "{tmp}/m.toml"], timeout=60,
          setup=_sidecar("m.toml", "afm_cantilever_modes.toml",
-                        csv_edit=lambda c: c.replace("flap,4,", "flap,100000,"))),
+                        csv_edit=_sub(r"^(flap\w*),4,", r"\g<1>,100000,"))),
     Case("c9-sidecar-wrong-type", 9, ["diagnose", "{tmp}/m.toml"], timeout=60,
          setup=_sidecar("m.toml", "afm_cantilever_modes.toml", _sub(r"^\[noise\]$", "noise = 5\n[noise2]"))),
 ]
