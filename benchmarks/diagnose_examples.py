@@ -4,10 +4,11 @@ Usage: ``python benchmarks/diagnose_examples.py [OUT.json] [NAME ...]`` (default
 ``benchmarks/results/diagnose_examples.json``; names select examples by file stem, e.g.
 ``afm_cantilever_modes``). Each example runs in a fresh process through the
 CLI (``probedyn diagnose FILE --json``), as a user would; recorded per example: the verdict, the
-findings in order, the confounded group, the baseline chi-square and dof, the held-out RMS before
-and after where the result carries them, and wall and CPU time of the whole process (the machine
-may be shared: CPU time is the comparable number). The table of docs/diagnose.md section 5 is
-written from this file.
+findings in order with their fitted parameters (value, sigma), the confounded group, the baseline
+chi-square and dof, the held-out RMS before and after where the result carries them, and wall and
+CPU time of the whole process (the machine may be shared: CPU time is the comparable number; the
+load average at the end is stored). The table of docs/diagnose.md section 5 is written from this
+file; the hidden effects of the synthetic examples are stated in their sidecars (examples/make_examples.py).
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ def run_one(toml: Path) -> dict:
         kind=res.get("kind"),
         verdict=res.get("verdict"),
         findings=[f.get("cause") for f in res.get("findings", [])],
+        parameters={f.get("cause"): {k: [v.get("value"), v.get("sigma")] for k, v in (f.get("parameters") or {}).items()
+                                     if isinstance(v, dict)} for f in res.get("findings", [])},
         confounded=[g.get("causes") for g in res.get("confounded") or []],
         baseline_chi2=base.get("chi2"),
         baseline_dof=base.get("dof"),
