@@ -620,7 +620,7 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
 
 
 #: mixed solver: Jacobi-preconditioned CG on M to this relative residual for ``r^T M^-1 r``
-MINV_RTOL = 1e-3
+MINV_RTOL = 1e-2
 
 
 def _minv_norms(M: sp.spmatrix, R: np.ndarray, dinv: np.ndarray, rtol: float = MINV_RTOL,
@@ -629,13 +629,13 @@ def _minv_norms(M: sp.spmatrix, R: np.ndarray, dinv: np.ndarray, rtol: float = M
 
     The consistent mass matrix is well conditioned after diagonal scaling, independently of the
     element size (Wathen, IMA J. Numer. Anal. 7 (1987) 449: the spectrum of ``D^-1 M`` lies in the
-    range of the element ones), so CG converges in a mesh-independent number of steps (~15 at
-    1e-3).  CG's iterate x_k gives ``r^T x_k``, which increases monotonically to ``r^T M^-1 r``;
-    the remainder is ``s^T M^-1 s`` (s = r - M x_k, Galerkin orthogonality), below
-    ``rtol^2 ||r||^2_{D^-1} / mu_min(D^-1 M)``: ~1e-5 relative for P2 tetrahedra and serendipity
-    hexahedra, whose scaled element mass matrices have mu_min ~0.1.  The remainder is added with
-    the smallest Ritz value of CG's own Lanczos matrix as mu_min's estimate (an upper estimate of
-    mu_min, so the term is an estimate, not a bound: it is ~1e-5 of the result)."""
+    range of the element ones), so CG converges in a mesh-independent number of steps (~10 at
+    1e-2, 265k P2 DOFs).  CG's iterate x_k gives ``r^T x_k``, which increases monotonically to
+    ``r^T M^-1 r``; the remainder is ``s^T M^-1 s`` (s = r - M x_k, Galerkin orthogonality), at
+    most ``rtol^2 ||r||^2_{D^-1} / mu_min(D^-1 M)``, and is added with the smallest Ritz value of
+    CG's own Lanczos matrix as mu_min (an upper estimate of mu_min: the added term is an
+    estimate, ~1e-3 of the result; the error bounds it enters are quadratic in the residual and
+    the solver stops with them 1e2-1e4 below their tolerances, tests/test_eigen_stopping.py)."""
     X = np.zeros_like(R)
     S = R.copy()
     Z = S * dinv[:, None]
@@ -759,7 +759,7 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
         est = d2[:n_modes] * (ratio if ratio is not None else 1.0)
         eb, ang = bounds(est)
         certified = False
-        if np.all(eb < 10 * etol) and np.all(ang < 10 * vtol):  # near: the M^-1 norms by CG
+        if np.all(eb < etol) and np.all(ang < vtol):  # converged by the estimate: the M^-1 norms by CG
             r2 = _minv_norms(M, R[:, :n_modes], dinv)
             info["cg_evaluations"] += 1
             ratio = r2 / np.maximum(d2[:n_modes], 1e-300)
