@@ -48,9 +48,12 @@ Usage::
     .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
         --no-overlap --out benchmarks/results/modal-s6-265k-quiet-nooverlap.txt
 
-    # session 7: the float32 factor + mixed_eigsh end to end (A/B against the line above, same session)
+    # session 7 (from 150k free DOFs the default is the float32 factor + mixed_eigsh, as in
+    # ElasticModel.modes): the quiet peer run, and the A/B with the session-6 double path
     .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
-        --mixed --out benchmarks/results/modal-s7-265k-mixed.txt
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s7-265k-quiet.txt
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --double --out benchmarks/results/modal-s7-265k-quiet-double.txt
 
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
@@ -112,15 +115,16 @@ def rss() -> float:
 
 
 def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: bool = True,
-        overlap: bool = True, mixed: bool = False) -> dict:
+        overlap: bool = True, mixed: bool | None = None) -> dict:
     """Mesh + assemble + solve one tetrahedral size in this process (wall and CPU times).
 
     ``overlap`` (default, as ``ElasticModel.modes``): PARDISO's analysis of the free stiffness'
     pattern starts before the assembly and runs beside it; the extra measurements (compiled
     and numpy assembly again, ARPACK, PARDISO settings) come after the end-to-end phases.
-    ``mixed``: the end-to-end eigen-solve is ``mixed_eigsh`` on a single-precision factor (its
-    analysis beside the assembly, as the double one); the double factor and the block solver
-    then run after it, for the frequencies' difference and the extra measurements."""
+    ``mixed`` (None: as ``ElasticModel.modes``, ``eigen.auto_method`` by the free DOFs): the
+    end-to-end eigen-solve is ``mixed_eigsh`` on a single-precision factor (its analysis beside
+    the assembly, as the double one); the double factor and the block solver then run after it,
+    for the frequencies' difference and the extra measurements."""
     sys.path.insert(0, str(HERE))
     import _numpy_assembly as old
 
@@ -136,6 +140,8 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["mesh_s"], out["mesh_cpu_s"] = since(c0)
     out["elements"] = int(model.mesh.t.shape[1])
     c0 = clock()
+    if mixed is None:
+        mixed = E.auto_method(int(model.free_dofs.size), 0.0) == "mixed"
     fopts = {"single": 1} if mixed else None
     analysis = model.start_analysis(fopts) if overlap else None
     K_full, M_full = model.assemble()
@@ -331,7 +337,10 @@ def main() -> None:
     ap.add_argument("--no-overlap", action="store_true",
                     help="PARDISO's analysis after the assembly (the session-5 order), not beside it")
     ap.add_argument("--mixed", action="store_true",
-                    help="end to end with a single-precision factor and fem.eigen.mixed_eigsh (session 7)")
+                    help="end to end with a single-precision factor and fem.eigen.mixed_eigsh at every size "
+                         "(default: as ElasticModel.modes, from eigen.MIXED_MIN_DOFS free DOFs)")
+    ap.add_argument("--double", action="store_true",
+                    help="end to end with the double factor and the block solver at every size (the session-6 path)")
     ap.add_argument("--quick", action="store_true", help="two small sizes only")
     ap.add_argument("--sizes", default=None, help="divisors n of h = t/n (default 1.5,2,3,4,5,6.5)")
     ap.add_argument("--match", default=None,
@@ -346,7 +355,7 @@ def main() -> None:
     a = ap.parse_args()
     if a.one is not None:
         print(json.dumps(one(a.one, not a.no_variants, numpy_asm=not a.lean, arpack=not a.lean,
-                             overlap=not a.no_overlap, mixed=a.mixed)))
+                             overlap=not a.no_overlap, mixed=True if a.mixed else (False if a.double else None))))
         return
     if a.hex:
         print(json.dumps(hex_default()))
@@ -377,7 +386,7 @@ def main() -> None:
             first = rep == 0
             args = ["--one", str(d)] + ([] if (first and d in variants_at) else ["--no-variants"])
             r = run_sub(args + ([] if first else ["--lean"]) + (["--no-overlap"] if a.no_overlap else [])
-                        + (["--mixed"] if a.mixed else []))
+                        + (["--mixed"] if a.mixed else []) + (["--double"] if a.double else []))
             runs.append(r)
             data.setdefault("runs", []).append(r)
             checkpoint(a.out, data)
@@ -413,7 +422,7 @@ def main() -> None:
             f"{r['block_s']:>6.2f} {r['block_vectors']:>6d} {r['arpack_s'] / r['block_s']:>6.2f} "
             f"{r['block_vs_arpack_max_rel']:>8.1e} {r['peak_rss_gib']:>5.2f}")
         say(f"{'':>7} CPU s: mesh {r['mesh_cpu_s']:.1f}, assembly {r['assemble_cpu_s']:.1f}, free DOFs "
-            f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, block {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
+            f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, {r.get('method', 'block')} {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
             f"ARPACK {r['arpack_cpu_s']:.1f}")
         if r.get("numeric_s") is not None:
             say(f"{'':>7} PARDISO: analysis {r['analysis_s']:.2f} s "
@@ -457,7 +466,8 @@ def main() -> None:
                 f"{', '.join(format(x, '.1f') for x in g['total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in g['total_cpu_s_runs'])} s CPU{pin}")
             say(f"    probedyn mesh {r['mesh_s']:.1f}/{r['mesh_cpu_s']:.1f}, assembly {r['assemble_s']:.1f}/"
-                f"{r['assemble_cpu_s']:.1f}, free DOFs {r['free_s']:.1f}/{r['free_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, block "
+                f"{r['assemble_cpu_s']:.1f}, free DOFs {r['free_s']:.1f}/{r['free_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, "
+                f"{r.get('method', 'block')} "
                 f"{r['block_s']:.1f}/{r['block_cpu_s']:.1f} -> total runs "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_cpu_s_runs'])} s CPU")

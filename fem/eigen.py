@@ -4,7 +4,7 @@ The shift-invert operator ``(K - sigma M)^-1`` is factorised once with MKL PARDI
 2`` real SPD when ``K - sigma M`` is positive definite, i.e. for ``sigma`` below the lowest
 eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of two eigen-solvers:
 
-* ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
+* ``method="block"`` (default below :data:`MIXED_MIN_DOFS`): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
   block of 6 costs about 3.5 single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
@@ -17,6 +17,13 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
   after ``steps + 1`` blocks it restarts from the best Ritz vectors.
 * ``method="arpack"``: ARPACK (``scipy.sparse.linalg.eigsh(..., OPinv=...)``) in shift-invert
   mode, one right-hand side per step (the reference; the benchmark compares the two).
+* ``method="mixed"`` (``"auto"``, the default, chooses it from :data:`MIXED_MIN_DOFS` free DOFs
+  with sigma = 0 and PARDISO): a single-precision factor of K (half the
+  factor's memory traffic) used only as the preconditioner of a block Davidson method whose
+  Rayleigh-Ritz projections and residuals use the double K and M, :func:`mixed_eigsh`; same
+  stopping bounds for the pencil (``||r||_{M^-1}`` by CG on M); falls back to the double factor
+  and the block solver if it does not converge.  Measured at 265k DOFs in docs/fem.md
+  ("Session 7"): 60 instead of 48 vectors, float32 numeric factorisation ~0.65x the double one.
 
 Without pypardiso the fallback is scipy's SuperLU (``splu``), which is two orders of magnitude
 slower for 3D problems (benchmarks/modal.py measures both).
@@ -61,7 +68,11 @@ from probedyn.core.errors import SolverError
 from probedyn.fem.kernels import upper_triangle as _upper_triangle
 
 SOLVERS = ("auto", "pardiso", "superlu")
-METHODS = ("block", "arpack", "mixed")
+METHODS = ("auto", "block", "arpack", "mixed")
+#: method="auto": the mixed-precision solver from this many DOFs (sigma = 0, PARDISO), else the block
+#: solver; at 265k DOFs the float32 factor saves ~6 of ~34 CPU s end to end (docs/fem.md "Session 7"),
+#: below ~100k the factorisation is too small a share for the extra vectors to pay
+MIXED_MIN_DOFS = 150_000
 #: block solver: accept a stagnating shift-invert residual below this (round-off floor reached)
 FLOOR_OK = 1e-5
 #: block solver: bound on the relative eigenvalue error of every returned pair (block_eigsh)
@@ -776,6 +787,15 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
     return th[:n_modes].copy(), X, n_solved, info
 
 
+def auto_method(n: int, sigma: float | None, tol: float = 0.0, solver: str = "auto") -> str:
+    """The eigen-solver ``method="auto"`` runs for ``n`` free DOFs: "mixed" for a positive definite
+    K (sigma = 0) with PARDISO from :data:`MIXED_MIN_DOFS` DOFs when no residual tolerance is asked
+    (``tol``: the vectors to the round-off floor need the double factor), else "block"."""
+    if (n >= MIXED_MIN_DOFS and sigma == 0 and tol == 0 and solver in ("auto", "pardiso") and have_pardiso()):
+        return "mixed"
+    return "block"
+
+
 def shift_invert_eigsh(
     K: sp.spmatrix,
     M: sp.spmatrix,
@@ -783,7 +803,7 @@ def shift_invert_eigsh(
     sigma: float | None = None,
     solver: str = "auto",
     tol: float = 0.0,
-    method: str = "block",
+    method: str = "auto",
     options: dict | None = None,
     analysis: Analysis | None = None,
 ) -> EigenResult:
@@ -791,8 +811,9 @@ def shift_invert_eigsh(
 
     ``sigma`` [rad^2/s^2]: shift; default ``-1e-12 * mean(diag K)/mean(diag M)`` (slightly below
     zero, so ``K - sigma M`` is SPD also for a free-floating model; a constrained model passes
-    ``sigma = 0``).  ``method``: "block" (block shift-invert Lanczos) or "arpack" (module
-    docstring); ``options``: PARDISO settings; ``analysis``: PARDISO's analysis of the pattern
+    ``sigma = 0``).  ``method``: "auto" (:func:`auto_method`), "block" (block shift-invert
+    Lanczos), "arpack" or "mixed" (module docstring; "mixed" needs sigma = 0, PARDISO and
+    ``tol = 0``, else it is "block"; pass it an ``analysis`` started with ``options={"single": 1}``); ``options``: PARDISO settings; ``analysis``: PARDISO's analysis of the pattern
     of ``K`` started before assembly (:class:`Analysis`, used for ``sigma = 0``).  Raises :class:`SolverError` for too few DOFs
     (fewer than 10 per requested mode), non-convergence, or non-finite / negative eigenvalues.
     """
@@ -813,11 +834,13 @@ def shift_invert_eigsh(
         # which can be ~1e-9 of diag(K)/diag(M) for a long beam with small elements
         sigma = -1e-12 * float(np.mean(np.abs(dK)) / np.mean(np.abs(dM)))
     A = K if sigma == 0 else (K - sigma * M).tocsr()  # sigma = 0: K itself (a reusable factorisation)
+    if method == "auto":
+        method = auto_method(n, sigma, tol, solver)
     mixed_failed = None
     if method == "mixed":
         # a single-precision factor of K as the preconditioner of mixed_eigsh (exact K, M projections);
         # K must be positive definite (sigma = 0, a clamped model) and the backend PARDISO
-        if sigma == 0 and solver in ("auto", "pardiso") and have_pardiso():
+        if sigma == 0 and tol == 0 and solver in ("auto", "pardiso") and have_pardiso():
             fac = factorize(A, solver=solver, options={**(options or {}), "single": 1}, analysis=analysis)
             analysis = None  # taken or released by factorize
             t0 = time.perf_counter()

@@ -129,6 +129,22 @@ def test_mixed_solver_without_a_useful_preconditioner_raises_and_the_method_fall
     assert res.method == "block" and res.info["mixed_failed"] == "refused"
 
 
+@pytest.mark.skipif(not have_pardiso(), reason="pypardiso not installed")
+def test_auto_method_is_mixed_for_large_positive_definite_models_only(KM, monkeypatch):
+    import probedyn.fem.eigen as E
+
+    n = KM[0].shape[0]
+    assert E.auto_method(n, 0.0) == "block"  # a small model: the block solver
+    monkeypatch.setattr(E, "MIXED_MIN_DOFS", n)
+    assert E.auto_method(n, 0.0) == "mixed"
+    assert E.auto_method(n, -1.0) == "block"  # a shifted (free-floating) model
+    assert E.auto_method(n, 0.0, tol=TO_FLOOR) == "block"  # vectors to the floor: the double factor
+    assert E.auto_method(n, 0.0, solver="superlu") == "block"
+    K, M = KM
+    res = shift_invert_eigsh(K, M, 4, sigma=0.0)
+    assert res.method == "mixed"
+
+
 def test_cg_m_inverse_norm_equals_the_direct_solve(KM):
     import scipy.sparse.linalg as spla
 
