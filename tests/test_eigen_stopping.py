@@ -145,6 +145,31 @@ def test_auto_method_is_mixed_for_large_positive_definite_models_only(KM, monkey
     assert res.method == "mixed"
 
 
+@pytest.mark.skipif(not have_pardiso(), reason="pypardiso not installed")
+def test_model_modes_take_the_mixed_path_with_its_single_precision_analysis(monkeypatch):
+    import probedyn.fem.eigen as E
+
+    def model():
+        b = cantilever_hex(300e-6, 30e-6, 10e-6, HexDivisions(2), "hex-s2")
+        return ElasticModel(b, {"body": get_material("silicon")}, clamp=["clamp"])
+
+    ref = model().modes(6)
+    taken = []
+    take = E.Analysis.take
+
+    def spy(self, upper, mtype, opts):
+        ps = take(self, upper, mtype, opts)
+        taken.append((opts["single"], ps is not None))
+        return ps
+
+    monkeypatch.setattr(E.Analysis, "take", spy)
+    monkeypatch.setattr(E, "MIXED_MIN_DOFS", 0)
+    mix = model().modes(6)
+    assert mix.solver.endswith("+mixed") and not ref.solver.endswith("+mixed")
+    assert taken == [(1, True)]  # the analysis beside the assembly was the single-precision one, and used
+    np.testing.assert_allclose([m.frequency_hz for m in mix.modes], [m.frequency_hz for m in ref.modes], rtol=1e-8)
+
+
 def test_cg_m_inverse_norm_equals_the_direct_solve(KM):
     import scipy.sparse.linalg as spla
 
