@@ -48,6 +48,13 @@ Usage::
     .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
         --no-overlap --out benchmarks/results/modal-s6-265k-quiet-nooverlap.txt
 
+    # session 7 (from 150k free DOFs the default is the float32 factor + mixed_eigsh, as in
+    # ElasticModel.modes): the quiet peer run, and the A/B with the session-6 double path
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s7-265k-quiet.txt
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --double --out benchmarks/results/modal-s7-265k-quiet-double.txt
+
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
 smooth in maxh (``ngsolve_peer.py --count --maxh H`` meshes only and prints the DOFs; measured
@@ -108,12 +115,16 @@ def rss() -> float:
 
 
 def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: bool = True,
-        overlap: bool = True) -> dict:
+        overlap: bool = True, mixed: bool | None = None) -> dict:
     """Mesh + assemble + solve one tetrahedral size in this process (wall and CPU times).
 
     ``overlap`` (default, as ``ElasticModel.modes``): PARDISO's analysis of the free stiffness'
     pattern starts before the assembly and runs beside it; the extra measurements (compiled
-    and numpy assembly again, ARPACK, PARDISO settings) come after the end-to-end phases."""
+    and numpy assembly again, ARPACK, PARDISO settings) come after the end-to-end phases.
+    ``mixed`` (None: as ``ElasticModel.modes``, ``eigen.auto_method`` by the free DOFs): the
+    end-to-end eigen-solve is ``mixed_eigsh`` on a single-precision factor (its analysis beside
+    the assembly, as the double one); the double factor and the block solver then run after it,
+    for the frequencies' difference and the extra measurements."""
     sys.path.insert(0, str(HERE))
     import _numpy_assembly as old
 
@@ -129,7 +140,10 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["mesh_s"], out["mesh_cpu_s"] = since(c0)
     out["elements"] = int(model.mesh.t.shape[1])
     c0 = clock()
-    analysis = model.start_analysis() if overlap else None
+    if mixed is None:
+        mixed = E.auto_method(int(model.free_dofs.size), 0.0) == "mixed"
+    fopts = {"single": 1} if mixed else None
+    analysis = model.start_analysis(fopts) if overlap else None
     K_full, M_full = model.assemble()
     # includes the numba pattern and the first-call overhead (and starting the analysis)
     out["assemble_s"], out["assemble_cpu_s"] = since(c0)
@@ -141,12 +155,24 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["nnz_K"] = int(K.nnz)
     # ---- eigen-solvers on one factorisation ---------------------------------------------------
     c0 = clock()
-    fac = E.factorize(K, analysis=analysis)
+    fac = E.factorize(K, analysis=analysis, options=fopts)
     out["factor_s"], out["factor_cpu_s"] = since(c0)
     out["factor_nnz"] = fac.info.get("factor_nnz")
     out["analysis_s"] = fac.info.get("analysis_s")
     out["numeric_s"] = fac.info.get("numeric_s")
     out["analysis_overlapped"] = fac.info.get("analysis_overlapped")
+    out["method"] = "mixed" if mixed else "block"
+    if mixed:
+        try:
+            c0 = clock()
+            w, V, n_solved, info = E.mixed_eigsh(K, M, N_MODES, fac.approximate)
+            out["block_s"], out["block_cpu_s"] = since(c0)
+        finally:
+            fac.release()
+        out["mixed_f_hz"] = (np.sqrt(w) / (2 * np.pi)).tolist()
+        out["mixed_vectors"], out["mixed_history"] = n_solved, info["history"]
+        out["mixed_error_bound"] = float(np.max(info["error_bounds"]))
+        fac = E.factorize(K)  # the double factor for the comparison and the extra measurements
     try:
         c0 = clock()
         w, V, n_solved, info = E.block_eigsh(K, M, N_MODES, 0.0, fac)
@@ -158,6 +184,12 @@ def one(divisor: float, variants: bool = True, numpy_asm: bool = True, arpack: b
     out["probedyn_total_cpu_s"] = (out["mesh_cpu_s"] + out["assemble_cpu_s"] + out["free_cpu_s"] + out["factor_cpu_s"]
                                    + out["block_cpu_s"])
     # ---- extra measurements (after the end-to-end phases) ---------------------------------------
+    if mixed:
+        c0 = clock()
+        w, V, n_solved, info = E.block_eigsh(K, M, N_MODES, 0.0, fac)
+        out["block_double_s"], out["block_double_cpu_s"] = since(c0)
+        out["mixed_vs_block_max_rel"] = float(np.max(np.abs(np.array(out["mixed_f_hz"]) / (np.sqrt(w) / (2 * np.pi))
+                                                            - 1)))
     try:
         out["block_vectors"] = n_solved
         out["block_size"] = info["block"]
@@ -304,6 +336,11 @@ def main() -> None:
     ap.add_argument("--hex", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--no-overlap", action="store_true",
                     help="PARDISO's analysis after the assembly (the session-5 order), not beside it")
+    ap.add_argument("--mixed", action="store_true",
+                    help="end to end with a single-precision factor and fem.eigen.mixed_eigsh at every size "
+                         "(default: as ElasticModel.modes, from eigen.MIXED_MIN_DOFS free DOFs)")
+    ap.add_argument("--double", action="store_true",
+                    help="end to end with the double factor and the block solver at every size (the session-6 path)")
     ap.add_argument("--quick", action="store_true", help="two small sizes only")
     ap.add_argument("--sizes", default=None, help="divisors n of h = t/n (default 1.5,2,3,4,5,6.5)")
     ap.add_argument("--match", default=None,
@@ -318,7 +355,7 @@ def main() -> None:
     a = ap.parse_args()
     if a.one is not None:
         print(json.dumps(one(a.one, not a.no_variants, numpy_asm=not a.lean, arpack=not a.lean,
-                             overlap=not a.no_overlap)))
+                             overlap=not a.no_overlap, mixed=True if a.mixed else (False if a.double else None))))
         return
     if a.hex:
         print(json.dumps(hex_default()))
@@ -348,7 +385,8 @@ def main() -> None:
         for rep in range(a.repeat):
             first = rep == 0
             args = ["--one", str(d)] + ([] if (first and d in variants_at) else ["--no-variants"])
-            r = run_sub(args + ([] if first else ["--lean"]) + (["--no-overlap"] if a.no_overlap else []))
+            r = run_sub(args + ([] if first else ["--lean"]) + (["--no-overlap"] if a.no_overlap else [])
+                        + (["--mixed"] if a.mixed else []) + (["--double"] if a.double else []))
             runs.append(r)
             data.setdefault("runs", []).append(r)
             checkpoint(a.out, data)
@@ -384,7 +422,7 @@ def main() -> None:
             f"{r['block_s']:>6.2f} {r['block_vectors']:>6d} {r['arpack_s'] / r['block_s']:>6.2f} "
             f"{r['block_vs_arpack_max_rel']:>8.1e} {r['peak_rss_gib']:>5.2f}")
         say(f"{'':>7} CPU s: mesh {r['mesh_cpu_s']:.1f}, assembly {r['assemble_cpu_s']:.1f}, free DOFs "
-            f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, block {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
+            f"{r['free_cpu_s']:.2f}, factor {r['factor_cpu_s']:.1f}, {r.get('method', 'block')} {r['block_cpu_s']:.1f} (b = {r['block_size']}), "
             f"ARPACK {r['arpack_cpu_s']:.1f}")
         if r.get("numeric_s") is not None:
             say(f"{'':>7} PARDISO: analysis {r['analysis_s']:.2f} s "
@@ -393,6 +431,10 @@ def main() -> None:
         say(f"{'':>7} block solver: largest eigenvalue error bound {r['block_error_bound']:.1e}, residual "
             f"{r['block_residual']:.1e}; (vectors, bound) per Rayleigh-Ritz step: "
             + ", ".join(f"({h[0]}, {h[1]:.0e})" for h in r["block_history"]))
+        if r.get("method") == "mixed":
+            say(f"{'':>7} end to end with the float32 factor + mixed_eigsh: {r['mixed_vectors']} vectors, bound "
+                f"{r['mixed_error_bound']:.1e}, frequencies vs the double block solver {r['mixed_vs_block_max_rel']:.1e} "
+                f"(double block solver afterwards: {r['block_double_s']:.1f}/{r['block_double_cpu_s']:.1f} s)")
     say("")
     say("PARDISO settings (same K; factorisation, one 15-column block solve; solution error vs the default; "
         "wall / CPU s):")
@@ -424,7 +466,8 @@ def main() -> None:
                 f"{', '.join(format(x, '.1f') for x in g['total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in g['total_cpu_s_runs'])} s CPU{pin}")
             say(f"    probedyn mesh {r['mesh_s']:.1f}/{r['mesh_cpu_s']:.1f}, assembly {r['assemble_s']:.1f}/"
-                f"{r['assemble_cpu_s']:.1f}, free DOFs {r['free_s']:.1f}/{r['free_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, block "
+                f"{r['assemble_cpu_s']:.1f}, free DOFs {r['free_s']:.1f}/{r['free_cpu_s']:.1f}, PARDISO {r['factor_s']:.1f}/{r['factor_cpu_s']:.1f}, "
+                f"{r.get('method', 'block')} "
                 f"{r['block_s']:.1f}/{r['block_cpu_s']:.1f} -> total runs "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_s_runs'])} s wall, "
                 f"{', '.join(format(x, '.1f') for x in r['probedyn_total_cpu_s_runs'])} s CPU")

@@ -4,7 +4,7 @@ The shift-invert operator ``(K - sigma M)^-1`` is factorised once with MKL PARDI
 2`` real SPD when ``K - sigma M`` is positive definite, i.e. for ``sigma`` below the lowest
 eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of two eigen-solvers:
 
-* ``method="block"`` (default): a **block shift-invert Lanczos** (block Krylov) method in the
+* ``method="block"`` (default below :data:`MIXED_MIN_DOFS`): a **block shift-invert Lanczos** (block Krylov) method in the
   M-inner product, :func:`block_eigsh`.  It applies the factorisation to a block of ``b``
   right-hand sides at once (PARDISO streams the factor from memory once per block, so a
   block of 6 costs about 3.5 single solves), builds the Krylov space ``[V, OP V, OP^2 V, ...]``
@@ -17,6 +17,13 @@ eigenvalue, else ``mtype = -2`` real symmetric indefinite) and used by one of tw
   after ``steps + 1`` blocks it restarts from the best Ritz vectors.
 * ``method="arpack"``: ARPACK (``scipy.sparse.linalg.eigsh(..., OPinv=...)``) in shift-invert
   mode, one right-hand side per step (the reference; the benchmark compares the two).
+* ``method="mixed"`` (``"auto"``, the default, chooses it from :data:`MIXED_MIN_DOFS` free DOFs
+  with sigma = 0 and PARDISO): a single-precision factor of K (half the
+  factor's memory traffic) used only as the preconditioner of a block Davidson method whose
+  Rayleigh-Ritz projections and residuals use the double K and M, :func:`mixed_eigsh`; same
+  stopping bounds for the pencil (``||r||_{M^-1}`` by CG on M); falls back to the double factor
+  and the block solver if it does not converge.  Measured at 265k DOFs in docs/fem.md
+  ("Session 7"): 60 instead of 48 vectors, float32 numeric factorisation ~0.65x the double one.
 
 Without pypardiso the fallback is scipy's SuperLU (``splu``), which is two orders of magnitude
 slower for 3D problems (benchmarks/modal.py measures both).
@@ -61,7 +68,11 @@ from probedyn.core.errors import SolverError
 from probedyn.fem.kernels import upper_triangle as _upper_triangle
 
 SOLVERS = ("auto", "pardiso", "superlu")
-METHODS = ("block", "arpack")
+METHODS = ("auto", "block", "arpack", "mixed")
+#: method="auto": the mixed-precision solver from this many DOFs (sigma = 0, PARDISO), else the block
+#: solver; at 265k DOFs the float32 factor saves ~6 of ~34 CPU s end to end (docs/fem.md "Session 7"),
+#: below ~100k the factorisation is too small a share for the extra vectors to pay
+MIXED_MIN_DOFS = 150_000
 #: block solver: accept a stagnating shift-invert residual below this (round-off floor reached)
 FLOOR_OK = 1e-5
 #: block solver: bound on the relative eigenvalue error of every returned pair (block_eigsh)
@@ -104,6 +115,9 @@ class Factorization:
     seconds: float
     release: Callable[[], None] = field(default=lambda: None)
     info: dict[str, Any] = field(default_factory=dict)
+    #: single-precision factors only: the float32 solve WITHOUT refinement (an approximate
+    #: inverse, relative error ~0.1 at 265k DOFs), the preconditioner of :func:`mixed_eigsh`
+    approximate: Callable[[np.ndarray], np.ndarray] | None = None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -166,7 +180,7 @@ def _factorize(A, spd, solver, options, analysis) -> Factorization:
         hit = _REUSE[-1].get(key)
         if hit is not None:
             hit.info["reused"] = hit.info.get("reused", 0) + 1
-            return Factorization(hit.solve, hit.backend, 0.0, lambda: None, hit.info)
+            return Factorization(hit.solve, hit.backend, 0.0, lambda: None, hit.info, hit.approximate)
     t0 = time.perf_counter()
     if solver in ("auto", "pardiso") and have_pardiso():
         last: Exception | None = None
@@ -190,7 +204,7 @@ def _factorize(A, spd, solver, options, analysis) -> Factorization:
     if key is not None:
         f.info["_release"] = f.release
         _REUSE[-1][key] = f
-        return Factorization(f.solve, f.backend, f.seconds, lambda: None, f.info)
+        return Factorization(f.solve, f.backend, f.seconds, lambda: None, f.info, f.approximate)
     return f
 
 
@@ -301,7 +315,8 @@ class Analysis:
     assembled (the ctypes call releases the GIL).  :func:`factorize` (``analysis=...``) takes the
     analysed handle only if the matrix's upper triangle has exactly this pattern (else, e.g.
     after springs added entries, it is released and the matrix analysed as usual): the
-    factorisation is the one the plain path computes.  Not used with single precision."""
+    factorisation is the one the plain path computes (single precision included: analysed with
+    ``options={"single": 1}`` the handle fits a single-precision factorisation)."""
 
     def __init__(self, ia: np.ndarray, ja: np.ndarray, options: dict | None = None) -> None:
         self.opts = {**PARDISO_OPTIONS, **(options or {})}
@@ -333,6 +348,8 @@ class Analysis:
         if (self.error is None and mtype == 2 and opts == self.opts and ia.size == self.ia.size
                 and ja.size == self.ja.size and np.array_equal(ia, self.ia) and np.array_equal(ja, self.ja)):
             ps.data = np.ascontiguousarray(data, dtype=np.float64)
+            if ps.single:
+                ps.data32 = ps.data.astype(np.float32)
             return ps
         ps.free()
         return None
@@ -363,7 +380,7 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict, analysis: Analysis | None
     if A.nnz >= 2**31 - 1:
         raise SolverError(f"matrix too large for PARDISO's 32-bit indices ({A.nnz} non-zeros)")
     upper = _upper_triangle(A.indptr, A.indices, A.data)
-    ps = analysis.take(upper, mtype, opts) if analysis is not None and not single else None
+    ps = analysis.take(upper, mtype, opts) if analysis is not None else None
     t0 = time.perf_counter()
     if ps is None:
         ps = _Pardiso(upper, mtype, opts)
@@ -418,8 +435,12 @@ def _pardiso(A: sp.csr_matrix, mtype: int, opts: dict, analysis: Analysis | None
                               "sweeps: the single-precision factor is too inaccurate for this matrix (use single=0)")
         return np.ascontiguousarray(x).reshape(shape)
 
+    def approximate(b: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(ps.call(33, np.asfortranarray(np.asarray(b, dtype=float).reshape(n, -1)))
+                                    ).reshape(np.shape(b))
+
     return Factorization(solve, f"pardiso(mtype={mtype}{', single+refinement' if single else ''})", 0.0, ps.free,
-                         info)
+                         info, approximate if single else None)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -609,6 +630,172 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     return w[o], X[:, o], n_solved, info
 
 
+#: mixed solver: Jacobi-preconditioned CG on M to this relative residual for ``r^T M^-1 r``
+MINV_RTOL = 1e-2
+
+
+def _minv_norms(M: sp.spmatrix, R: np.ndarray, dinv: np.ndarray, rtol: float = MINV_RTOL,
+                max_iter: int = 200) -> np.ndarray:
+    """``r^T M^-1 r`` for every column r of R by Jacobi-preconditioned conjugate gradients on M.
+
+    The consistent mass matrix is well conditioned after diagonal scaling, independently of the
+    element size (Wathen, IMA J. Numer. Anal. 7 (1987) 449: the spectrum of ``D^-1 M`` lies in the
+    range of the element ones), so CG converges in a mesh-independent number of steps (~10 at
+    1e-2, 265k P2 DOFs).  CG's iterate x_k gives ``r^T x_k``, which increases monotonically to
+    ``r^T M^-1 r``; the remainder is ``s^T M^-1 s`` (s = r - M x_k, Galerkin orthogonality), at
+    most ``rtol^2 ||r||^2_{D^-1} / mu_min(D^-1 M)``, and is added with the smallest Ritz value of
+    CG's own Lanczos matrix as mu_min (an upper estimate of mu_min: the added term is an
+    estimate, ~1e-3 of the result; the error bounds it enters are quadratic in the residual and
+    the solver stops with them 1e2-1e4 below their tolerances, tests/test_eigen_stopping.py)."""
+    X = np.zeros_like(R)
+    S = R.copy()
+    Z = S * dinv[:, None]
+    P = Z.copy()
+    rz = np.einsum("ij,ij->j", S, Z)
+    rz0 = rz.copy()
+    alphas, betas = [], []
+    for _k in range(max_iter):
+        MP = M @ P
+        a = rz / np.einsum("ij,ij->j", P, MP)
+        X += P * a
+        S -= MP * a
+        Z = S * dinv[:, None]
+        rz1 = np.einsum("ij,ij->j", S, Z)
+        alphas.append(a)
+        if np.all(rz1 <= rtol ** 2 * rz0):
+            break
+        beta = rz1 / rz
+        betas.append(beta)
+        P = Z + P * beta
+        rz = rz1
+    else:
+        raise SolverError("M^-1 norm: CG on the mass matrix did not converge (is M positive definite?)")
+    # mu_min of D^-1 M estimated from CG's Lanczos tridiagonal (smallest over the columns)
+    k = len(alphas)
+    A_ = np.array(alphas)
+    B_ = np.array(betas) if betas else np.zeros((0, R.shape[1]))
+    mu = np.inf
+    for j in range(R.shape[1]):
+        d = 1.0 / A_[:, j]
+        d[1:] += B_[:, j] / A_[:-1, j]
+        e = np.sqrt(np.abs(B_[:, j])) / A_[:-1, j]
+        T = np.diag(d) + np.diag(e, 1) + np.diag(e, -1) if k > 1 else np.array([[d[0]]])
+        mu = min(mu, float(np.linalg.eigvalsh(T)[0]))
+    return np.einsum("ij,ij->j", R, X) + rz1 / max(mu, 1e-300)
+
+
+def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Callable[[np.ndarray], np.ndarray],
+                block: int | None = None, etol: float = ETOL, vtol: float = VTOL, max_vectors: int | None = None,
+                seed: int = 12345) -> tuple[np.ndarray, np.ndarray, int, dict]:
+    """The ``n_modes`` lowest eigenpairs of ``K x = lambda M x`` by a block Davidson method
+    whose preconditioner ``precondition(R) ~ K^-1 R`` may be inexact (a single-precision
+    factor of K: :attr:`Factorization.approximate`) and whose Rayleigh-Ritz projections and
+    residuals use the exact double-precision K and M.
+
+    Why it is exact although the solves are not: the basis Q (M-orthonormal) is only a search
+    space; the Ritz pairs ``(theta, x = Q y)`` of ``Q^T K Q`` are Rayleigh-Ritz approximations
+    of the pencil ``(K, M)`` itself, and the stopping test uses their TRUE residuals
+    ``r = K x - theta M x`` (K Q is kept: one sparse product per new block).  With an exact
+    preconditioner the space is the shift-invert Krylov space of :func:`block_eigsh`
+    (``K^-1 r = x - theta K^-1 M x``); a float32 factor (cond(K) ~1e9: each solve ~10 % off)
+    only slows the convergence (265k DOFs: 60 vectors instead of 48).
+
+    **Stopping rule** (Kato-Temple for the pencil, Parlett thm 11.7.1 in the M-inner product):
+    for an M-normalised Ritz vector x with residual r there is an eigenvalue lambda with
+    ``|lambda - theta| <= ||r||^2_{M^-1} / gap`` (gap = distance of theta to the rest of the
+    spectrum, estimated by the nearest other Ritz value, as :func:`block_eigsh`) and the angle
+    of x to its eigenvector is at most ``||r||_{M^-1} / gap``.  The iteration stops when for
+    every wanted pair the relative eigenvalue bound ``||r||^2_{M^-1} / (gap theta)`` is below
+    ``etol`` and the angle bound below ``vtol``.  ``||r||_{M^-1}`` is ``sqrt(r^T D^-1 r)``
+    scaled by the ratio measured at the last CG evaluation while the bounds are large, and
+    computed by CG on M (:func:`_minv_norms`) before the solver stops.  The eigenvalues
+    returned are the Rayleigh quotients theta (upper bounds of the eigenvalues, Courant-Fischer).
+
+    Expansion: each step applies the preconditioner to the residuals of the ``block`` least
+    converged of the ``max(block, n_modes)`` lowest Ritz pairs (the first steps, while the space
+    has fewer than ``n_modes + 1`` vectors: to ``M W`` of the last block, a Krylov start).
+    No restart: at most ``max_vectors`` (default 16 blocks) basis vectors, else SolverError (the
+    caller falls back to the double-precision path).  Returns (eigenvalues ascending,
+    M-orthonormal vectors, number of vectors solved, info with ``residuals`` (||r||_{M^-1} /
+    theta), ``error_bounds`` and ``history``)."""
+    n = K.shape[0]
+    b = int(block or max(4, n_modes // 2 + 1))
+    b = max(1, min(b, n // 3))
+    cap = int(max_vectors or 16 * b)
+    cap = max(cap, n_modes + 2 * b)
+    Q, MQ, KQ = (np.empty((n, cap), order="F") for _ in range(3))
+    A = np.zeros((cap, cap))
+    dinv = 1.0 / M.diagonal()
+    if not np.all(dinv > 0):
+        raise SolverError("mixed eigen-solver: the mass matrix has a non-positive diagonal")
+    rng = np.random.default_rng(seed)
+    W = precondition(M @ rng.standard_normal((n, b)))
+    n_solved = b
+    m = 0
+    ratio = None  # ||r||^2_{M^-1} / ||r||^2_{D^-1} of the wanted pairs at the last CG evaluation
+    info: dict[str, Any] = {"block": b, "history": [], "cg_evaluations": 0}
+    nx = max(b, n_modes)
+    while True:
+        for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
+            if m:
+                W = W - Q[:, :m] @ (MQ[:, :m].T @ W)
+        W, MW = _m_orthonormalize(W, M @ W)
+        k = W.shape[1]
+        if k == 0:
+            raise SolverError("mixed eigen-solver: the search space stopped growing")
+        if m + k > cap:
+            raise SolverError(f"mixed eigen-solver did not converge within {cap} vectors")
+        sl = slice(m, m + k)
+        Q[:, sl], MQ[:, sl], KQ[:, sl] = W, MW, K @ W
+        A[: m + k, sl] = Q[:, : m + k].T @ KQ[:, sl]
+        A[sl, :m] = A[:m, sl].T
+        m += k
+        if m < n_modes + 1:
+            W = precondition(MW)
+            n_solved += k
+            continue
+        th, Y = np.linalg.eigh(0.5 * (A[:m, :m] + A[:m, :m].T))
+        nxm = min(nx, m)
+        Yx = Y[:, :nxm]
+        R = KQ[:, :m] @ Yx - MQ[:, :m] @ (Yx * th[:nxm])
+        d2 = np.einsum("ij,ij->j", R, R * dinv[:, None])  # ||r||^2_{D^-1}
+        gap = np.array([np.min(np.abs(np.delete(th, i) - th[i])) for i in range(n_modes)])
+        rel_gap = np.abs(th[:n_modes]) / np.maximum(gap, 1e-300)
+        th_w = np.abs(th[:n_modes])
+
+        def bounds(r2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            res = np.sqrt(r2) / th_w  # ||r||_{M^-1} / theta
+            return res ** 2 * rel_gap, res * rel_gap
+
+        est = d2[:n_modes] * (ratio if ratio is not None else 1.0)
+        eb, ang = bounds(est)
+        certified = False
+        if np.all(eb < etol) and np.all(ang < vtol):  # converged by the estimate: the M^-1 norms by CG
+            r2 = _minv_norms(M, R[:, :n_modes], dinv)
+            info["cg_evaluations"] += 1
+            ratio = r2 / np.maximum(d2[:n_modes], 1e-300)
+            eb, ang = bounds(r2)
+            certified = True
+        info["history"].append((n_solved, float(eb.max()), float(ang.max())))
+        info["residuals"], info["error_bounds"] = np.sqrt(eb / rel_gap), eb
+        if certified and np.all(eb < etol) and np.all(ang < vtol):
+            break
+        pick = np.argsort(-d2)[:b]  # the least converged of the lowest nx pairs
+        W = precondition(np.asfortranarray(R[:, pick]))
+        n_solved += W.shape[1]
+    X = Q[:, :m] @ Y[:, :n_modes]
+    return th[:n_modes].copy(), X, n_solved, info
+
+
+def auto_method(n: int, sigma: float | None, tol: float = 0.0, solver: str = "auto") -> str:
+    """The eigen-solver ``method="auto"`` runs for ``n`` free DOFs: "mixed" for a positive definite
+    K (sigma = 0) with PARDISO from :data:`MIXED_MIN_DOFS` DOFs when no residual tolerance is asked
+    (``tol``: the vectors to the round-off floor need the double factor), else "block"."""
+    if (n >= MIXED_MIN_DOFS and sigma == 0 and tol == 0 and solver in ("auto", "pardiso") and have_pardiso()):
+        return "mixed"
+    return "block"
+
+
 def shift_invert_eigsh(
     K: sp.spmatrix,
     M: sp.spmatrix,
@@ -616,7 +803,7 @@ def shift_invert_eigsh(
     sigma: float | None = None,
     solver: str = "auto",
     tol: float = 0.0,
-    method: str = "block",
+    method: str = "auto",
     options: dict | None = None,
     analysis: Analysis | None = None,
 ) -> EigenResult:
@@ -624,8 +811,9 @@ def shift_invert_eigsh(
 
     ``sigma`` [rad^2/s^2]: shift; default ``-1e-12 * mean(diag K)/mean(diag M)`` (slightly below
     zero, so ``K - sigma M`` is SPD also for a free-floating model; a constrained model passes
-    ``sigma = 0``).  ``method``: "block" (block shift-invert Lanczos) or "arpack" (module
-    docstring); ``options``: PARDISO settings; ``analysis``: PARDISO's analysis of the pattern
+    ``sigma = 0``).  ``method``: "auto" (:func:`auto_method`), "block" (block shift-invert
+    Lanczos), "arpack" or "mixed" (module docstring; "mixed" needs sigma = 0, PARDISO and
+    ``tol = 0``, else it is "block"; pass it an ``analysis`` started with ``options={"single": 1}``); ``options``: PARDISO settings; ``analysis``: PARDISO's analysis of the pattern
     of ``K`` started before assembly (:class:`Analysis`, used for ``sigma = 0``).  Raises :class:`SolverError` for too few DOFs
     (fewer than 10 per requested mode), non-convergence, or non-finite / negative eigenvalues.
     """
@@ -646,10 +834,36 @@ def shift_invert_eigsh(
         # which can be ~1e-9 of diag(K)/diag(M) for a long beam with small elements
         sigma = -1e-12 * float(np.mean(np.abs(dK)) / np.mean(np.abs(dM)))
     A = K if sigma == 0 else (K - sigma * M).tocsr()  # sigma = 0: K itself (a reusable factorisation)
+    if method == "auto":
+        method = auto_method(n, sigma, tol, solver)
+    mixed_failed = None
+    if method == "mixed":
+        # a single-precision factor of K as the preconditioner of mixed_eigsh (exact K, M projections);
+        # K must be positive definite (sigma = 0, a clamped model) and the backend PARDISO
+        if sigma == 0 and tol == 0 and solver in ("auto", "pardiso") and have_pardiso():
+            fac = factorize(A, solver=solver, options={**(options or {}), "single": 1}, analysis=analysis)
+            analysis = None  # taken or released by factorize
+            t0 = time.perf_counter()
+            try:
+                if fac.approximate is None:
+                    raise SolverError("no single-precision solve")
+                w, V, count, binfo = mixed_eigsh(K, M, n_modes, fac.approximate)
+            except SolverError as exc:  # fall back to the double-precision factor and block Lanczos
+                mixed_failed = str(exc)
+            else:
+                info = {**fac.info, **binfo}
+                info.pop("_release", None)
+                return _checked(EigenResult(w, V, fac.backend + "+mixed", fac.seconds, time.perf_counter() - t0,
+                                            count, "mixed", info))
+            finally:
+                fac.release()
+        method = "block"
     fac = factorize(A, spd=sigma <= 0, solver=solver, options=options, analysis=analysis if sigma == 0 else None)
     t0 = time.perf_counter()
     info: dict[str, Any] = dict(fac.info)
     info.pop("_release", None)
+    if mixed_failed is not None:
+        info["mixed_failed"] = mixed_failed
     # a shift below zero is for free-floating models: their rigid-body modes have enormous
     # theta = 1 / (lambda - sigma), whose round-off swamps the block solver's residual test of
     # the elastic modes; ARPACK's implicit restarts handle them (and any non-convergence)
@@ -687,8 +901,14 @@ def shift_invert_eigsh(
     finally:
         fac.release()
     solve_s = time.perf_counter() - t0
-    order = np.argsort(w)
-    w, V = w[order], V[:, order]
+    return _checked(EigenResult(w, V, fac.backend, fac.seconds, solve_s, count, "block" if use_block else "arpack",
+                                info))
+
+
+def _checked(r: EigenResult) -> EigenResult:
+    """Eigenpairs sorted ascending; SolverError for non-finite or negative eigenvalues."""
+    order = np.argsort(r.eigenvalues)
+    w, V = r.eigenvalues[order], r.vectors[:, order]
     if not np.all(np.isfinite(w)):
         raise SolverError("eigen-solver returned non-finite eigenvalues")
     scale = float(np.max(np.abs(w))) if w.size else 1.0
@@ -696,5 +916,5 @@ def shift_invert_eigsh(
         raise SolverError(
             f"negative eigenvalue {w.min():.3g} (rad/s)^2: the stiffness is not positive semi-definite"
         )
-    w = np.maximum(w, 0.0)
-    return EigenResult(w, V, fac.backend, fac.seconds, solve_s, count, "block" if use_block else "arpack", info)
+    r.eigenvalues, r.vectors = np.maximum(w, 0.0), V
+    return r

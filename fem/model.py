@@ -31,7 +31,7 @@ from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.assembly import element_kind, element_volumes
-from probedyn.fem.eigen import Analysis, factorize, have_pardiso, shift_invert_eigsh
+from probedyn.fem.eigen import Analysis, auto_method, factorize, have_pardiso, shift_invert_eigsh
 from probedyn.fem.kernels import free_upper_pattern as _free_upper_pattern
 from probedyn.fem.kernels import principal_submatrix as _principal_submatrix
 from probedyn.fem.materials import Material, get_material
@@ -306,7 +306,10 @@ class ElasticModel:
         if sigma is None and self.clamp:
             sigma = 0.0  # a clamped face removes all rigid motions: K_ff is positive definite
         # K_ff is factorised as it is (sigma = 0): its ordering can run while K and M are assembled
-        analysis = self.start_analysis() if (sigma == 0 and self._K is None and solver in ("auto", "pardiso")) else None
+        # (with the single-precision setting when the size selects the mixed-precision solver)
+        single = auto_method(int(self.free_dofs.size), sigma, solver=solver) == "mixed"
+        analysis = (self.start_analysis({"single": 1} if single else None)
+                    if (sigma == 0 and self._K is None and solver in ("auto", "pardiso")) else None)
         try:
             K, M = self.assemble()
             free = self.free_dofs
