@@ -16,7 +16,7 @@ with the clamp-edge singularity, docs/fem.md, and the h^4 of smooth eigenvalues 
 elements), times Roache's safety factor of the grid convergence index (1.25 with the order
 observed; 3 and the lowest order when the differences are not monotone). When the data state their noise, the mesh is refined (the stretch halved, then all
 sizes halved) until every used frequency's estimated error is at most a third of its noise or the
-next mesh would exceed :data:`REFINE_DOF_BUDGET`; the remaining estimate enters the error budget as
+next mesh would exceed the DOF budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters the error budget as
 a model uncertainty added to the measurement noise in quadrature.
 
 Extended model (:class:`ModalState`): what the causes change --
@@ -127,9 +127,11 @@ DOF_BUDGET = 30_000  # DOFs of one diagnosis FEM (a thin lever is meshed thick a
 #: error that is systematic (the same sign on every mode, so not averaged away like noise) adds at
 #: most n / 9 to the chi^2 of n modes, below its own scatter sqrt(2 n) for any n < 160
 DISC_NOISE_FRACTION = 1.0 / 3.0
-#: the largest FEM the baseline refines to for the data's accuracy (hex-s2: ~26 kB per DOF, so
-#: ~1.6 GB; measured 6-10 s CPU per solve with its two coarse estimate meshes, docs/diagnose.md)
-REFINE_DOF_BUDGET = 60_000
+#: the largest FEM the baseline refines to for the data's accuracy: the time budget of one 6-mode
+#: diagnosis (issue 15: < 10 s on 2 cores). Its cost grows faster than the DOFs (the Ritz basis,
+#: static corrections and FEM re-solves): measured on lever A (300 x 30 x 10 um, load 9) 14 s CPU
+#: at 7.3 k DOFs, 36 s at 13.8 k (docs/diagnose.md); ``dof_budget`` raises it per baseline
+REFINE_DOF_BUDGET = 9_000
 #: range of the observed convergence order used in the Richardson estimate (module docstring)
 ORDER_RANGE = (0.8, 4.0)
 #: Roache's safety factors of the grid convergence index: 1.25 on an order observed from three
@@ -212,10 +214,12 @@ class FEMBaseline:
     """The probe's FEM, its modes and what the reduced model needs to know about its geometry."""
 
     def __init__(self, probe, values: dict[str, Any], needed: dict[str, int], *, estimate_error: bool = True,
-                 max_modes: int = 40, noise: dict[tuple[str, int], float] | None = None) -> None:
+                 max_modes: int = 40, noise: dict[tuple[str, int], float] | None = None,
+                 dof_budget: int = REFINE_DOF_BUDGET) -> None:
         """``noise``: the stated frequency noise (Hz) of every used ``(family, order)``; with it the
         mesh is refined until the estimated discretisation error of each is at most
-        :data:`DISC_NOISE_FRACTION` of it (within :data:`REFINE_DOF_BUDGET`)."""
+        :data:`DISC_NOISE_FRACTION` of it (within ``dof_budget`` DOFs)."""
+        self.dof_budget = int(dof_budget)
         t0 = time.perf_counter()
         self.probe = probe
         self.values = dict(values)
@@ -420,7 +424,7 @@ class FEMBaseline:
 
     def _refine_for(self, noise: dict[tuple[str, int], float], needed: dict[str, int], max_modes: int) -> None:
         """Refine the mesh until every used frequency's estimated error is at most
-        :data:`DISC_NOISE_FRACTION` of its noise, within :data:`REFINE_DOF_BUDGET`."""
+        :data:`DISC_NOISE_FRACTION` of its noise, within ``dof_budget``."""
         def excess() -> float:
             worst = 0.0
             for (fa, o), sig in noise.items():
@@ -437,15 +441,15 @@ class FEMBaseline:
                 m = build_within_budget(self.probe, self.probe.resolve(vals), s)
             except ProbedynError:
                 return
-            if m.dofs > REFINE_DOF_BUDGET and s < self.stretch:
+            if m.dofs > self.dof_budget and s < self.stretch:
                 # the stretch that fills the budget (DOFs ~ 1 / s^2)
-                s = self.stretch * math.sqrt(self.model.dofs / REFINE_DOF_BUDGET)
+                s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
                 if s > 0.85 * self.stretch:
                     return
                 m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s))
-            if m.dofs > REFINE_DOF_BUDGET or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
+            if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
                 self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
-                                   f"{REFINE_DOF_BUDGET}), the estimate enters sigma")
+                                   f"{self.dof_budget}), the estimate enters sigma")
                 return
             self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}, "
                                     f"error/noise {excess():.2g})")
