@@ -14,10 +14,10 @@ sizes, s times the thickness, which the number of layers alone does not change),
 ``q`` the order observed on two coarse meshes, kept within [0.8, 4] (the lowest order measured
 with the clamp-edge singularity, docs/fem.md, and the h^4 of smooth eigenvalues of quadratic
 elements), times Roache's safety factor of the grid convergence index (1.25 with the order
-observed; 3 and the lowest order when the differences are not monotone). When the data state their noise, the mesh is refined (the stretch halved, then all
-sizes halved) until every used frequency's estimated error is at most a third of its noise or the
-next mesh would exceed the DOF budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters the error budget as
-a model uncertainty added to the measurement noise in quadrature.
+observed; 3 and the lowest order when the differences are not monotone). When the data state
+their noise, the mesh is refined (the stretch halved, then all sizes halved) until every used frequency's estimated error is at most a third of its noise or the
+next mesh would exceed the DOF budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters
+the error budget as a model uncertainty added to the measurement noise in quadrature.
 
 Extended model (:class:`ModalState`): what the causes change --
 
@@ -445,6 +445,8 @@ class FEMBaseline:
                 # the stretch that fills the budget (DOFs ~ 1 / s^2)
                 s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
                 if s > 0.85 * self.stretch:
+                    self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
+                                       f"{self.dof_budget}), the estimate enters sigma")
                     return
                 m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s))
             if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
