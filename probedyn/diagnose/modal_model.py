@@ -15,9 +15,10 @@ sizes, s times the thickness, which the number of layers alone does not change),
 with the clamp-edge singularity, docs/fem.md, and the h^4 of smooth eigenvalues of quadratic
 elements), times Roache's safety factor of the grid convergence index (1.25 with the order
 observed; 3 and the lowest order when the differences are not monotone). When the data state
-their noise, the mesh is refined (the stretch halved, then all sizes halved) until every used frequency's estimated error is at most a third of its noise or the
-next mesh would exceed the DOF budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters
-the error budget as a model uncertainty added to the measurement noise in quadrature.
+their noise, the mesh is refined (the stretch halved, then all sizes halved) until every used
+frequency's estimated error is at most a third of its noise or the next mesh would exceed the DOF
+budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters the error budget as a model
+uncertainty added to the measurement noise in quadrature.
 
 Extended model (:class:`ModalState`): what the causes change --
 
