@@ -74,6 +74,7 @@ from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.materials import Material
 from probedyn.fem.model import ElasticModel, PointMass
+from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
 
 __all__ = ["ModalState", "Term", "FEMBaseline", "ReducedModal", "full_solve", "FAMILIES"]
 
@@ -133,8 +134,10 @@ DISC_NOISE_FRACTION = 1.0 / 3.0
 #: static corrections and FEM re-solves): measured on lever A (300 x 30 x 10 um, load 9) 14 s CPU
 #: at 7.3 k DOFs, 36 s at 13.8 k (docs/diagnose.md); ``dof_budget`` raises it per baseline
 REFINE_DOF_BUDGET = 9_000
-#: range of the observed convergence order used in the Richardson estimate (module docstring)
-ORDER_RANGE = (0.8, 4.0)
+#: range of the observed convergence order used in the Richardson estimate (module docstring): the
+#: lowest order measured on the default hexahedral meshes (clamp-edge singularities, docs/fem.md) and
+#: the h^4 of smooth eigenvalues of quadratic elements
+ORDER_RANGE = (min(p for _, p in DEFAULT_ACCURACY.values()), 4.0)
 #: Roache's safety factors of the grid convergence index: 1.25 on an order observed from three
 #: meshes, 3 when it could not be observed (two meshes, or non-monotone differences)
 GCI_SAFETY = (1.25, 3.0)
