@@ -108,9 +108,12 @@ class ModalProblem:
                 if L is not None:
                     vals["length"] = L
                 needed: dict[str, int] = {}
-                for fa, o in self.need_of[L]:
+                noise: dict[tuple[str, int], float] = {}
+                for i, (fa, o) in zip(self.rows_of[L], self.need_of[L]):
                     needed[fa] = max(needed.get(fa, 0), o)
-                b = FEMBaseline(d.probe, d.probe.resolve(_probe_overrides(d.probe, vals)), needed)
+                    noise[(fa, o)] = min(noise.get((fa, o), math.inf), float(d.freq_sigma[i]))
+                # the mesh is refined for the stated noise (modal_model.DISC_NOISE_FRACTION)
+                b = FEMBaseline(d.probe, d.probe.resolve(_probe_overrides(d.probe, vals)), needed, noise=noise)
             self.bases[L] = b
         self.reference_baseline = self.bases[self.lengths[-1]]
         self._check_units()

@@ -6,9 +6,18 @@ without tip, duo-bimorph, piezotube, or a probe TOML) built with its parameters 
 solved by :meth:`probedyn.fem.model.ElasticModel.modes`; every FEM mode carries its family
 (``probedyn.fem.modes.classify_shapes``), and a measured ``(family, order)`` is the order-th FEM
 mode of that family. The discretisation error of each FEM frequency is estimated by
-Richardson's rule from the same probe on a mesh with half the elements through the thickness,
-``e = |f_h - f_H| / ((H/h)^q - 1)`` with ``q = 2`` (a conservative order for P2 eigenvalues with
-corner singularities; smooth problems converge as h^4), and enters the error budget as a model
+Richardson's rule from the same probe on coarser meshes with *every* element size scaled by the
+same factor (fewer elements through the thickness, and the axial size of a hexahedral mesh with
+them: on a thin lever meshed thick and stretched back the error comes from the axial and width
+sizes, s times the thickness, which the number of layers alone does not change), ``e = |f_h - f_H|
+/ (r^q - 1)`` with ``r`` the ratio of the effective element sizes ``(V / N_elements)^(1/3)`` and
+``q`` the order observed on two coarse meshes, kept within [0.8, 4] (the lowest order measured
+with the clamp-edge singularity, docs/fem.md, and the h^4 of smooth eigenvalues of quadratic
+elements), times Roache's safety factor of the grid convergence index (1.25 with the order
+observed; 3 and the lowest order when the differences are not monotone). When the data state
+their noise, the mesh is refined (the stretch halved, then all sizes halved) until every used
+frequency's estimated error is at most a third of its noise or the next mesh would exceed the DOF
+budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters the error budget as a model
 uncertainty added to the measurement noise in quadrature.
 
 Extended model (:class:`ModalState`): what the causes change --
@@ -65,6 +74,7 @@ from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.materials import Material
 from probedyn.fem.model import ElasticModel, PointMass
+from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
 
 __all__ = ["ModalState", "Term", "FEMBaseline", "ReducedModal", "full_solve", "FAMILIES"]
 
@@ -114,6 +124,23 @@ def _iso_E(model: ElasticModel) -> float:
 
 
 DOF_BUDGET = 30_000  # DOFs of one diagnosis FEM (a thin lever is meshed thick and stretched back)
+#: the estimated discretisation error of every used frequency is refined down to this fraction of
+#: its stated noise: added in quadrature it widens sigma by at most sqrt(1 + 1/9) - 1 = 5 %, and an
+#: error that is systematic (the same sign on every mode, so not averaged away like noise) adds at
+#: most n / 9 to the chi^2 of n modes, below its own scatter sqrt(2 n) for any n < 160
+DISC_NOISE_FRACTION = 1.0 / 3.0
+#: the largest FEM the baseline refines to for the data's accuracy: the time budget of one 6-mode
+#: diagnosis (issue 15: < 10 s on 2 cores). Its cost grows faster than the DOFs (the Ritz basis,
+#: static corrections and FEM re-solves): measured on lever A (300 x 30 x 10 um, load 9) 14 s CPU
+#: at 7.3 k DOFs, 36 s at 13.8 k (docs/diagnose.md); ``dof_budget`` raises it per baseline
+REFINE_DOF_BUDGET = 9_000
+#: range of the observed convergence order used in the Richardson estimate (module docstring): the
+#: lowest order measured on the default hexahedral meshes (clamp-edge singularities, docs/fem.md) and
+#: the h^4 of smooth eigenvalues of quadratic elements
+ORDER_RANGE = (min(p for _, p in DEFAULT_ACCURACY.values()), 4.0)
+#: Roache's safety factors of the grid convergence index: 1.25 on an order observed from three
+#: meshes, 3 when it could not be observed (two meshes, or non-monotone differences)
+GCI_SAFETY = (1.25, 3.0)
 
 
 def stretched(m0: ElasticModel, sc, cls=ElasticModel, **kw) -> ElasticModel:
@@ -168,17 +195,55 @@ def build_within_budget(probe, values: dict[str, Any], s: float = 1.0) -> Elasti
     return stretched(m, sc)
 
 
+def observed_order(d: list[tuple[float, float]]) -> float | None:
+    """Convergence order q from the differences ``d = [(r_a, f_a - f), (r_b, f_b - f)]`` of two
+    coarse meshes (size ratios r_a < r_b) to the fine one: ``(r_b^q - 1) / (r_a^q - 1) = d_b / d_a``
+    (each difference ``C h^q (r^q - 1)``); None when the differences do not converge monotonically
+    (opposite signs, or the coarser mesh closer)."""
+    (ra, da), (rb, db) = sorted(d)
+    if not (rb > ra > 1.0) or da == 0.0 or db / da <= 0:
+        return None
+    ratio = db / da
+    g = lambda q: (rb**q - 1.0) / (ra**q - 1.0)  # noqa: E731  (increasing in q, -> ln rb / ln ra at q = 0)
+    lo, hi = 1e-3, 12.0
+    if not g(lo) < ratio < g(hi):
+        return None
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if g(mid) < ratio else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
 class FEMBaseline:
     """The probe's FEM, its modes and what the reduced model needs to know about its geometry."""
 
     def __init__(self, probe, values: dict[str, Any], needed: dict[str, int], *, estimate_error: bool = True,
-                 max_modes: int = 40) -> None:
+                 max_modes: int = 40, noise: dict[tuple[str, int], float] | None = None,
+                 dof_budget: int = REFINE_DOF_BUDGET) -> None:
+        """``noise``: the stated frequency noise (Hz) of every used ``(family, order)``; with it the
+        mesh is refined until the estimated discretisation error of each is at most
+        :data:`DISC_NOISE_FRACTION` of it (within ``dof_budget`` DOFs)."""
+        self.dof_budget = int(dof_budget)
         t0 = time.perf_counter()
         self.probe = probe
         self.values = dict(values)
         self.stretch = thickness_stretch(self.values)
-        self.model = build_within_budget(probe, self.values, self.stretch)
-        m = self.model
+        self.mesh_values = dict(self.values)  # the mesh parameters of the model actually used
+        self.refinements: list[str] = []
+        self._build(build_within_budget(probe, self.values, self.stretch), needed, max_modes)
+        self.disc_err = np.zeros(len(self.families))
+        self.disc_note = "not estimated"
+        if estimate_error:
+            self._estimate_discretisation(needed, len(self.families))
+            if noise:
+                self._refine_for(noise, needed, max_modes)
+        self.solve_s = time.perf_counter() - t0  # FEM, error estimate and refinement
+        self.beam_gap, self.plate_gap, self.beam_note = self._beam_gap()
+
+    def _build(self, model: ElasticModel, needed: dict[str, int], max_modes: int) -> None:
+        """Geometry and modes of ``model`` (the baseline's FEM)."""
+        self.model = m = model
+        probe = self.probe
         self.axis = int(m.beam_axis)
         self.length_axis, self.width_axis, self.thickness_axis = self.axis, (self.axis + 1) % 3, (self.axis + 2) % 3
         p = m.mesh.p
@@ -213,12 +278,6 @@ class FEMBaseline:
         self.freqs = res.frequencies_hz
         self.families = fams
         self.shapes = np.column_stack([md.shape for md in res.modes])
-        self.solve_s = time.perf_counter() - t0
-        self.disc_err = np.zeros(len(fams))
-        self.disc_note = "not estimated"
-        if estimate_error:
-            self._estimate_discretisation(needed, len(fams))
-        self.beam_gap, self.plate_gap, self.beam_note = self._beam_gap()
 
     def _beam_gap(self) -> tuple[np.ndarray | None, np.ndarray | None, str]:
         """The 1D-3D model-form gap of every FEM mode: ``ln(f_FEM / f_beam)`` with probedyn's own
@@ -283,31 +342,127 @@ class FEMBaseline:
                     return i
         raise DataFormatError(f"no FEM mode {family} {order}")
 
+    def _coarse_values(self, mv: dict[str, Any], ett_c: int) -> dict[str, Any]:
+        """Mesh parameters of a mesh with every element size ``ett / ett_c`` times those of the mesh
+        of ``mv`` (same stretch): fewer layers through the thickness (which set the width size
+        too), and the axial size scaled with them (``element_size``; a hexahedral mesh's default
+        axial size is proportional to the thickness, not to the layers)."""
+        ett = int(mv["elements_through_thickness"])
+        k = ett / ett_c
+        c = dict(mv, elements_through_thickness=ett_c)
+        es = mv.get("element_size")
+        if es:
+            c["element_size"] = float(es) * k
+        elif str(self.model.bundle.element or "").startswith("hex"):
+            x = np.unique(np.round(self.model.mesh.p[self.axis][self.model.mesh.t[:8]], 12))
+            c["element_size"] = float(np.max(np.diff(x))) * k
+        return c
+
+    def _modes_by_family(self, model: ElasticModel, n: int) -> dict[str, list[float]]:
+        r = model.modes(n)
+        return {fa: [md.frequency_hz for md in r.modes if md.family == fa] for fa in FAMILIES}
+
     def _estimate_discretisation(self, needed: dict[str, int], n: int) -> None:
-        v = self.values
+        """Richardson estimate of every FEM frequency's discretisation error (module docstring)
+        from one or two coarser meshes with all element sizes scaled by the same factor."""
+        v = self.mesh_values
         ett = int(v.get("elements_through_thickness", 0) or 0)
         if ett < 2:
             self.disc_note = "not estimated (fewer than two elements through the thickness)"
             return
-        coarse = dict(v, elements_through_thickness=max(1, ett // 2))
-        ratio = ett / max(1, ett // 2)
+        coarse = sorted({max(1, round(ett / 1.5)), max(1, ett // 3)} - {ett}, reverse=True)
+        n_el = self.model.mesh.t.shape[1]
+        runs = []
         try:
-            mc = build_within_budget(self.probe, self.probe.resolve(coarse), self.stretch)
-            rc = mc.modes(n)
+            for ett_c in coarse:
+                mc = build_within_budget(self.probe, self.probe.resolve(self._coarse_values(v, ett_c)), self.stretch)
+                runs.append(((n_el / mc.mesh.t.shape[1]) ** (1.0 / 3.0), self._modes_by_family(mc, n), ett_c))
         except ProbedynError as exc:
-            self.disc_note = f"not estimated (coarse mesh failed: {exc})"
-            return
-        fc = {fa: [md.frequency_hz for md in rc.modes if md.family == fa] for fa in FAMILIES}
-        cnt: dict[str, int] = {}
+            if not runs:
+                self.disc_note = f"not estimated (coarse mesh failed: {exc})"
+                return
         err = np.zeros(n)
+        orders = []
+        cnt: dict[str, int] = {}
         for i, fa in enumerate(self.families):
             cnt[fa] = cnt.get(fa, 0) + 1
-            lst = fc.get(fa, [])
-            if cnt[fa] <= len(lst):
-                err[i] = abs(self.freqs[i] - lst[cnt[fa] - 1]) / (ratio**2 - 1.0)
+            d = []
+            for r, fc, _ in runs:
+                lst = fc.get(fa, [])
+                if cnt[fa] <= len(lst):
+                    d.append((r, lst[cnt[fa] - 1] - self.freqs[i]))
+            if not d:
+                continue
+            q = observed_order(d) if len(d) == 2 else None
+            orders.append(q)
+            if q is None:  # not observed: the lowest order and the two-mesh safety factor
+                qq, fs = ORDER_RANGE[0], GCI_SAFETY[1]
+            else:
+                qq, fs = min(max(q, ORDER_RANGE[0]), ORDER_RANGE[1]), GCI_SAFETY[0]
+            err[i] = fs * max(abs(di) / (r**qq - 1.0) for r, di in d)
         self.disc_err = err
-        self.disc_note = (f"Richardson estimate from a mesh with {max(1, ett // 2)} instead of {ett} elements "
-                          "through the thickness, order 2")
+        obs = [q for q in orders if q is not None]
+        self.disc_orders = orders
+        self.disc_note = ("Richardson estimate from " + " and ".join(f"{e} (size ratio {r:.2f})" for r, _, e in runs)
+                          + f" instead of {ett} elements through the thickness, all sizes scaled; observed order "
+                          + (f"{min(obs):.2f}-{max(obs):.2f}" if obs else "not determined")
+                          + f" (used within {ORDER_RANGE[0]}-{ORDER_RANGE[1]}, GCI safety {GCI_SAFETY[0]}/"
+                          f"{GCI_SAFETY[1]}); {self.model.dofs} DOFs, stretch "
+                          f"{self.stretch:.3g}" + (f"; refined: {'; '.join(self.refinements)}" if self.refinements else ""))
+
+    def _finer(self) -> tuple[dict[str, Any], float] | None:
+        """The next finer mesh: the thickness stretch halved (the axial and width sizes of a lever
+        meshed thick are s times its thickness), and from s = 1 on every size halved (a stretch
+        below 1.5 is first set to 1 together with that halving: alone it would refine by less
+        than 1.5)."""
+        if self.stretch >= 1.5:
+            return self.mesh_values, max(1.0, self.stretch / 2.0)
+        ett = int(self.mesh_values.get("elements_through_thickness", 0) or 0)
+        if ett < 1 or ett * 2 > 40:
+            return None
+        fine = self._coarse_values(dict(self.mesh_values), ett)  # the current axial size, explicit
+        fine["elements_through_thickness"] = 2 * ett
+        if fine.get("element_size"):
+            fine["element_size"] = fine["element_size"] / 2.0
+        return fine, 1.0
+
+    def _refine_for(self, noise: dict[tuple[str, int], float], needed: dict[str, int], max_modes: int) -> None:
+        """Refine the mesh until every used frequency's estimated error is at most
+        :data:`DISC_NOISE_FRACTION` of its noise, within ``dof_budget``."""
+        def excess() -> float:
+            worst = 0.0
+            for (fa, o), sig in noise.items():
+                if sig > 0 and np.isfinite(sig):
+                    worst = max(worst, self.disc_err[self.index(fa, o)] / (DISC_NOISE_FRACTION * sig))
+            return worst
+
+        while excess() > 1.0:
+            nxt = self._finer()
+            if nxt is None:
+                return
+            vals, s = nxt
+            try:
+                m = build_within_budget(self.probe, self.probe.resolve(vals), s)
+            except ProbedynError:
+                return
+            if m.dofs > self.dof_budget and s < self.stretch:
+                # the stretch that fills the budget (DOFs ~ 1 / s^2)
+                s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
+                if s > 0.85 * self.stretch:
+                    self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
+                                       f"{self.dof_budget}), the estimate enters sigma")
+                    return
+                m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s))
+            if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
+                self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
+                                   f"{self.dof_budget}), the estimate enters sigma")
+                return
+            self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}, "
+                                    f"error/noise {excess():.2g})")
+            self.mesh_values, self.stretch = dict(self.probe.resolve(vals)), max(1.0, s)
+            self._build(m, needed, max_modes)
+            self.disc_err = np.zeros(len(self.families))
+            self._estimate_discretisation(needed, len(self.families))
 
     # -- geometry helpers ---------------------------------------------------------------------
     def mass_path(self, xi: np.ndarray) -> np.ndarray:
