@@ -9,6 +9,7 @@ rate study over 50 + 50 curves is ``benchmarks/diagnose_rates_curves.py`` (slow 
 
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -203,3 +204,33 @@ def test_truth_continuation_pulls_off_however_far_the_lever_springs_back():
     # after the jump: the tail's stable root, |F| = H R / (6 g^2) <= k g / 2 at a gap g beyond the fold's
     # (H R / (3 k))^(1/3) ~ 3 nm: a small fraction of the pull-off force, at every later sample
     assert np.all(np.abs(F[j + 1:]) < 0.05 * F_po)
+
+
+def test_force_curve_misfit_continuous_where_a_jump_crosses_a_sample(tmp_path):
+    """A DMT truth (snap-in and pull-off) refitted by the diagnosis, then its own noise-free record:
+    moving the contact point sweeps each predicted jump across a sample. The point-sampled misfit
+    changes there by the whole step squared ((jump / sigma)^2, hundreds), whatever the step in z_c:
+    the class of stalled fits (a finite-difference Jacobian across it). The diagnosis' misfit (a
+    sample stands for its piezo interval: two-branch mixture) is continuous: its largest increment
+    over a sweep of +-1 sample step halves when the step in z_c halves (ratio 1/2 + O(h); a
+    discontinuity keeps it at 1). On the model's own record the mixture costs at most 2 ln 2 per
+    jump (the followed branch has probability >= 1/2)."""
+    path, truth = make_curve_case(tmp_path, 2000, "adhesion-dmt")
+    prob, base, fit = _nested(path, "adhesion-dmt")
+    v, causes = dict(fit.values), fit.causes
+    prob.data = replace(prob.data, force=prob.predict(v, causes))
+    assert float(np.sum(prob.residuals(v, causes) ** 2)) <= 2 * 2 * math.log(2)
+
+    def largest_increment(h, point):
+        zc = v["z_c"] + h * np.arange(-round(float(np.median(prob.dz)) / h), round(float(np.median(prob.dz)) / h) + 1)
+        if point:
+            c = [np.sum(((prob.data.force - prob.predict({**v, "z_c": z}, causes)) / prob.sigma) ** 2) for z in zc]
+        else:
+            c = [np.sum(prob.residuals({**v, "z_c": z}, causes) ** 2) for z in zc]
+        return float(np.abs(np.diff(c)).max())
+
+    h = float(np.median(prob.dz)) / 50
+    pt = largest_increment(h, True), largest_increment(h / 2, True)
+    mix = largest_increment(h, False), largest_increment(h / 2, False)
+    assert pt[1] > 100 and pt[1] / pt[0] > 0.9  # the point-sampled misfit jumps
+    assert mix[1] / mix[0] < 0.6 and mix[1] < pt[1] / 10, (mix, pt)

@@ -225,16 +225,57 @@ def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n
     return out
 
 
-def lever_curve_registry(z_rel, segment, model, k: float, span: float) -> np.ndarray:
+def _jump_alternatives(Z, P, zq, dzq):
+    """The other branch at every sample of a segment with a jump, for motion towards increasing ``Z``
+    (the approach; the retract is passed mirrored). ``Z`` = piezo position of the polyline points,
+    ``P`` their force; the followed branch is the running maximum of ``Z`` and a jump is a run of
+    points below it: the fold at the point before the run (``Z_j``, force ``P_f``), the landing branch
+    from the run's lowest ``Z`` to its end.
+
+    A sample recorded at ``z`` stands for the piezo interval ``[z - dz/2, z + dz/2]`` it was taken
+    in (the instant of the snapshot within it is not part of the record; the lever also rings after
+    a jump, and thermal motion fires a fold early): relative to the sample, the jump's position is
+    uncertain by the interval's standard deviation ``dz / sqrt(12)``. The sample shows the pre-jump
+    branch with probability ``q = Phi(sqrt(12) (Z_j - z) / dz)`` and the landing branch otherwise
+    (beyond its fold the pre-jump branch is represented by its fold force). Returns ``(alt, log_w)``:
+    the other branch's force and the log of its probability (``-inf`` in a segment without a jump;
+    ``log_w <= ln 1/2``: the followed branch is always the likelier one; nearest jump if several)."""
+    from scipy.special import log_ndtr  # (scipy at first use: the CLI's help lists no scipy)
+
+    alt = np.full(len(zq), np.nan)
+    log_w = np.full(len(zq), -np.inf)
+    env = np.maximum.accumulate(Z)
+    below = np.concatenate([[0], (Z < env).astype(np.int8), [0]])
+    edges = np.flatnonzero(np.diff(below))
+    best = np.full(len(zq), np.inf)
+    for s, e in zip(edges[::2], edges[1::2]):  # run [s, e) below the envelope
+        if s == 0 or e >= len(Z):
+            continue
+        zj, Pf = Z[s - 1], P[s - 1]
+        u = (zj - zq) / dzq  # > 0: the sample precedes the jump
+        take = np.abs(u) < best
+        best = np.where(take, np.abs(u), best)
+        m = s + int(np.argmin(Z[s:e]))
+        landing = np.interp(zq, np.maximum.accumulate(Z[m:e + 1]), P[m:e + 1])
+        alt = np.where(take, np.where(u >= 0, landing, Pf), alt)
+        log_w = np.where(take, log_ndtr(-math.sqrt(12.0) * np.abs(u)), log_w)
+    return alt, log_w
+
+
+def lever_curve_registry(z_rel, segment, model, k: float, span: float, dz=None):
     """:func:`lever_curve` for a registry contact law: the equilibria are located on the law's
     polylines (contact-radius parametrisation) and refined by Newton steps in A on the exact
-    normalised curve (or in the penetration on the tail)."""
+    normalised curve (or in the penetration on the tail). With ``dz`` (each sample's piezo interval)
+    also returns the other branch and the log of its probability at every sample of a segment with a
+    jump (:func:`_jump_alternatives`): ``(F, F_alt, log_w)``."""
     zmin, zmax = float(z_rel.min()), float(z_rel.max())
     lines = registry_polylines(model, min(zmin, 0.0) - 0.05 * span, max(zmax, 0.0) + 0.05 * span, n_contact=500,
                                n_tail=300)  # a bracket only: Newton refines on the exact curve
     sc = model.scales
     du, Pu = sc.d_unit, sc.P_unit
     F = np.empty(len(z_rel))
+    F_alt = np.full(len(z_rel), np.nan)
+    lw_alt = np.full(len(z_rel), -np.inf)
     for s_, branch in ((0, "loading"), (1, "unloading")):
         sel = segment == s_
         if not sel.any():
@@ -243,6 +284,10 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float) -> np.nda
         delta, P, A = lines[branch]
         Z = delta + P / k
         n = len(Z)
+        if dz is not None:  # the retract mirrored: its followed branch is the running maximum of -Z
+            alt, lw = (_jump_alternatives(Z, P, zq, dz[sel]) if s_ == 0 else
+                       _jump_alternatives(-Z[::-1], P[::-1], -zq, dz[sel]))
+            F_alt[sel], lw_alt[sel] = alt, lw
         if s_ == 0:
             env = np.maximum.accumulate(Z)
             idx = np.searchsorted(env, zq, side="left") - 1
@@ -276,7 +321,9 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float) -> np.nda
                 d = np.where(gp > 0, d - g / np.where(gp > 0, gp, 1.0), d)
             Fq[tail] = Pu * model.nd_tail(d / du)[0]
         F[sel] = Fq
-    return F
+    if dz is None:
+        return F
+    return F, np.where(np.isfinite(lw_alt), F_alt, F), lw_alt
 
 
 def _z0_for_lambda(lam: float, W: float, R: float, K: float) -> float:
@@ -363,6 +410,16 @@ class ForceCurveProblem:
         t = d.time if d.time is not None else np.arange(self.n, dtype=float)
         self.tau = (t - 0.5 * (t.min() + t.max())) / max(float(np.ptp(t)), 1e-300)
         self.separation = False  # residuals in the force-separation domain (starting values only)
+        # each sample's piezo interval (the spacing to its neighbours along its segment): where a
+        # predicted jump falls inside it, the sample is a mixture of the two branches
+        # (:func:`_jump_alternatives`), so the misfit is continuous in the parameters
+        self.dz = np.empty(self.n)
+        for s_ in (0, 1):
+            idx = np.nonzero(d.segment == s_)[0]
+            o = idx[np.argsort(d.z[idx], kind="stable")]
+            g_ = np.abs(np.gradient(d.z[o])) if len(o) > 1 else np.zeros(len(o))
+            pos = g_[g_ > 0]
+            self.dz[o] = np.where(g_ > 0, g_, float(np.median(pos)) if len(pos) else 1e-12)
         # starting values: contact point where the approach force first exceeds 20 noise levels above
         # its far baseline (fitted as a line over the far half)
         app = d.segment == 0
@@ -419,13 +476,21 @@ class ForceCurveProblem:
         return st
 
     def predict(self, values, causes=()) -> np.ndarray:
+        return self._predict_branches(values, causes)[0]
+
+    def _predict_branches(self, values, causes=()):
+        """The predicted force at every sample, the other branch of a jump and the log of its
+        probability (``-inf`` without a jump; :func:`_jump_alternatives`)."""
         d = self.data
         st = self.state(values, causes)
-        F = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k)
-        F = F + st.b0 + st.b1 * d.z + st.drift * self.tau
-        for tf in st.transforms:
-            F = tf(self, F)
-        return F
+        F, F_alt, w = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k, self.dz)
+        out = []
+        for G in (F, F_alt):
+            G = G + st.b0 + st.b1 * d.z + st.drift * self.tau
+            for tf in st.transforms:
+                G = tf(self, G)
+            out.append(G)
+        return out[0], out[1], w
 
     def _separation_residuals(self, values, causes) -> np.ndarray:
         """Residuals in the force-separation domain: the measured force minus the baseline, against
@@ -520,20 +585,38 @@ class ForceCurveProblem:
             self.separation = False
         return out
 
-    def _curve(self, st: ForceState, z_rel, segment, k):
+    def _curve(self, st: ForceState, z_rel, segment, k, dz=None):
+        """The lever's force along ``z_rel``; with ``dz`` (the samples' piezo intervals) the triple
+        ``(F, F_alt, log_w)`` of :func:`lever_curve_registry` (laws without jumps: ``log_w`` = -inf)."""
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         if model is None:
-            return lever_curve(z_rel, segment, Pl, Pu, k, self.span)
-        return lever_curve_registry(z_rel, segment, model, k, self.span)
+            F = lever_curve(z_rel, segment, Pl, Pu, k, self.span)  # Hertz, cone: monotone, no jumps
+            return F if dz is None else (F, F, np.full(len(F), -np.inf))
+        return lever_curve_registry(z_rel, segment, model, k, self.span, dz)
 
     def residuals(self, values, causes=()) -> np.ndarray:
+        """Normalised residuals; in a segment with a predicted jump, the signed root of the deviance of
+        the two-branch mixture, ``-2 ln((1 - w) e^{-ra^2/2} + w e^{-rb^2/2})`` (>= the smaller of
+        ``ra^2``, ``rb^2 - 2 ln w``; the sign of the nearer branch; :func:`_jump_alternatives`):
+        continuous in the parameters as a jump crosses a sample, where the point residual changes by
+        the whole step (a finite-difference Jacobian across it stalled the fits). Equal to the point
+        residual to round-off away from the jump."""
         try:
             if self.separation:
                 return self._separation_residuals(values, causes)
-            m = self.predict(values, causes)
+            m, m_alt, lw = self._predict_branches(values, causes)
         except (ProbedynError, FloatingPointError, ValueError):
             return np.full(self.n, 1e6)
-        return (self.data.force - m) / self.sigma
+        y = self.data.force
+        r = (y - m) / self.sigma
+        mix = np.isfinite(lw)
+        if mix.any():
+            ra, rb, lwm = r[mix], (y[mix] - m_alt[mix]) / self.sigma, lw[mix]
+            dev = -2.0 * np.logaddexp(np.log1p(-np.exp(lwm)) - 0.5 * ra * ra, lwm - 0.5 * rb * rb)
+            near = np.where(np.abs(ra) <= np.abs(rb), ra, rb)
+            sgn = np.where(near >= 0, 1.0, -1.0)
+            r[mix] = sgn * np.sqrt(np.maximum(dev, 0.0))
+        return r
 
     def physical_rms(self, r) -> float:
         return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
