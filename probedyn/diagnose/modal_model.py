@@ -64,7 +64,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg  # noqa: F401  (sp.linalg)
-from scipy.optimize import linear_sum_assignment
+from scipy.optimize import brentq, linear_sum_assignment
 
 from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, SolverError
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
@@ -204,14 +204,14 @@ def observed_order(d: list[tuple[float, float]]) -> float | None:
     if not (rb > ra > 1.0) or da == 0.0 or db / da <= 0:
         return None
     ratio = db / da
-    g = lambda q: (rb**q - 1.0) / (ra**q - 1.0)  # noqa: E731  (increasing in q, -> ln rb / ln ra at q = 0)
+
+    def g(q: float) -> float:  # increasing in q, -> ln rb / ln ra at q = 0
+        return (rb**q - 1.0) / (ra**q - 1.0) - ratio
+
     lo, hi = 1e-3, 12.0
-    if not g(lo) < ratio < g(hi):
+    if not g(lo) < 0.0 < g(hi):
         return None
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if g(mid) < ratio else (lo, mid)
-    return 0.5 * (lo + hi)
+    return float(brentq(g, lo, hi, xtol=1e-12))
 
 
 class FEMBaseline:
