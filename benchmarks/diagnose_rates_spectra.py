@@ -73,7 +73,7 @@ def run_case(folder, case: dict) -> dict:
         row.update(verdict=f"error: {e}", findings=[], peaks=[], runtime_s=time.perf_counter() - t0,
                    cpu_s=time.process_time() - c0)
         return _score(row, effect, truth)
-    _BASES.setdefault(lever, prob.reference_baseline)
+    _BASES.setdefault(lever, prob.identification_baseline)  # the fit's baseline: refined from it per case
     row["peaks"] = [{"f0_Hz": p["f0_Hz"], "Q": p["Q"], "accepted": p["accepted"], "family": p["family"],
                      "order": p["order"], "reasons": p["reasons"]} for p in prob.peaks["peaks"]]
     res = diagnose(prob)

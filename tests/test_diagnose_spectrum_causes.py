@@ -24,7 +24,7 @@ from diagnose_truth_spectra import make_spectrum_case  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose  # noqa: E402
 from probedyn.diagnose.formats import read_measurement  # noqa: E402
-from probedyn.diagnose.spectrum import MATCH_TOL, spectrum_problem  # noqa: E402
+from probedyn.diagnose.spectrum import MATCH_TOL, _peak_noise, spectrum_problem  # noqa: E402
 
 SEED = 3019  # a width error of lever C in vacuum (the rate study's case)
 
@@ -46,6 +46,11 @@ def test_width_error_hidden_in_a_thermal_spectrum_is_found(tmp_path):
     for p in prob.peaks["peaks"]:
         if any(abs(p["f0_Hz"] - s) < 3 * prob.peaks["resolution_Hz"] for s in spurs):
             assert not p["accepted"]
+    # the fit's baseline is the labelling baseline refined for the accepted peaks' uncertainties
+    noise = _peak_noise(read_measurement(path), prob.peaks["peaks"])
+    assert sorted(noise) == sorted(acc)
+    assert noise == {(fa, int(o)): s for fa, o, s in zip(prob.data.family, prob.data.order, prob.data.freq_sigma)}
+    assert prob.reference_baseline is prob.identification_baseline.refined(noise)
     res = diagnose(prob)
     assert res["findings"] and res["findings"][0]["cause"] == "width-error", (res["verdict"], res["findings"])
     fit = res["findings"][0]["parameters"]["w_ratio"]["value"]

@@ -33,7 +33,14 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    predicts extra observables for each fitted model and the separating measurements are named.
    A problem with ``rank_by_heldout`` (modal) ranks the claimed causes and judges confounding by
    the uncapped held-out evidence: the cap bounds each cause against the baseline, and when
-   several causes reach it, it would rank only their in-sample fits.
+   several causes reach it, it would rank only their in-sample fits. A held-out difference is a
+   sum over the folds and has a standard error (``sqrt(n_folds var)`` of the per-fold differences of
+   the two causes' held-out chi^2, halved); a rival is also confounded while its held-out deficit is
+   within ``HELDOUT_SE_FACTOR`` = 2 of those standard errors (the difference is not resolved by the
+   folds: Vehtari, Gelman & Gabry 2017, LOO comparison by ``elpd_diff`` against its ``se_diff``)
+   *and* its in-sample Akaike deficit is within the margin (with a handful of folds one badly
+   predicted group inflates that standard error; then the in-sample fits must not separate them
+   either).
 6. **Extend** greedily while the extended model still fails the chi^2 test (at most
    ``max_causes``, each nested in the current model and passing the same tests).
 7. **Gain.** The final model is re-solved with the full model where the fits used a reduced
@@ -83,6 +90,9 @@ __all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
 
 ALPHA = 0.01
 EVIDENCE_MARGIN = math.log(10.0)
+#: a rival whose held-out deficit is within this many standard errors of the paired per-fold
+#: differences is confounded with the leader (``rank_by_heldout`` problems; module docstring, step 5)
+HELDOUT_SE_FACTOR = 2.0
 MAX_STARTS = 6
 
 
@@ -724,7 +734,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     reasons: list[str] = []
     if claimed:
         best = claimed[0]
-        rivals = [d for d in claimed[1:] if rank(d) >= rank(best) - margin and not d.get("contains_leader")]
+        rivals = [d for d in claimed[1:] if not d.get("contains_leader")
+                  and (rank(d) >= rank(best) - margin or (by_ho and _unresolved(best, d, cv, margin)))]
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
         current = best["fit"]
@@ -883,6 +894,29 @@ def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> No
     else:
         d["evidence"] = 0.5 * d["dchi2"] - d["k"]
         d["method"] = "akaike (fewer than 3 groups)"
+
+
+def _unresolved(best: dict, d: dict, cv: CrossValidation | None, margin: float) -> bool:
+    """Neither the folds nor the in-sample fits separate ``d`` from the leader ``best``: its held-out
+    deficit is within ``HELDOUT_SE_FACTOR`` standard errors of the paired per-fold differences and
+    its in-sample Akaike deficit ``(chi2_d - chi2_best) / 2 + k_d - k_best`` within ``margin``. Both
+    are needed: with a handful of folds one badly predicted group can make the standard error as
+    large as the difference itself (a cause worse in-sample by 250 in chi^2 is not a rival)."""
+    if best.get("evidence_cv") is None or d.get("evidence_cv") is None:
+        return False
+    ho = best["evidence_cv"] - d["evidence_cv"]
+    ins = 0.5 * (d["fit"].chi2 - best["fit"].chi2) + d["k"] - best["k"]
+    return ho <= HELDOUT_SE_FACTOR * _heldout_diff_se(best, d, cv) and ins < margin
+
+
+def _heldout_diff_se(a: dict, b: dict, cv: CrossValidation | None) -> float:
+    """Standard error (nats) of the held-out evidence difference of two claimed causes: half the
+    ``sqrt(n var)`` of their per-fold held-out chi^2 differences (0 without cross-validation)."""
+    ra, rb = a["fit"].cv_r, b["fit"].cv_r
+    if cv is None or ra is None or rb is None or len(cv.folds) < 2:
+        return 0.0
+    diff = np.array([np.nansum(ra[fold] ** 2) - np.nansum(rb[fold] ** 2) for fold in cv.folds])
+    return 0.5 * float(np.sqrt(len(diff) * np.var(diff)))
 
 
 def _candidate_row(d: dict) -> dict[str, Any]:

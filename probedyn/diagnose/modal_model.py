@@ -54,6 +54,7 @@ final extended model is re-solved with the full FEM (:func:`full_solve`).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import time
@@ -224,6 +225,7 @@ class FEMBaseline:
         mesh is refined until the estimated discretisation error of each is at most
         :data:`DISC_NOISE_FRACTION` of it (within ``dof_budget`` DOFs)."""
         self.dof_budget = int(dof_budget)
+        self.needed, self.max_modes = dict(needed), int(max_modes)
         t0 = time.perf_counter()
         self.probe = probe
         self.values = dict(values)
@@ -426,43 +428,80 @@ class FEMBaseline:
             fine["element_size"] = fine["element_size"] / 2.0
         return fine, 1.0
 
+    def excess(self, noise: dict[tuple[str, int], float]) -> float:
+        """The largest ratio of a used frequency's estimated discretisation error to
+        :data:`DISC_NOISE_FRACTION` of its noise (``noise``: Hz per ``(family, order)``)."""
+        worst = 0.0
+        for (fa, o), sig in noise.items():
+            if sig > 0 and np.isfinite(sig):
+                worst = max(worst, self.disc_err[self.index(fa, o)] / (DISC_NOISE_FRACTION * sig))
+        return worst
+
     def _refine_for(self, noise: dict[tuple[str, int], float], needed: dict[str, int], max_modes: int) -> None:
         """Refine the mesh until every used frequency's estimated error is at most
         :data:`DISC_NOISE_FRACTION` of its noise, within ``dof_budget``."""
-        def excess() -> float:
-            worst = 0.0
-            for (fa, o), sig in noise.items():
-                if sig > 0 and np.isfinite(sig):
-                    worst = max(worst, self.disc_err[self.index(fa, o)] / (DISC_NOISE_FRACTION * sig))
-            return worst
+        while self.excess(noise) > 1.0:
+            if not self._refine_step(needed, max_modes, self.excess(noise)):
+                return
 
-        while excess() > 1.0:
-            nxt = self._finer()
-            if nxt is None:
-                return
-            vals, s = nxt
-            try:
-                m = build_within_budget(self.probe, self.probe.resolve(vals), s)
-            except ProbedynError:
-                return
-            if m.dofs > self.dof_budget and s < self.stretch:
-                # the stretch that fills the budget (DOFs ~ 1 / s^2)
-                s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
-                if s > 0.85 * self.stretch:
-                    self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
-                                       f"{self.dof_budget}), the estimate enters sigma")
-                    return
-                m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s))
-            if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
+    def _refine_step(self, needed: dict[str, int], max_modes: int, ratio: float) -> bool:
+        """Replace the mesh by the next finer one within ``dof_budget`` (and re-estimate its
+        discretisation error); False (with a note) when there is none."""
+        nxt = self._finer()
+        if nxt is None:
+            return False
+        vals, s = nxt
+        try:
+            m = build_within_budget(self.probe, self.probe.resolve(vals), s)
+        except ProbedynError:
+            return False
+        if m.dofs > self.dof_budget and s < self.stretch:
+            # the stretch that fills the budget (DOFs ~ 1 / s^2)
+            s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
+            if s > 0.85 * self.stretch:
                 self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
                                    f"{self.dof_budget}), the estimate enters sigma")
-                return
-            self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}, "
-                                    f"error/noise {excess():.2g})")
-            self.mesh_values, self.stretch = dict(self.probe.resolve(vals)), max(1.0, s)
-            self._build(m, needed, max_modes)
-            self.disc_err = np.zeros(len(self.families))
-            self._estimate_discretisation(needed, len(self.families))
+                return False
+            m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s))
+        if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
+            self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
+                               f"{self.dof_budget}), the estimate enters sigma")
+            return False
+        self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}, "
+                                f"error/noise {ratio:.2g})")
+        self.mesh_values, self.stretch = dict(self.probe.resolve(vals)), max(1.0, s)
+        self._build(m, needed, max_modes)
+        self.disc_err = np.zeros(len(self.families))
+        self._estimate_discretisation(needed, len(self.families))
+        return True
+
+    def refined(self, noise: dict[tuple[str, int], float]) -> FEMBaseline:
+        """This baseline, or the finer one (same probe, same budget) whose estimated discretisation
+        error of every ``(family, order)`` in ``noise`` is at most :data:`DISC_NOISE_FRACTION` of
+        its noise (Hz) -- the refinement ``FEMBaseline(..., noise=noise)`` makes, for a baseline
+        built before the noise was known (a spectrum's peaks are labelled on it). The chain of finer
+        meshes does not depend on the noise (only where it stops), so each finer baseline is built
+        once and kept: measurements of one probe with different noise share them."""
+        b = self
+        while b.excess(noise) > 1.0:
+            if "_finer_baseline" not in b.__dict__:
+                c = copy.copy(b)
+                for attr in ("reduced", "_finer_baseline"):  # the Ritz reduction belongs to b's mesh
+                    c.__dict__.pop(attr, None)
+                c.refinements = list(b.refinements)
+                t0 = time.perf_counter()
+                ok = c._refine_step(b.needed, b.max_modes, b.excess(noise))
+                if ok:
+                    c.beam_gap, c.plate_gap, c.beam_note = c._beam_gap()
+                    c.solve_s = b.solve_s + time.perf_counter() - t0
+                    b._finer_baseline = c
+                else:  # no finer mesh within the budget: the estimate enters sigma (the note says why)
+                    b._finer_baseline = None
+                    b.disc_note = c.disc_note
+            if b._finer_baseline is None:
+                return b
+            b = b._finer_baseline
+        return b
 
     # -- geometry helpers ---------------------------------------------------------------------
     def mass_path(self, xi: np.ndarray) -> np.ndarray:

@@ -464,8 +464,14 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     if not acc:
         raise DataFormatError(f"{meas.path}: none of the {len(table)} peaks is a mode of the probe model "
                               f"({'; '.join(r for t in table for r in t['reasons'][:1])})")
-    prob = _modal_problem(meas, table, base, L)
+    # the labels are settled on the identification mesh; the fit is made on the mesh whose estimated
+    # discretisation error of every accepted peak is at most DISC_NOISE_FRACTION of that peak's
+    # frequency uncertainty (the modal problem's rule for its stated noise, within the same DOF
+    # budget): the peaks' uncertainties are known only once they are labelled
+    fit_base = base.refined(_peak_noise(meas, table))
+    prob = _modal_problem(meas, table, fit_base, L)
     prob.kind = meas.kind
+    prob.identification_baseline = base
     # the folds of the cross-validation (one mode left out) start from the null and from the full-data
     # optimum of the cause's parameters (engine: ``cv_warm``). A cause located by several modes (a point
     # mass: mass and position) has several (mass, position) pairs that fit four of five modes about
@@ -563,6 +569,20 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     return table
 
 
+def _peak_sigma(meas: SpectrumData, acc: list[dict]) -> np.ndarray:
+    """Frequency uncertainty (Hz) of accepted peaks: the line fit's standard error of the centre and
+    the declared relative calibration uncertainty, in quadrature."""
+    f = np.array([t["f0_Hz"] for t in acc])
+    return np.sqrt(np.array([t["f0_sigma_Hz"] for t in acc]) ** 2 + (meas.freq_rel * f) ** 2)
+
+
+def _peak_noise(meas: SpectrumData, table: list[dict]) -> dict[tuple[str, int], float]:
+    """The frequency uncertainty (Hz) of every accepted peak by its ``(family, order)`` label: the
+    ``noise`` a FEM baseline is refined for (:meth:`FEMBaseline.refined`)."""
+    acc = [t for t in table if t["accepted"]]
+    return {(t["family"], int(t["order"])): float(s) for t, s in zip(acc, _peak_sigma(meas, acc))}
+
+
 def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) -> ModalProblem:
     """The modal problem of the accepted peaks (frequency with the fit's standard error and the
     declared calibration uncertainty, Q with its fit error)."""
@@ -570,7 +590,7 @@ def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) 
     fam = np.array([t["family"] for t in acc])
     order = np.array([t["order"] for t in acc])
     f = np.array([t["f0_Hz"] for t in acc])
-    sig = np.sqrt(np.array([t["f0_sigma_Hz"] for t in acc]) ** 2 + (meas.freq_rel * f) ** 2)
+    sig = _peak_sigma(meas, acc)
     Q = np.array([t["Q"] for t in acc])
     qrel = np.where(np.isfinite(Q), np.maximum(np.array([t["Q_sigma"] for t in acc]) / Q, 1e-3), np.nan)
     md = ModalData(path=meas.path, kind="modal", meta=meas.meta, description=meas.description, medium=meas.medium,
