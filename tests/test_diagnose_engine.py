@@ -109,3 +109,31 @@ def test_no_second_beam_or_friction_model_in_diagnose():
     assert "from probedyn.schemes.ffm import" in src["friction.py"]  # the FFM integrator users run
     assert "probedyn.schemes.contact" in src["forcecurve.py"]  # the contact registry's adhesion laws
     assert "probe.build(" in src["modal_model.py"]  # the probe's own FEM
+
+
+def test_causes_the_folds_do_not_resolve_are_confounded():
+    """Held-out-ranked problems (modal, spectra): a rival whose held-out deficit is within 2 paired
+    standard errors (half sqrt(n var) of the per-fold held-out chi^2 differences) AND whose in-sample
+    Akaike deficit is within the margin is confounded; a rival far behind in sample is not, however
+    large the folds' scatter (with five folds one badly predicted mode inflates the standard error)."""
+    from types import SimpleNamespace as NS
+
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN, HELDOUT_SE_FACTOR, _heldout_diff_se, _unresolved
+
+    cv = NS(folds=[np.array([i]) for i in range(5)])
+
+    def cand(cv_r, chi2, k, ev):
+        return {"fit": NS(cv_r=np.array(cv_r, float), chi2=chi2), "k": k, "evidence_cv": ev}
+
+    lead = cand([1.0, -1.0, 0.5, 1.0, -0.5], 3.0, 2, 100.0)
+    # per-fold differences of held-out chi^2 (lead - rival): the rival predicts two folds worse
+    rival = cand([1.0, -3.0, 0.5, 2.0, -0.5], 4.4, 1, 100.0 - 5.5)
+    d = np.array([0.0, 1.0 - 9.0, 0.0, 1.0 - 4.0, 0.0])
+    se = 0.5 * np.sqrt(5 * np.var(d))
+    assert _heldout_diff_se(lead, rival, cv) == pytest.approx(se, rel=1e-12)
+    assert 5.5 > EVIDENCE_MARGIN and 5.5 <= HELDOUT_SE_FACTOR * se  # outside the margin, inside 2 SE
+    assert _unresolved(lead, rival, cv, EVIDENCE_MARGIN)  # in sample: 0.7 - 1 nats behind
+    far = dict(rival, fit=NS(cv_r=rival["fit"].cv_r, chi2=261.0))  # same folds, chi^2 261 in sample
+    assert not _unresolved(lead, far, cv, EVIDENCE_MARGIN)
+    resolved = dict(rival, evidence_cv=100.0 - 2.5 * HELDOUT_SE_FACTOR * se)
+    assert not _unresolved(lead, resolved, cv, EVIDENCE_MARGIN)
