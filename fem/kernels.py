@@ -6,7 +6,12 @@ cache is per source file, so editing the drivers does not recompile these).
 * :func:`upper_triangle` - PARDISO's 1-based int32 upper triangle of a symmetric CSR matrix;
 * :func:`free_upper_pattern` - the same pattern predicted from the node adjacency (no values);
 * :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
-* :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
+* :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place;
+* :func:`block_to_csr` / :func:`scalar_to_vector_csr` - the interleaved (3N x 3N) CSR arrays of
+  a 3 x 3 block matrix / of ``kron(S, I3)`` in one pass (what scipy's ``bsr.tocsr()`` and a
+  numpy gather produced, the same arrays);
+* :func:`csr_matmat_rows` - rows ``r0:r1`` of ``A @ X`` (CSR times a dense block), releasing
+  the GIL so that Python threads can compute disjoint row ranges at once.
 """
 
 from __future__ import annotations
@@ -299,4 +304,65 @@ def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
 
 
 
-__all__ = ["pattern", "principal_submatrix", "upper_triangle", "free_upper_pattern", "jacobian", "stiffness_kernel", "mass_kernel"]
+# ---------------------------------------------------------------------------------------
+# CSR conversions and products
+# ---------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def block_to_csr(indptr, indices, blocks, vptr, vind, vdat):  # pragma: no cover - compiled
+    """Fill ``vptr``, ``vind``, ``vdat`` (preallocated: 3N + 1, 9 nnzb, 9 nnzb) with the CSR of
+    the 3 x 3 block matrix (``indptr``, ``indices``, ``blocks`` (nnzb, 3, 3)): row ``3 s + c``
+    holds ``blocks[k, c, d]`` at column ``3 t + d`` for the blocks k = (s, t) of block row s,
+    in their order (sorted block rows give sorted rows; every block entry kept, as scipy's
+    ``bsr_matrix.tocsr``)."""
+    n = indptr.size - 1
+    vptr[0] = 0
+    for s in range(n):
+        lo = indptr[s]
+        L = 3 * (indptr[s + 1] - lo)
+        for c in range(3):
+            base = 9 * lo + c * L
+            vptr[3 * s + c + 1] = base + L
+            for k in range(lo, indptr[s + 1]):
+                q = base + 3 * (k - lo)
+                t3 = 3 * indices[k]
+                for d in range(3):
+                    vind[q + d] = t3 + d
+                    vdat[q + d] = blocks[k, c, d]
+
+
+@njit(cache=True)
+def scalar_to_vector_csr(indptr, indices, data, vptr, vind, vdat):  # pragma: no cover - compiled
+    """Fill ``vptr``, ``vind``, ``vdat`` (preallocated: 3N + 1, 3 nnz, 3 nnz) with the CSR of
+    ``kron(S, I3)`` in the interleaved numbering, only its non-zeros: row ``3 s + c`` holds
+    ``S[s, t]`` at column ``3 t + c``."""
+    n = indptr.size - 1
+    vptr[0] = 0
+    for s in range(n):
+        lo = indptr[s]
+        L = indptr[s + 1] - lo
+        for c in range(3):
+            base = 3 * lo + c * L
+            vptr[3 * s + c + 1] = base + L
+            for k in range(lo, indptr[s + 1]):
+                vind[base + k - lo] = 3 * indices[k] + c
+                vdat[base + k - lo] = data[k]
+
+
+@njit(cache=True, nogil=True)
+def csr_matmat_rows(indptr, indices, data, X, Y, r0, r1):  # pragma: no cover - compiled
+    """``Y[r0:r1] = (A @ X)[r0:r1]`` for CSR ``A`` and C-ordered ``X`` (n, k), ``Y`` zeroed.
+    Each entry is accumulated over its row's non-zeros in their stored order, as scipy's
+    ``csr_matvecs`` does (the same sums, bit for bit).  Compiled with ``nogil``: threads that
+    own disjoint row ranges run at once without a numba threading layer."""
+    k = X.shape[1]
+    for i in range(r0, r1):
+        for p in range(indptr[i], indptr[i + 1]):
+            a = data[p]
+            j = indices[p]
+            for c in range(k):
+                Y[i, c] += a * X[j, c]
+
+
+__all__ = ["pattern", "principal_submatrix", "upper_triangle", "free_upper_pattern", "jacobian", "stiffness_kernel", "mass_kernel",
+           "block_to_csr", "scalar_to_vector_csr", "csr_matmat_rows"]
