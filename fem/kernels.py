@@ -27,9 +27,13 @@ from numba import njit
 @njit(cache=True)
 def pattern(ed, n):  # pragma: no cover - compiled
     """Node adjacency of ``ed`` (nel, nb) as CSR (indptr, indices sorted per row) and the
-    position ``pos[e, a, b]`` of block (ed[e, a], ed[e, b]) in ``indices``."""
+    position ``pos[e, a, b]`` of block (ed[e, a], ed[e, b]) in ``indices``.
+
+    Per row s: its neighbours are inserted in order as they are found (rows are short: 15-60
+    nodes for quadratic elements), then every element block of row s is located by a scatter
+    array ``loc[t]`` = position of column t in the row (no search, no per-row allocation)."""
     nel, nb = ed.shape
-    # node -> elements
+    # node -> (element, local index) incidences
     cnt = np.zeros(n + 1, np.int64)
     for e in range(nel):
         for a in range(nb):
@@ -41,15 +45,15 @@ def pattern(ed, n):  # pragma: no cover - compiled
     for e in range(nel):
         for a in range(nb):
             s = ed[e, a]
-            n2e[fill[s]] = e
+            n2e[fill[s]] = e * nb + a
             fill[s] += 1
-    # rows: unique neighbours, sorted
+    # row lengths: unique neighbours
     mark = np.full(n, -1, np.int64)
     indptr = np.zeros(n + 1, np.int64)
     for s in range(n):
         c = 0
         for k in range(cnt[s], cnt[s + 1]):
-            e = n2e[k]
+            e = n2e[k] // nb
             for b in range(nb):
                 t = ed[e, b]
                 if mark[t] != s:
@@ -57,35 +61,31 @@ def pattern(ed, n):  # pragma: no cover - compiled
                     c += 1
         indptr[s + 1] = indptr[s] + c
     indices = np.empty(indptr[n], np.int64)
+    pos = np.empty((nel, nb, nb), np.int64)
+    loc = np.empty(n, np.int64)
     mark[:] = -1
     for s in range(n):
-        p = indptr[s]
+        lo = indptr[s]
+        p = lo
         for k in range(cnt[s], cnt[s + 1]):
-            e = n2e[k]
+            e = n2e[k] // nb
             for b in range(nb):
                 t = ed[e, b]
-                if mark[t] != s:
+                if mark[t] != s:  # insert t into the sorted row
                     mark[t] = s
-                    indices[p] = t
+                    q = p
+                    while q > lo and indices[q - 1] > t:
+                        indices[q] = indices[q - 1]
+                        q -= 1
+                    indices[q] = t
                     p += 1
-        indices[indptr[s]:indptr[s + 1]] = np.sort(indices[indptr[s]:indptr[s + 1]])
-    pos = np.empty((nel, nb, nb), np.int64)
-    for e in range(nel):
-        for a in range(nb):
-            s = ed[e, a]
-            lo = indptr[s]
-            hi = indptr[s + 1]
+        for q in range(lo, p):
+            loc[indices[q]] = q
+        for k in range(cnt[s], cnt[s + 1]):
+            e = n2e[k] // nb
+            a = n2e[k] - e * nb
             for b in range(nb):
-                t = ed[e, b]
-                # binary search of t in indices[lo:hi]
-                i0, i1 = lo, hi
-                while i1 - i0 > 1:
-                    mid = (i0 + i1) // 2
-                    if indices[mid] <= t:
-                        i0 = mid
-                    else:
-                        i1 = mid
-                pos[e, a, b] = i0
+                pos[e, a, b] = loc[ed[e, b]]
     return indptr, indices, pos
 
 
