@@ -89,10 +89,12 @@ def pattern(ed, n):  # pragma: no cover - compiled
     return indptr, indices, pos
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover - compiled
     """CSR arrays of ``A[keep][:, keep]`` (``new[j]`` = position of column j in ``keep`` or -1);
-    one pass over the kept rows, sorted rows stay sorted (``new`` is monotone on ``keep``)."""
+    one pass over the kept rows, sorted rows stay sorted (``new`` is monotone on ``keep``).  The
+    column indices keep the input's integer type (no int64 copy of a 20M-entry int32 array);
+    ``nogil``: K's and M's submatrices can be taken at once in two threads."""
     m = keep.size
     ptr = np.zeros(m + 1, np.int64)
     for i in range(m):
@@ -102,7 +104,7 @@ def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover -
             if new[indices[k]] >= 0:
                 c += 1
         ptr[i + 1] = ptr[i] + c
-    ind = np.empty(ptr[m], np.int64)
+    ind = np.empty(ptr[m], indices.dtype)
     val = np.empty(ptr[m], data.dtype)
     for i in range(m):
         r = keep[i]

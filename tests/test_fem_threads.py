@@ -102,3 +102,19 @@ def test_threaded_solvers_give_the_serial_frequencies(monkeypatch):
     np.testing.assert_array_equal(res[1][0], res[2][0])
     assert res[2][1].method == "mixed"
     np.testing.assert_allclose(np.sqrt(res[2][1].eigenvalues), np.sqrt(res[1][1].eigenvalues), rtol=1e-10)
+
+
+def test_free_matrices_in_two_threads_equal_the_serial_ones(monkeypatch):
+    from probedyn.fem import model as fm
+
+    b = cantilever_hex(300e-6, 30e-6, 10e-6, HexDivisions(1), "hex-s2")
+    got = {}
+    for t in (1, 2):
+        monkeypatch.setattr(fm, "matmat_threads", lambda t=t: t)
+        monkeypatch.setattr(fm, "FREE_THREADS_MIN_NNZ", 0)
+        got[t] = ElasticModel(b, {"body": get_material("silicon")}, clamp=["clamp"]).free_matrices()
+    for A, B in zip(got[1], got[2]):
+        for a in ("indptr", "indices", "data"):
+            np.testing.assert_array_equal(getattr(A, a), getattr(B, a))
+            assert getattr(A, a).dtype == getattr(B, a).dtype
+        assert A.has_canonical_format and B.has_canonical_format
