@@ -55,6 +55,16 @@ Usage::
     .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
         --double --out benchmarks/results/modal-s7-265k-quiet-double.txt
 
+    # session 8 (threaded sparse / tall products in the eigen-solvers, compiled CSR conversions;
+    # the mixed path's total now counts the mixed solver's own time): the quiet peer run, the
+    # A/B with the double path, and the A/B of the threads (NUMBA_NUM_THREADS=1: scipy's products)
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s8-265k-quiet.txt
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \\
+        --double --out benchmarks/results/modal-s8-265k-quiet-double.txt
+    NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 \\
+        --no-accuracy --out benchmarks/results/modal-s8-265k-quiet-1thread.txt
+
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
 smooth in maxh (``ngsolve_peer.py --count --maxh H`` meshes only and prints the DOFs; measured
