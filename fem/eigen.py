@@ -631,9 +631,12 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     return w[o], X[:, o], n_solved, info
 
 
-#: :func:`matmat`: products with fewer multiply-adds (nnz x columns) stay in scipy (a thread
-#: start costs ~0.1 ms; 10M multiply-adds take ~10 ms)
-MATMAT_MIN_WORK = 2_000_000
+#: :func:`matmat` / :func:`rows_matmul`: products with fewer multiply-adds stay serial (scipy /
+#: numpy).  A thread start costs ~0.1 ms, but on a loaded machine a second thread only adds CPU
+#: (docs/fem.md "Session 8"), so only the large models where the eigen phase's products take
+#: seconds (from ~60k DOFs: K x 6 columns ~20M multiply-adds) use threads; the default probes'
+#: solves (~14k DOFs) and the test suite keep the serial path
+MATMAT_MIN_WORK = 20_000_000
 
 
 def matmat_threads() -> int:

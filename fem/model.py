@@ -43,8 +43,8 @@ Where = Union[str, Sequence[float], np.ndarray]
 
 
 #: ElasticModel.free_matrices takes K's and M's free-DOF submatrices in two threads from this
-#: many non-zeros of K (0.55 s of compiled copying at 265k DOFs; a thread start is ~0.1 ms)
-FREE_THREADS_MIN_NNZ = 1_000_000
+#: many non-zeros of K (~60k DOFs; 0.55 s of compiled copying at 265k DOFs), as fem.eigen.MATMAT_MIN_WORK
+FREE_THREADS_MIN_NNZ = 5_000_000
 
 
 def principal_submatrix(A: sp.spmatrix, keep: np.ndarray) -> sp.csr_matrix:
