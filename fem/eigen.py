@@ -65,6 +65,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from probedyn.core.errors import SolverError
+from probedyn.fem.kernels import csr_matmat_rows as _csr_matmat_rows
 from probedyn.fem.kernels import upper_triangle as _upper_triangle
 
 SOLVERS = ("auto", "pardiso", "superlu")
@@ -529,8 +530,8 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     Qb, MQb, OQb, MOQb = (np.empty((n, cap), order="F") for _ in range(4))
     H, G = np.zeros((cap, cap)), np.zeros((cap, cap))
     rng = np.random.default_rng(seed)
-    W = fac.solve(M @ rng.standard_normal((n, b)))  # one smoothing solve: a start rich in low modes
-    W, MW = _m_orthonormalize(W, M @ W)
+    W = fac.solve(matmat(M, rng.standard_normal((n, b))))  # one smoothing solve: a start rich in low modes
+    W, MW = _m_orthonormalize(W, matmat(M, W))
     m = 0
     n_solved = b
     info: dict[str, Any] = {"block": b, "steps": max_blocks - 1, "cycles": 1, "restarts": 0, "history": []}
@@ -545,7 +546,7 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
         if OW is None:
             OQb[:, sl] = fac.solve(MW)
             n_solved += k
-            MOQb[:, sl] = M @ OQb[:, sl]
+            MOQb[:, sl] = matmat(M, OQb[:, sl])
         else:
             OQb[:, sl], MOQb[:, sl] = OW, MOW
         H[: m + k, sl] = MQb[:, : m + k].T @ OQb[:, sl]
@@ -561,7 +562,7 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
             W -= Qa @ (MQa.T @ W)
         # M W explicitly: as a combination M OP Q_src - M Q C it would carry the cancellation of
         # the orthogonalisation (relative error eps / residual once the Ritz pairs converge)
-        return _m_orthonormalize(W, M @ W, max_cols=max_cols)
+        return _m_orthonormalize(W, matmat(M, W), max_cols=max_cols)
 
     append(W, MW)
     prev = None
@@ -630,6 +631,85 @@ def block_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, sigma: float, fac:
     return w[o], X[:, o], n_solved, info
 
 
+#: :func:`matmat` / :func:`rows_matmul`: products with fewer multiply-adds stay serial (scipy /
+#: numpy).  A thread start costs ~0.1 ms, but on a loaded machine a second thread only adds CPU
+#: (docs/fem.md "Session 8"), so only the large models where the eigen phase's products take
+#: seconds (from ~60k DOFs: K x 6 columns ~20M multiply-adds) use threads; the default probes'
+#: solves (~14k DOFs) and the test suite keep the serial path
+MATMAT_MIN_WORK = 20_000_000
+
+
+def matmat_threads() -> int:
+    """Threads of :func:`matmat`: numba's thread count (``NUMBA_NUM_THREADS``, the number of
+    CPUs unless set; the report's workers set 1), as for every compiled kernel."""
+    import numba
+
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def matmat(A: sp.spmatrix, X: np.ndarray, threads: int | None = None) -> np.ndarray:
+    """``A @ X`` for a CSR matrix and a dense block X (n, k), its rows split between threads.
+
+    The same sums as scipy's ``csr_matvecs`` (every entry accumulated over its row's non-zeros in
+    stored order), so the result is bit for bit scipy's (tests/test_fem_solver.py); rows are cut
+    at equal shares of the non-zeros.  The threads are plain Python threads running a compiled
+    kernel that releases the GIL (:func:`probedyn.fem.kernels.csr_matmat_rows`), started per
+    call: no numba threading layer (its default, workqueue, aborts on concurrent launches from
+    several threads; OpenMP's GNU runtime beside MKL's is not fork-safe), no pool to be left
+    broken in a forked child.  Anything but a float64 CSR matrix times a float64 2-D block, or a
+    small product, goes to scipy."""
+    nt = matmat_threads() if threads is None else int(threads)
+    if (nt < 2 or not sp.isspmatrix_csr(A) or A.dtype != np.float64 or getattr(X, "ndim", 0) != 2
+            or np.asarray(X).dtype != np.float64 or A.nnz * X.shape[1] < MATMAT_MIN_WORK):
+        return A @ X
+    n = A.shape[0]
+    Xc = np.ascontiguousarray(X)
+    Y = np.zeros((n, Xc.shape[1]))
+    cuts = np.searchsorted(A.indptr, np.linspace(0, A.nnz, nt + 1)[1:-1]).tolist()
+    bounds = list(zip([0] + cuts, cuts + [n]))
+    _in_threads(lambda r0, r1: _csr_matmat_rows(A.indptr, A.indices, A.data, Xc, Y, r0, r1), bounds)
+    return Y
+
+
+def rows_matmul(A: np.ndarray, B: np.ndarray, threads: int | None = None) -> np.ndarray:
+    """``A @ B`` for a tall dense A (n, m) and a small B (m, k), its rows split between threads
+    as :func:`matmat` (numpy releases the GIL inside BLAS; OpenBLAS itself keeps one thread,
+    ``probedyn/__init__.py``, so no spinning BLAS threads compete with MKL's between calls).
+    Each row's products are BLAS's own for that row: the result equals ``A @ B``
+    (tests/test_fem_solver.py).  Small products (``n m k`` below :data:`MATMAT_MIN_WORK`) and
+    single-thread settings call numpy once."""
+    nt = matmat_threads() if threads is None else int(threads)
+    n = A.shape[0]
+    if nt < 2 or B.ndim != 2 or n * A.shape[1] * B.shape[1] < MATMAT_MIN_WORK:
+        return A @ B
+    Y = np.empty((n, B.shape[1]), dtype=np.result_type(A, B))
+    cuts = np.linspace(0, n, nt + 1).astype(int).tolist()
+    bounds = list(zip(cuts[:-1], cuts[1:]))
+    _in_threads(lambda r0, r1: np.matmul(A[r0:r1], B, out=Y[r0:r1]), bounds)
+    return Y
+
+
+def _in_threads(fn: Callable[[int, int], Any], bounds: list[tuple[int, int]]) -> None:
+    """``fn(*b)`` for every row range b: the first in this thread, the others in new threads
+    (started per call, joined before returning; an exception in any is raised here)."""
+    errors: list[BaseException] = []
+
+    def part(r0: int, r1: int) -> None:
+        try:
+            fn(r0, r1)
+        except BaseException as exc:  # pragma: no cover - re-raised below
+            errors.append(exc)
+
+    workers = [threading.Thread(target=part, args=b, daemon=True) for b in bounds[1:]]
+    for w in workers:
+        w.start()
+    part(*bounds[0])
+    for w in workers:
+        w.join()
+    if errors:  # pragma: no cover
+        raise errors[0]
+
+
 #: mixed solver: Jacobi-preconditioned CG on M to this relative residual for ``r^T M^-1 r``
 MINV_RTOL = 1e-2
 
@@ -655,7 +735,7 @@ def _minv_norms(M: sp.spmatrix, R: np.ndarray, dinv: np.ndarray, rtol: float = M
     rz0 = rz.copy()
     alphas, betas = [], []
     for _k in range(max_iter):
-        MP = M @ P
+        MP = matmat(M, P)
         a = rz / np.einsum("ij,ij->j", P, MP)
         X += P * a
         S -= MP * a
@@ -729,7 +809,7 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
     if not np.all(dinv > 0):
         raise SolverError("mixed eigen-solver: the mass matrix has a non-positive diagonal")
     rng = np.random.default_rng(seed)
-    W = precondition(M @ rng.standard_normal((n, b)))
+    W = precondition(matmat(M, rng.standard_normal((n, b))))
     n_solved = b
     m = 0
     ratio = None  # ||r||^2_{M^-1} / ||r||^2_{D^-1} of the wanted pairs at the last CG evaluation
@@ -738,15 +818,15 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
     while True:
         for _pass in range(2):  # classical Gram-Schmidt, twice (M-inner product)
             if m:
-                W = W - Q[:, :m] @ (MQ[:, :m].T @ W)
-        W, MW = _m_orthonormalize(W, M @ W)
+                W = W - rows_matmul(Q[:, :m], MQ[:, :m].T @ W)
+        W, MW = _m_orthonormalize(W, matmat(M, W))
         k = W.shape[1]
         if k == 0:
             raise SolverError("mixed eigen-solver: the search space stopped growing")
         if m + k > cap:
             raise SolverError(f"mixed eigen-solver did not converge within {cap} vectors")
         sl = slice(m, m + k)
-        Q[:, sl], MQ[:, sl], KQ[:, sl] = W, MW, K @ W
+        Q[:, sl], MQ[:, sl], KQ[:, sl] = W, MW, matmat(K, W)
         A[: m + k, sl] = Q[:, : m + k].T @ KQ[:, sl]
         A[sl, :m] = A[:m, sl].T
         m += k
@@ -757,7 +837,7 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
         th, Y = np.linalg.eigh(0.5 * (A[:m, :m] + A[:m, :m].T))
         nxm = min(nx, m)
         Yx = Y[:, :nxm]
-        R = KQ[:, :m] @ Yx - MQ[:, :m] @ (Yx * th[:nxm])
+        R = rows_matmul(KQ[:, :m], Yx) - rows_matmul(MQ[:, :m], Yx * th[:nxm])
         d2 = np.einsum("ij,ij->j", R, R * dinv[:, None])  # ||r||^2_{D^-1}
         gap = np.array([np.min(np.abs(np.delete(th, i) - th[i])) for i in range(n_modes)])
         rel_gap = np.abs(th[:n_modes]) / np.maximum(gap, 1e-300)
@@ -783,7 +863,7 @@ def mixed_eigsh(K: sp.spmatrix, M: sp.spmatrix, n_modes: int, precondition: Call
         pick = np.argsort(-d2)[:b]  # the least converged of the lowest nx pairs
         W = precondition(np.asfortranarray(R[:, pick]))
         n_solved += W.shape[1]
-    X = Q[:, :m] @ Y[:, :n_modes]
+    X = rows_matmul(Q[:, :m], Y[:, :n_modes])
     return th[:n_modes].copy(), X, n_solved, info
 
 

@@ -6,7 +6,12 @@ cache is per source file, so editing the drivers does not recompile these).
 * :func:`upper_triangle` - PARDISO's 1-based int32 upper triangle of a symmetric CSR matrix;
 * :func:`free_upper_pattern` - the same pattern predicted from the node adjacency (no values);
 * :func:`stiffness_kernel` - element stiffness blocks ``sum_q w_q G_q^T C_q G_q`` added in place;
-* :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place.
+* :func:`mass_kernel` - scalar element masses ``int rho N_a N_b`` added in place;
+* :func:`block_to_csr` / :func:`scalar_to_vector_csr` - the interleaved (3N x 3N) CSR arrays of
+  a 3 x 3 block matrix / of ``kron(S, I3)`` in one pass (what scipy's ``bsr.tocsr()`` and a
+  numpy gather produced, the same arrays);
+* :func:`csr_matmat_rows` - rows ``r0:r1`` of ``A @ X`` (CSR times a dense block), releasing
+  the GIL so that Python threads can compute disjoint row ranges at once.
 """
 
 from __future__ import annotations
@@ -22,9 +27,13 @@ from numba import njit
 @njit(cache=True)
 def pattern(ed, n):  # pragma: no cover - compiled
     """Node adjacency of ``ed`` (nel, nb) as CSR (indptr, indices sorted per row) and the
-    position ``pos[e, a, b]`` of block (ed[e, a], ed[e, b]) in ``indices``."""
+    position ``pos[e, a, b]`` of block (ed[e, a], ed[e, b]) in ``indices``.
+
+    Per row s: its neighbours are inserted in order as they are found (rows are short: 15-60
+    nodes for quadratic elements), then every element block of row s is located by a scatter
+    array ``loc[t]`` = position of column t in the row (no search, no per-row allocation)."""
     nel, nb = ed.shape
-    # node -> elements
+    # node -> (element, local index) incidences
     cnt = np.zeros(n + 1, np.int64)
     for e in range(nel):
         for a in range(nb):
@@ -36,15 +45,15 @@ def pattern(ed, n):  # pragma: no cover - compiled
     for e in range(nel):
         for a in range(nb):
             s = ed[e, a]
-            n2e[fill[s]] = e
+            n2e[fill[s]] = e * nb + a
             fill[s] += 1
-    # rows: unique neighbours, sorted
+    # row lengths: unique neighbours
     mark = np.full(n, -1, np.int64)
     indptr = np.zeros(n + 1, np.int64)
     for s in range(n):
         c = 0
         for k in range(cnt[s], cnt[s + 1]):
-            e = n2e[k]
+            e = n2e[k] // nb
             for b in range(nb):
                 t = ed[e, b]
                 if mark[t] != s:
@@ -52,42 +61,40 @@ def pattern(ed, n):  # pragma: no cover - compiled
                     c += 1
         indptr[s + 1] = indptr[s] + c
     indices = np.empty(indptr[n], np.int64)
+    pos = np.empty((nel, nb, nb), np.int64)
+    loc = np.empty(n, np.int64)
     mark[:] = -1
     for s in range(n):
-        p = indptr[s]
+        lo = indptr[s]
+        p = lo
         for k in range(cnt[s], cnt[s + 1]):
-            e = n2e[k]
+            e = n2e[k] // nb
             for b in range(nb):
                 t = ed[e, b]
-                if mark[t] != s:
+                if mark[t] != s:  # insert t into the sorted row
                     mark[t] = s
-                    indices[p] = t
+                    q = p
+                    while q > lo and indices[q - 1] > t:
+                        indices[q] = indices[q - 1]
+                        q -= 1
+                    indices[q] = t
                     p += 1
-        indices[indptr[s]:indptr[s + 1]] = np.sort(indices[indptr[s]:indptr[s + 1]])
-    pos = np.empty((nel, nb, nb), np.int64)
-    for e in range(nel):
-        for a in range(nb):
-            s = ed[e, a]
-            lo = indptr[s]
-            hi = indptr[s + 1]
+        for q in range(lo, p):
+            loc[indices[q]] = q
+        for k in range(cnt[s], cnt[s + 1]):
+            e = n2e[k] // nb
+            a = n2e[k] - e * nb
             for b in range(nb):
-                t = ed[e, b]
-                # binary search of t in indices[lo:hi]
-                i0, i1 = lo, hi
-                while i1 - i0 > 1:
-                    mid = (i0 + i1) // 2
-                    if indices[mid] <= t:
-                        i0 = mid
-                    else:
-                        i1 = mid
-                pos[e, a, b] = i0
+                pos[e, a, b] = loc[ed[e, b]]
     return indptr, indices, pos
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover - compiled
     """CSR arrays of ``A[keep][:, keep]`` (``new[j]`` = position of column j in ``keep`` or -1);
-    one pass over the kept rows, sorted rows stay sorted (``new`` is monotone on ``keep``)."""
+    one pass over the kept rows, sorted rows stay sorted (``new`` is monotone on ``keep``).  The
+    column indices keep the input's integer type (no int64 copy of a 20M-entry int32 array);
+    ``nogil``: K's and M's submatrices can be taken at once in two threads."""
     m = keep.size
     ptr = np.zeros(m + 1, np.int64)
     for i in range(m):
@@ -97,7 +104,7 @@ def principal_submatrix(indptr, indices, data, keep, new):  # pragma: no cover -
             if new[indices[k]] >= 0:
                 c += 1
         ptr[i + 1] = ptr[i] + c
-    ind = np.empty(ptr[m], np.int64)
+    ind = np.empty(ptr[m], indices.dtype)
     val = np.empty(ptr[m], data.dtype)
     for i in range(m):
         r = keep[i]
@@ -299,4 +306,65 @@ def mass_kernel(Xe, dNg, N, W, rho, pos, out):  # pragma: no cover - compiled
 
 
 
-__all__ = ["pattern", "principal_submatrix", "upper_triangle", "free_upper_pattern", "jacobian", "stiffness_kernel", "mass_kernel"]
+# ---------------------------------------------------------------------------------------
+# CSR conversions and products
+# ---------------------------------------------------------------------------------------
+
+@njit(cache=True)
+def block_to_csr(indptr, indices, blocks, vptr, vind, vdat):  # pragma: no cover - compiled
+    """Fill ``vptr``, ``vind``, ``vdat`` (preallocated: 3N + 1, 9 nnzb, 9 nnzb) with the CSR of
+    the 3 x 3 block matrix (``indptr``, ``indices``, ``blocks`` (nnzb, 3, 3)): row ``3 s + c``
+    holds ``blocks[k, c, d]`` at column ``3 t + d`` for the blocks k = (s, t) of block row s,
+    in their order (sorted block rows give sorted rows; every block entry kept, as scipy's
+    ``bsr_matrix.tocsr``)."""
+    n = indptr.size - 1
+    vptr[0] = 0
+    for s in range(n):
+        lo = indptr[s]
+        L = 3 * (indptr[s + 1] - lo)
+        for c in range(3):
+            base = 9 * lo + c * L
+            vptr[3 * s + c + 1] = base + L
+            for k in range(lo, indptr[s + 1]):
+                q = base + 3 * (k - lo)
+                t3 = 3 * indices[k]
+                for d in range(3):
+                    vind[q + d] = t3 + d
+                    vdat[q + d] = blocks[k, c, d]
+
+
+@njit(cache=True)
+def scalar_to_vector_csr(indptr, indices, data, vptr, vind, vdat):  # pragma: no cover - compiled
+    """Fill ``vptr``, ``vind``, ``vdat`` (preallocated: 3N + 1, 3 nnz, 3 nnz) with the CSR of
+    ``kron(S, I3)`` in the interleaved numbering, only its non-zeros: row ``3 s + c`` holds
+    ``S[s, t]`` at column ``3 t + c``."""
+    n = indptr.size - 1
+    vptr[0] = 0
+    for s in range(n):
+        lo = indptr[s]
+        L = indptr[s + 1] - lo
+        for c in range(3):
+            base = 3 * lo + c * L
+            vptr[3 * s + c + 1] = base + L
+            for k in range(lo, indptr[s + 1]):
+                vind[base + k - lo] = 3 * indices[k] + c
+                vdat[base + k - lo] = data[k]
+
+
+@njit(cache=True, nogil=True)
+def csr_matmat_rows(indptr, indices, data, X, Y, r0, r1):  # pragma: no cover - compiled
+    """``Y[r0:r1] = (A @ X)[r0:r1]`` for CSR ``A`` and C-ordered ``X`` (n, k), ``Y`` zeroed.
+    Each entry is accumulated over its row's non-zeros in their stored order, as scipy's
+    ``csr_matvecs`` does (the same sums, bit for bit).  Compiled with ``nogil``: threads that
+    own disjoint row ranges run at once without a numba threading layer."""
+    k = X.shape[1]
+    for i in range(r0, r1):
+        for p in range(indptr[i], indptr[i + 1]):
+            a = data[p]
+            j = indices[p]
+            for c in range(k):
+                Y[i, c] += a * X[j, c]
+
+
+__all__ = ["pattern", "principal_submatrix", "upper_triangle", "free_upper_pattern", "jacobian", "stiffness_kernel", "mass_kernel",
+           "block_to_csr", "scalar_to_vector_csr", "csr_matmat_rows"]
