@@ -99,8 +99,8 @@ def run_case(folder: Path | None, seed: int, effect: str | None) -> dict:
     # passed against the noise but not against the current model's own error (engine.model_error_scale)
     row["finding_fits"] = [{"cause": f["cause"], "chi2_after": f["gain"]["chi2_after"], "delta_chi2": f["delta_chi2"],
                             "evidence": f["evidence"], "evidence_cv": f["evidence_cv"]} for f in res["findings"]]
-    row["extensions_not_claimed"] = [{k: v for k, v in x.items() if k != "reason"}
-                                     for x in res.get("extensions_not_claimed", [])]
+    row["not_claimed"] = [{k: v for k, v in x.items() if k != "reason"}
+                                     for x in res.get("not_claimed", [])]
     if effect is not None:
         # detectability (the same criterion for every data kind): a hidden effect is detectable when
         # the baseline fails its chi-square test at the diagnosis' alpha; below that no method can

@@ -709,6 +709,13 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             d["evidence"] = 0.5 * d["dchi2"] - d["k"]
             d["method"] = "akaike (fewer than 3 groups)"
     claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
+    not_claimed: list[dict] = []
+    if getattr(problem, "extension_vs_model_error", False):
+        # the same rule as for a further cause (step 6): a cause that takes less than EXCESS_FRACTION of
+        # the baseline's excess chi^2 - dof leaves more unexplained than it explains and is not claimed
+        for d in [d for d in claimed if d["dchi2"] < EXCESS_FRACTION * (base.chi2 - base.dof)]:
+            claimed.remove(d)
+            not_claimed.append(_not_claimed(d["cause"], [], d["dchi2"], d["lr_threshold"], base, d["evidence"]))
     # ranking: by the evidence (capped), or -- a problem with ``rank_by_heldout`` -- by the held-out
     # evidence itself: the cap bounds each cause's Bayes factor against the *baseline*, but when several
     # causes reach their caps it only ranks their in-sample fits (a cause with more parameters wins);
@@ -722,7 +729,6 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     parsimony = _parsimony(claimed, margin, alpha)
     findings: list[dict] = []
     confounded: list[dict] = []
-    not_claimed: list[dict] = []
     chosen: list[Cause] = []
     current = base
     reasons: list[str] = []
@@ -758,13 +764,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                 thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
                 if dchi2 <= thr:
                     continue
-                excess = current.chi2 - current.dof
-                if vs_me and dchi2 < EXCESS_FRACTION * excess:  # (in sample: no cross-validation spent on it)
-                    not_claimed.append({"cause": c.key, "after": [x.key for x in chosen], "delta_chi2": dchi2,
-                                        "lr_threshold": thr, "excess_before": excess,
-                                        "fraction_of_excess": dchi2 / excess,
-                                        "reason": f"takes {dchi2 / excess:.0%} of the current model's excess chi^2 - dof "
-                                                  f"(< {EXCESS_FRACTION:.0%}): not separable from that model's own error"})
+                if vs_me and dchi2 < EXCESS_FRACTION * (current.chi2 - current.dof):  # (in sample: no cross-validation spent on it)
+                    not_claimed.append(_not_claimed(c, chosen, dchi2, thr, current, None))
                     continue
                 e = {"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr, "lr_pass": True}
                 _evidence(e, current, cv, use_cv)
@@ -780,6 +781,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     # 7. the final model re-solved with the full model (where the fits used a reduced one)
     final = _final(problem, F, current, base, cv, folds, use_cv)
     verdict, reasons = _verdict(significant, findings, confounded, final, alpha)
+    if not findings and not_claimed:
+        reasons = reasons + [f"{x['cause']}: {x['reason']}" for x in not_claimed]
     result = {
         "measurement": str(getattr(problem, "path", "")),
         "kind": problem.kind,
@@ -804,7 +807,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         "candidates": [_candidate_row(d) for d in sorted(cands, key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))],
         "findings": findings,
         "confounded": confounded,
-        "extensions_not_claimed": not_claimed,
+        "not_claimed": not_claimed,
         "verdict": verdict,
         "verdict_reasons": reasons,
         "final": final["report"],
@@ -815,6 +818,14 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     if extra:
         result.update(extra())
     return result
+
+
+def _not_claimed(c, after, dchi2: float, thr: float, ref: "Fit", evidence) -> dict[str, Any]:
+    excess = ref.chi2 - ref.dof
+    return {"cause": c.key, "after": [x.key for x in after], "delta_chi2": dchi2, "lr_threshold": thr,
+            "evidence": evidence, "excess_before": excess, "fraction_of_excess": dchi2 / excess,
+            "reason": f"takes {dchi2 / excess:.0%} of the excess chi^2 - dof of the model it extends "
+                      f"(< {EXCESS_FRACTION:.0%}): not separable from that model's own error"}
 
 
 def _limit_refits(F: Fitter, causes: list, fits: list) -> list:
