@@ -122,7 +122,10 @@ def miss_class(r: dict) -> str:
     if r["effect"] is None:
         return f"null: claimed {r['findings'][0]} ({r['verdict']})"
     if not r["findings"]:
-        return f"{r['effect']}: nothing claimed ({r['verdict']}, baseline p = {r['baseline_p']:.2g})"
+        nc = [x for x in r.get("not_claimed", []) if not x.get("after")]
+        why = (f"; not claimed (excess rule): " + ", ".join(f"{x['cause']} {x['fraction_of_excess']:.0%} of the excess"
+                                                           for x in nc)) if nc else ""
+        return f"{r['effect']}: nothing claimed ({r['verdict']}, baseline p = {r['baseline_p']:.2g}{why})"
     return f"{r['effect']}: named {r['findings'][0]} first ({r['verdict']})"
 
 
