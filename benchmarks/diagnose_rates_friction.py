@@ -123,8 +123,8 @@ def miss_class(r: dict) -> str:
         return f"null: claimed {r['findings'][0]} ({r['verdict']})"
     if not r["findings"]:
         nc = [x for x in r.get("not_claimed", []) if not x.get("after")]
-        why = (f"; not claimed (excess rule): " + ", ".join(f"{x['cause']} {x['fraction_of_excess']:.0%} of the excess"
-                                                           for x in nc)) if nc else ""
+        why = ("; not claimed (remainder rule): " + ", ".join(f"{x['cause']} dchi2 {x['delta_chi2']:.3g} <= remainder "
+                                                              f"{x['remainder']:.3g}" for x in nc)) if nc else ""
         return f"{r['effect']}: nothing claimed ({r['verdict']}, baseline p = {r['baseline_p']:.2g}{why})"
     return f"{r['effect']}: named {r['findings'][0]} first ({r['verdict']})"
 
