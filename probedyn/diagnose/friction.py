@@ -764,8 +764,8 @@ class FrictionProblem:
         # full-data optimum (engine: cv_warm, cv_warm_all)
         self.cv_warm = True
         self.cv_warm_all = True
-        # a second cause is claimed only if it takes the greater part of the first cause's excess chi^2
-        # (engine.EXCESS_FRACTION): the stick-slip models of thermal activation and misalignment do not
+        # a cause is claimed only if its gain exceeds the excess the greedy chain up to it leaves
+        # (engine._beyond_remainder): the stick-slip models of thermal activation and misalignment do not
         # reproduce a Langevin truth's slips to the noise, and any cause absorbs part of that model error
         # (session 6: 15/50 hidden cases reported a second cause not in the truth)
         self.extension_vs_model_error = True
