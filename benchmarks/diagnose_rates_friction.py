@@ -95,6 +95,12 @@ def run_case(folder: Path | None, seed: int, effect: str | None) -> dict:
            "wall_s": wall, "cpu_s": cpu, "model_evaluations": res["model_evaluations"],
            "candidates": {c["cause"]: {"delta_chi2": c["delta_chi2"], "evidence": c["evidence"]}
                           for c in res["candidates"]}}
+    # per finding: chi^2 after it (the first cause's model error) and its held-out gain; extensions that
+    # passed against the noise but not against the current model's own error (engine.model_error_scale)
+    row["finding_fits"] = [{"cause": f["cause"], "chi2_after": f["gain"]["chi2_after"], "delta_chi2": f["delta_chi2"],
+                            "evidence": f["evidence"], "evidence_cv": f["evidence_cv"]} for f in res["findings"]]
+    row["not_claimed"] = [{k: v for k, v in x.items() if k != "reason"}
+                                     for x in res.get("not_claimed", [])]
     if effect is not None:
         # detectability (the same criterion for every data kind): a hidden effect is detectable when
         # the baseline fails its chi-square test at the diagnosis' alpha; below that no method can
@@ -116,7 +122,10 @@ def miss_class(r: dict) -> str:
     if r["effect"] is None:
         return f"null: claimed {r['findings'][0]} ({r['verdict']})"
     if not r["findings"]:
-        return f"{r['effect']}: nothing claimed ({r['verdict']}, baseline p = {r['baseline_p']:.2g})"
+        nc = [x for x in r.get("not_claimed", []) if not x.get("after")]
+        why = ("; not claimed (remainder rule): " + ", ".join(f"{x['cause']} dchi2 {x['delta_chi2']:.3g} <= remainder "
+                                                              f"{x['remainder']:.3g}" for x in nc)) if nc else ""
+        return f"{r['effect']}: nothing claimed ({r['verdict']}, baseline p = {r['baseline_p']:.2g}{why})"
     return f"{r['effect']}: named {r['findings'][0]} first ({r['verdict']})"
 
 

@@ -716,6 +716,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             d["evidence"] = 0.5 * d["dchi2"] - d["k"]
             d["method"] = "akaike (fewer than 3 groups)"
     claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
+    not_claimed: list[dict] = []
+    vs_me = bool(getattr(problem, "extension_vs_model_error", False))
     # ranking: by the evidence (capped), or -- a problem with ``rank_by_heldout`` -- by the held-out
     # evidence itself: the cap bounds each cause's Bayes factor against the *baseline*, but when several
     # causes reach their caps it only ranks their in-sample fits (a cause with more parameters wins);
@@ -739,6 +741,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
         current = best["fit"]
+        chain = [current]
         chosen.append(best["cause"])
         findings.append(_finding(problem, F, base, best, confounded[0] if confounded else None))
         if parsimony:
@@ -769,9 +772,29 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             findings.append(_finding(problem, F, current, nxt, None))
             chosen.append(nxt["cause"])
             current = nxt["fit"]
+            chain.append(current)
+        # a problem with ``extension_vs_model_error``: every claimed cause must take more than the excess
+        # the chain leaves unexplained (_beyond_remainder)
+        if vs_me:
+            j = _beyond_remainder([f["delta_chi2"] for f in findings], chain)
+            for i in range(j, len(findings)):
+                f = findings[i]
+                not_claimed.append({"cause": f["cause"], "after": [x["cause"] for x in findings[:i]],
+                                    "delta_chi2": f["delta_chi2"], "evidence": f["evidence"],
+                                    "remainder": max(chain[i].chi2 - chain[i].dof, 0.0),
+                                    "reason": "a gain in the chain up to it does not exceed the excess chi^2 - dof that "
+                                              "chain leaves unexplained: not separable from the model error that "
+                                              "remainder shows"})
+            if j < len(findings):
+                findings, chosen = findings[:j], chosen[:j]
+                current = chain[j - 1] if j else base
+                if not j:
+                    confounded = []
     # 7. the final model re-solved with the full model (where the fits used a reduced one)
     final = _final(problem, F, current, base, cv, folds, use_cv)
     verdict, reasons = _verdict(significant, findings, confounded, final, alpha)
+    if not findings and not_claimed:
+        reasons = reasons + [f"{x['cause']}: {x['reason']}" for x in not_claimed]
     result = {
         "measurement": str(getattr(problem, "path", "")),
         "kind": problem.kind,
@@ -796,6 +819,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         "candidates": [_candidate_row(d) for d in sorted(cands, key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))],
         "findings": findings,
         "confounded": confounded,
+        "not_claimed": not_claimed,
         "verdict": verdict,
         "verdict_reasons": reasons,
         "final": final["report"],
@@ -806,6 +830,25 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     if extra:
         result.update(extra())
     return result
+
+
+def _beyond_remainder(gains: list[float], fits: list["Fit"]) -> int:
+    """The number of leading causes of a greedy chain that are claimed: the longest prefix c_1..c_j in
+    which every cause's gain (``gains``: its Delta chi^2 over the model it extended) exceeds the excess
+    chi^2 - dof that c_1..c_j leaves, R_j (``fits[j - 1]``).
+
+    Physical reason: R_j is what the catalog's models demonstrably do not describe (their own error,
+    or an effect outside the catalog). A cause whose gain is below that remainder is within the size
+    of the model error present and may be absorbing part of it (a stick-slip model that misplaces
+    slips leaves a slip-structured residual any flexible cause partly fits); a real cause takes its
+    signal, and with every real effect in the chain R_j is the noise's ~sqrt(2 dof). For the last
+    cause this reads "it takes more than half of the excess it found"; several comparable real
+    effects are all claimed when the chain holds them (R small), whatever their order."""
+    for j in range(len(fits), 0, -1):
+        R = max(fits[j - 1].chi2 - fits[j - 1].dof, 0.0)
+        if all(g > R for g in gains[:j]):
+            return j
+    return 0
 
 
 def _limit_refits(F: Fitter, causes: list, fits: list) -> list:

@@ -729,10 +729,15 @@ class FrictionProblem:
         u0_loop = float(np.median(self.loop.U0 / self.loads)) if self.loop is not None else u0_start
         u0_starts = tuple(x for x in (0.85 * u0_start, 1.2 * u0_start, u0_loop)
                           if 1e-2 * u0_start <= x <= 1e2 * u0_start)
+        # the period sets the slip pattern: a period off by da misplaces the n-th slip by n da, another
+        # basin once n da exceeds half a period over the scan; where the two independent estimates (the
+        # slip positions, the periodogram) differ by that much, the baseline also starts from the other
+        n_per = max(float(max(np.ptp(s_.position) for s_ in sc)) / self.a_est, 1.0)
+        a_starts = ((self.a_est,) if abs(self.a_est - self.a_slip) > 0.5 * self.a_est / n_per else ())
         self.base_params = [
             CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
                        scale="log", starts=u0_starts),
-            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period"),
+            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period", starts=a_starts),
         ]
         self.temperature = data.temperature
         self.N_mean = N
@@ -759,6 +764,11 @@ class FrictionProblem:
         # full-data optimum (engine: cv_warm, cv_warm_all)
         self.cv_warm = True
         self.cv_warm_all = True
+        # a cause is claimed only if its gain exceeds the excess the greedy chain up to it leaves
+        # (engine._beyond_remainder): the stick-slip models of thermal activation and misalignment do not
+        # reproduce a Langevin truth's slips to the noise, and any cause absorbs part of that model error
+        # (session 6: 15/50 hidden cases reported a second cause not in the truth)
+        self.extension_vs_model_error = True
         self.causes = []
         for cls in catalog("friction"):
             c = cls().constrain(self)

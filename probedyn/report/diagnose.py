@@ -83,6 +83,9 @@ def summary(res: dict[str, Any]) -> str:
                      f"{g['residual_rms_before']:.2f} -> {g['residual_rms_after']:.2f} sigma{ho}")
         for fl in f["flags"]:
             lines.append(f"  flag: {fl}")
+    for x in res.get("not_claimed") or []:
+        lines.append(f"not claimed: {x['cause']} (Delta chi2 {x['delta_chi2']:.4g}; the chain up to it leaves an excess "
+                     f"chi2 - dof of {x['remainder']:.4g} that no cause describes: not separable from that model error)")
     for c in res["confounded"]:
         lines.append(f"CONFOUNDED within {c['margin_nats']:.2f} nats: " + ", ".join(
             f"{n} ({e:.1f})" for n, e in zip(c["causes"], c["evidence"])))
