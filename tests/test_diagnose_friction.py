@@ -27,6 +27,7 @@ from scipy.stats import chi2
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from diagnose_truth import make_friction_case  # noqa: E402
+from toy_problem import ToyProblem  # noqa: E402
 
 from probedyn.diagnose.causes import Cause, CauseParam  # noqa: E402
 from probedyn.diagnose.engine import Fitter, diagnose  # noqa: E402
@@ -140,35 +141,22 @@ class _Inert(Cause):
         pass
 
 
-class _StalledBaseline:
+class _StalledBaseline(ToyProblem):
     """y = exp(b t) with 1 % noise; the least-squares cap (nfev_per_param = 1) stops the baseline fit
     from b = 0 far from its optimum b = 2, as a rugged stick-slip chi^2 stopped a friction null's."""
 
-    kind, unit, path, reduced = "toy", "1", "toy", False
     nfev_per_param = 1
 
     def __init__(self):
         rng = np.random.default_rng(0)
         self.t = np.linspace(0.0, 1.0, 200)
-        self.y = np.exp(2.0 * self.t) + 0.01 * rng.standard_normal(len(self.t))
+        self.y = np.exp(2.0 * self.t) + self.noise * rng.standard_normal(len(self.t))
         self.groups = np.arange(len(self.t)) % 4
         self.base_params = [CauseParam("b", "1", -5.0, 5.0, 0.0, "rate")]
         self.causes = [_Inert()]
 
     def residuals(self, values, causes=()):
-        return (self.y - np.exp(values["b"] * self.t)) / 0.01
-
-    def physical_rms(self, r):
-        return float(np.sqrt(np.mean(np.asarray(r) ** 2))) * 0.01
-
-    def structure(self, r):
-        return {}
-
-    def describe(self):
-        return {}
-
-    def model_description(self):
-        return {}
+        return (self.y - np.exp(values["b"] * self.t)) / self.noise
 
 
 def test_a_stalled_baseline_is_refitted_not_explained_by_a_cause():

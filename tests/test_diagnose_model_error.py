@@ -11,10 +11,16 @@ under ``not_claimed``.
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 
 from probedyn.diagnose.causes import Cause, CauseParam
 from probedyn.diagnose.engine import diagnose
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from toy_problem import ToyProblem  # noqa: E402
 
 
 class _Slope(Cause):
@@ -41,17 +47,16 @@ class _Bump(Cause):
         pass
 
 
-class _Toy:
+class _Toy(ToyProblem):
     """y = 1 + 2 t (+ extra) with noise 0.01, t in [0, 1] recorded in each of 8 groups; baseline a
     constant; causes a slope and a wave cos(6 pi t)."""
 
-    kind, unit, path, reduced = "toy", "1", "toy", False
 
     def __init__(self, extra, opt_in: bool, bump: bool = False):
         rng = np.random.default_rng(3)
         # every group records the same pattern (as every scan segment records the same slips)
         self.t = np.tile(np.linspace(0.0, 1.0, 50), 8)
-        self.y = 1.0 + 2.0 * self.t + extra(self.t) + 0.01 * rng.standard_normal(len(self.t))
+        self.y = 1.0 + 2.0 * self.t + extra(self.t) + self.noise * rng.standard_normal(len(self.t))
         self.groups = np.repeat(np.arange(8), 50)
         self.base_params = [CauseParam("b", "1", -5.0, 5.0, 0.0, "offset")]
         self.causes = [_Slope(), _Wave()] + ([_Bump()] if bump else [])
@@ -66,19 +71,7 @@ class _Toy:
                 m = m + values["c"] * np.cos(6 * np.pi * self.t)
             if c.key == "bump":
                 m = m + values["d"] * np.cos(2 * np.pi * self.t)
-        return (self.y - m) / 0.01
-
-    def physical_rms(self, r):
-        return float(np.sqrt(np.mean(np.asarray(r) ** 2))) * 0.01
-
-    def structure(self, r):
-        return {}
-
-    def describe(self):
-        return {}
-
-    def model_description(self):
-        return {}
+        return (self.y - m) / self.noise
 
 
 def _form_error(t):
