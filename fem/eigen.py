@@ -651,7 +651,7 @@ def matmat(A: sp.spmatrix, X: np.ndarray, threads: int | None = None) -> np.ndar
     """``A @ X`` for a CSR matrix and a dense block X (n, k), its rows split between threads.
 
     The same sums as scipy's ``csr_matvecs`` (every entry accumulated over its row's non-zeros in
-    stored order), so the result is bit for bit scipy's (tests/test_fem_solver.py); rows are cut
+    stored order), so the result is bit for bit scipy's (tests/test_fem_threads.py); rows are cut
     at equal shares of the non-zeros.  The threads are plain Python threads running a compiled
     kernel that releases the GIL (:func:`probedyn.fem.kernels.csr_matmat_rows`), started per
     call: no numba threading layer (its default, workqueue, aborts on concurrent launches from
@@ -667,7 +667,7 @@ def matmat(A: sp.spmatrix, X: np.ndarray, threads: int | None = None) -> np.ndar
     Y = np.zeros((n, Xc.shape[1]))
     cuts = np.searchsorted(A.indptr, np.linspace(0, A.nnz, nt + 1)[1:-1]).tolist()
     bounds = list(zip([0] + cuts, cuts + [n]))
-    _in_threads(lambda r0, r1: _csr_matmat_rows(A.indptr, A.indices, A.data, Xc, Y, r0, r1), bounds)
+    in_threads(lambda r0, r1: _csr_matmat_rows(A.indptr, A.indices, A.data, Xc, Y, r0, r1), bounds)
     return Y
 
 
@@ -676,7 +676,7 @@ def rows_matmul(A: np.ndarray, B: np.ndarray, threads: int | None = None) -> np.
     as :func:`matmat` (numpy releases the GIL inside BLAS; OpenBLAS itself keeps one thread,
     ``probedyn/__init__.py``, so no spinning BLAS threads compete with MKL's between calls).
     Each row's products are BLAS's own for that row: the result equals ``A @ B``
-    (tests/test_fem_solver.py).  Small products (``n m k`` below :data:`MATMAT_MIN_WORK`) and
+    (tests/test_fem_threads.py).  Small products (``n m k`` below :data:`MATMAT_MIN_WORK`) and
     single-thread settings call numpy once."""
     nt = matmat_threads() if threads is None else int(threads)
     n = A.shape[0]
@@ -685,18 +685,19 @@ def rows_matmul(A: np.ndarray, B: np.ndarray, threads: int | None = None) -> np.
     Y = np.empty((n, B.shape[1]), dtype=np.result_type(A, B))
     cuts = np.linspace(0, n, nt + 1).astype(int).tolist()
     bounds = list(zip(cuts[:-1], cuts[1:]))
-    _in_threads(lambda r0, r1: np.matmul(A[r0:r1], B, out=Y[r0:r1]), bounds)
+    in_threads(lambda r0, r1: np.matmul(A[r0:r1], B, out=Y[r0:r1]), bounds)
     return Y
 
 
-def _in_threads(fn: Callable[[int, int], Any], bounds: list[tuple[int, int]]) -> None:
-    """``fn(*b)`` for every row range b: the first in this thread, the others in new threads
-    (started per call, joined before returning; an exception in any is raised here)."""
+def in_threads(fn: Callable[..., Any], bounds: list[tuple]) -> None:
+    """``fn(*b)`` for every argument tuple b (a row range, or a task): the first in this thread,
+    the others in new threads (started per call, joined before returning; an exception in any is
+    raised here).  For compiled kernels that release the GIL."""
     errors: list[BaseException] = []
 
-    def part(r0: int, r1: int) -> None:
+    def part(*args: Any) -> None:
         try:
-            fn(r0, r1)
+            fn(*args)
         except BaseException as exc:  # pragma: no cover - re-raised below
             errors.append(exc)
 

@@ -20,7 +20,6 @@ on a clamped boundary) are eliminated before solving.
 
 from __future__ import annotations
 
-import threading
 import time
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence, Union
@@ -32,7 +31,7 @@ from probedyn.core import progress
 from probedyn.core.errors import GeometryError, MaterialError, ParameterError, SolverError
 from probedyn.fem import elasticity as el
 from probedyn.fem.assembly import element_kind, element_volumes
-from probedyn.fem.eigen import Analysis, auto_method, factorize, have_pardiso, matmat_threads, shift_invert_eigsh
+from probedyn.fem.eigen import Analysis, auto_method, factorize, have_pardiso, in_threads, matmat_threads, shift_invert_eigsh
 from probedyn.fem.kernels import free_upper_pattern as _free_upper_pattern
 from probedyn.fem.kernels import principal_submatrix as _principal_submatrix
 from probedyn.fem.materials import Material, get_material
@@ -293,12 +292,7 @@ class ElasticModel:
                 out[i] = principal_submatrix(A, free)
 
             if matmat_threads() > 1 and K.nnz >= FREE_THREADS_MIN_NNZ:  # K's and M's at once (nogil kernel)
-                side = threading.Thread(target=take, args=(1, M), daemon=True)
-                side.start()
-                take(0, K)
-                side.join()
-                if out[1] is None:  # pragma: no cover - the thread failed: its error, here
-                    take(1, M)
+                in_threads(take, [(0, K), (1, M)])
             else:
                 take(0, K)
                 take(1, M)
