@@ -1,7 +1,7 @@
 """Discretisation error of the diagnosis' FEM mesh on a thin lever, against a converged mesh.
 
 Usage: ``python benchmarks/diagnose_thin_lever_mesh.py [LENGTH WIDTH THICKNESS]`` (SI; default the
-200 x 30 x 2 um silicon lever of ``thermal_psd_air``). Prints the relative frequency error of
+200 x 30 x 2 um silicon lever of the session-6 ``thermal_psd_air``). Prints the relative frequency error of
 flapwise 1-4, lateral 1 and torsion 1 for: the diagnosis' mesh (``thickness_stretch``: meshed
 ``s`` times thicker and stretched back), its Richardson companion (1 layer, the same stretch), the
 same stretch with an axial element size of 2 t, against an unstretched mesh with 4 layers (the

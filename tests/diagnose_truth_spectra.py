@@ -122,18 +122,23 @@ def thermal_lines(freq, f0s, Qs, areas) -> np.ndarray:
 
 
 def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, truth_kind: str = "fem",
-                       declared_medium: str | None = "vacuum", T: float = 295.0) -> tuple[Path, dict]:
+                       declared_medium: str | None = "vacuum", T: float = 295.0, params: dict | None = None,
+                       name: str | None = None, f_max: float | None = None) -> tuple[Path, dict]:
     """Write a thermal spectrum of lever ``lever`` with a hidden ``effect`` (None: noise only).
 
     ``effect = "fluid-loading"``: the lever is in water, ethanol or air and the medium is not declared. Otherwise the
-    truth is in ``declared_medium`` (vacuum or air; in air Sader loading of the flapwise modes)."""
+    truth is in ``declared_medium`` (vacuum or air; in air Sader loading of the flapwise modes).
+    ``params``: the effect's parameters (default: drawn from ``seed``; the seed's draws are consumed either
+    way, so the instrument draws are the same); ``name``: the file stem (default ``spectrum_<seed>``);
+    ``f_max``: the detector's bandwidth [Hz] (default: 1.2 x the highest of flapwise 3, lateral 1, torsion 1)."""
     rng = np.random.default_rng(seed)
-    params = draw_modal_effect(effect, lever, rng) if effect else {}
+    drawn = draw_modal_effect(effect, lever, rng) if effect else {}
+    params = dict(drawn if params is None else params)
     if effect == "fluid-loading":
         declared_medium = None  # the fluid (water, ethanol or air, as the modal study) is not declared
     medium = params.get("medium") if effect == "fluid-loading" else declared_medium
     tr = timoshenko_spectrum_truth(lever) if truth_kind == "timoshenko" else spectrum_fem_truth(lever, effect, params)
-    g = LEVERS[lever]
+    g = dt.lever_geometry(lever)
     f = np.array(tr["freqs"], float)
     d = np.array(tr["detector_disp"], float)
     Q_int = float(10 ** rng.uniform(2.3, 3.0))
@@ -147,7 +152,7 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
     ok = np.isfinite(f) & np.isfinite(d)
     # the band: up to 1.2 x the highest of flapwise 3, lateral 1, torsion 1 (a detector bandwidth)
     key = [i for i, m in enumerate(MODES) if m in (("flapwise", 3), ("lateral", 1), ("torsion", 1)) and ok[i]]
-    f_hi = 1.2 * max(f[i] for i in key)
+    f_hi = 1.2 * max(f[i] for i in key) if f_max is None else float(f_max)
     inband = ok & (f < f_hi / 1.05)
     f1 = f[0]
     df = float(np.min(f[inband] / Q[inband])) / 5.0  # the narrowest line spans 5 bins
@@ -168,7 +173,7 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
     f_rel = float(rng.choice([1e-4, 3e-4, 1e-3]))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    name = f"spectrum_{seed}"
+    name = name or f"spectrum_{seed}"
     np.savetxt(outdir / f"{name}.csv", np.column_stack([freq, S]), delimiter=",", header="frequency_Hz,value",
                comments="", fmt="%.10g")
     med = "" if declared_medium is None else f'name = "{declared_medium}"\n'

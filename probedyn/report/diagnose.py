@@ -213,7 +213,7 @@ def section(outdir: Path, quick: bool) -> str:
     text = intro + markdown(res, fr.name, fe.name)
     if not quick:
         conf = run(EXAMPLES / "afm_cantilever_one_mode.toml")
-        text += ("\n\n**A confounded case.** Only the first flapwise mode of a Si cantilever with a hidden tip mass "
+        text += ("\n\n**A confounded case.** Only the first flapwise mode of a Si cantilever 3 % thicker than nominal "
                  "(`examples/measurements/afm_cantilever_one_mode.*`): one number fits every cause that can move one "
                  "frequency, so the diagnosis names the group and the measurements that would separate it instead of "
                  "guessing.\n\n```\n" + summary(conf) + "\n```\n")
