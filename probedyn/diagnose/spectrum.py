@@ -28,10 +28,14 @@
    the parameter -- near buckling, a heavy tip mass), on the Ritz reduction. A hidden effect moves
    the families differently (a width error moves lateral and torsional modes only, a length error
    flapwise and lateral as 1/L^2 but torsion as 1/L), so the nearest nominal mode after one common
-   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings
-   (the nominal probe's among them when it places as many), and distinct labellings are decided by
-   their modal fit -- the baseline's chi-square or a single cause's plus its likelihood-ratio
-   threshold (:func:`_labelling_score`). Labellings within the evidence margin whose best models
+   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings,
+   the nominal probe's labelling always competes (whatever it places), and distinct labellings are
+   decided by their goodness of fit -- the baseline's chi-square or a single cause's plus its
+   likelihood-ratio threshold (:func:`_labelling_score`), plus for every resolved line of plausible Q
+   the labelling leaves unlabelled the largest chi-square a correct label could add
+   (:func:`_unlabelled_price`), not by the number of peaks placed (a hypothesis can place every
+   peak by mislabelling some: a soft clamp's lowered torsion taken for flapwise 3 under a point
+   mass). Labellings within the evidence margin whose best models
    differ leave the peaks they disagree on out (reported as ambiguous); if one cause explains them
    all, the best labelling is kept and the other's parameters reported.
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
