@@ -403,14 +403,25 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     # frequencies alone cannot decide: the labelling with the best goodness of fit -- its best model
     # (the baseline, or one catalog cause penalised by its likelihood-ratio threshold) plus the price
     # of the resolved lines it leaves unlabelled -- is taken (see _labelling_score, _unlabelled_price).
-    # Counting placed peaks first would let a labelling win by placing a peak wrongly
+    # Counting placed peaks first would let a labelling win by placing a peak wrongly; scoring alone
+    # would let a labelling win by leaving out a peak that no catalog model fits well (below)
     cands = [scored[0], *sorted((x for x in scored[1:] if x[0] == top), key=lambda x: x[1])]
     distinct: dict[tuple, tuple] = {}
     for _, _, h, sh in cands:
         tab = _label_table(meas, fits, [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])], sh, df)
         lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
         distinct.setdefault(lab, (lab, tab, h, sh))
-    options = list(distinct.values())[:1 + MAX_LABELLINGS]
+    # a labelling that agrees with another on every peak it labels and only leaves out lines the other
+    # places (each within the window of its predicted mode) does not compete: it proposes no other
+    # label for any line, it only deletes data, and a worse fit of the placed line is evidence about
+    # the model (a cause, an undeclared medium), which the modal engine judges, not about the labels
+    # (an undeclared air load moves flapwise 3 of a thin lever by ~3 %: dropping it halves the
+    # baseline's chi-square and would hide the very discrepancy to be diagnosed)
+    def _sub(a: tuple, b: tuple) -> bool:
+        return a != b and all(x is None or x == y for x, y in zip(a, b))
+
+    labs = list(distinct)
+    options = [distinct[a] for a in labs if not any(_sub(a, b) for b in labs)][:1 + MAX_LABELLINGS]
     from probedyn.diagnose.engine import EVIDENCE_MARGIN
 
     scores: list[tuple[float, str | None, dict]] = []
