@@ -104,6 +104,11 @@ def test_identification_grid_is_refined_where_the_modes_move():
     (3006, "axial-prestress", "A", [("flapwise", 1), ("torsion", 1), ("flapwise", 3)], False),  # 0.43 of buckling
     (3020, "length-error", "C", [("torsion", 1)], False),  # torsion ~1/L, flapwise and lateral ~1/L^2
     (3011, "width-error", "B", [("lateral", 1), ("torsion", 1)], True),  # lateral ~w, torsion ~t/w
+    # a stiff but finite clamp lowers torsion 1 by 17 % (2.54 -> 2.105 MHz, between flapwise 2 and 3)
+    # where no hypothesis places it; a point mass placed all five peaks with it labelled flapwise 3
+    # (and flapwise 3 labelled lateral 2) at a modal chi2 of 2293: the labelling that leaves the
+    # line out (chi2 16 + its price 12.8) must win and flapwise 3 keep its true peak
+    (3025, "clamp-compliance", "A", [("flapwise", 1), ("flapwise", 2), ("flapwise", 3), ("lateral", 1)], False),
 ])
 def test_peaks_moved_by_a_hidden_effect_carry_their_true_labels(tmp_path, seed, effect, lever, must, ambiguous):
     """Spectra whose hidden effect moves the mode families differently (the rate study's former
@@ -123,3 +128,46 @@ def test_peaks_moved_by_a_hidden_effect_carry_their_true_labels(tmp_path, seed, 
         assert ok, (key, f, modes)
     if ambiguous:
         assert prob.peaks["labels_from"]["ambiguous_labellings"]
+
+
+def test_a_labelling_pays_for_the_resolved_lines_it_leaves_out():
+    """Labellings of different peak counts compete by goodness of fit (``_unlabelled_price``): a
+    resolved line of plausible Q left unlabelled costs the ``1 - ALPHA / N`` quantile of chi^2 with as
+    many degrees of freedom as its rows (frequency and Q: 2), the largest contribution a correct label
+    could plausibly add; lines with no line-shape evidence of a mode -- unresolved (a spur), a Q no mode
+    of the lever can have -- and labelled lines cost nothing. So a labelling placing the line with
+    chi^2 at its expectation (2) beats leaving it out, and one whose fit is worse than the quantile
+    loses to it."""
+    import math
+
+    from scipy.stats import chi2
+
+    from probedyn.diagnose.engine import ALPHA
+    from probedyn.diagnose.spectrum import _unlabelled_price
+
+    def line(accepted, mode_line, Q=300.0):
+        return {"accepted": accepted, "_mode_line": mode_line, "Q": Q}
+
+    table = [line(True, True), line(True, True), line(False, True), line(False, False, math.nan),
+             line(False, False, 5e4), line(True, True, math.nan)]
+    q = chi2.ppf(1 - ALPHA / len(table), 2)
+    assert _unlabelled_price(table) == pytest.approx(q, rel=1e-12)
+    assert 2.0 < q < 2 * 9.21  # above the expectation of a correct label, below two lines' chi2_2(0.99)
+    # a line left out with only its frequency measured: one degree of freedom
+    assert _unlabelled_price([line(False, True, math.nan), line(True, True)]) == pytest.approx(
+        chi2.ppf(1 - ALPHA / 2, 1), rel=1e-12)
+    assert _unlabelled_price([line(True, True), line(False, False)]) == 0.0
+
+
+@pytest.mark.slow
+def test_a_peak_no_model_fits_well_is_not_dropped_by_its_labelling():
+    """A labelling that only leaves out a line another labelling places (same labels elsewhere) does not
+    compete: it deletes data. The shipped thin lever in undeclared air (three flapwise lines of a
+    32-times averaged periodogram, the sidecar says vacuum): air loading moves flapwise 3 within the
+    window but no catalog model fits the three lines to the noise, and leaving flapwise 3 out halves the
+    baseline's chi^2 (237 + 11.4 against 489). The three lines are three flapwise modes (the sidecar's
+    families, one lever): all three must stay labelled, in order."""
+    toml = Path(__file__).resolve().parents[1] / "examples" / "measurements" / "thermal_psd_air.toml"
+    prob = spectrum_problem(read_measurement(toml))
+    acc = [(p["family"], p["order"]) for p in prob.peaks["peaks"] if p["accepted"]]
+    assert acc == [("flapwise", 1), ("flapwise", 2), ("flapwise", 3)], prob.peaks["peaks"]

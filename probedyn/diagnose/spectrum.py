@@ -28,10 +28,14 @@
    the parameter -- near buckling, a heavy tip mass), on the Ritz reduction. A hidden effect moves
    the families differently (a width error moves lateral and torsional modes only, a length error
    flapwise and lateral as 1/L^2 but torsion as 1/L), so the nearest nominal mode after one common
-   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings
-   (the nominal probe's among them when it places as many), and distinct labellings are decided by
-   their modal fit -- the baseline's chi-square or a single cause's plus its likelihood-ratio
-   threshold (:func:`_labelling_score`). Labellings within the evidence margin whose best models
+   scale may be another family's; the hypotheses placing the most resolved peaks propose labellings,
+   the nominal probe's labelling always competes (whatever it places), and distinct labellings are
+   decided by their goodness of fit -- the baseline's chi-square or a single cause's plus its
+   likelihood-ratio threshold (:func:`_labelling_score`), plus for every resolved line of plausible Q
+   the labelling leaves unlabelled the largest chi-square a correct label could add
+   (:func:`_unlabelled_price`), not by the number of peaks placed (a hypothesis can place every
+   peak by mislabelling some: a soft clamp's lowered torsion taken for flapwise 3 under a point
+   mass). Labellings within the evidence margin whose best models
    differ leave the peaks they disagree on out (reported as ambiguous); if one cause explains them
    all, the best labelling is kept and the other's parameters reported.
 4. The accepted peaks become modal rows (frequency with the fit's standard error and the
@@ -391,24 +395,33 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
         scored.append(((n_res,), (round(abs(math.log(sh)) / 0.01), round(dev2 / MATCH_TOL**2, 2),
                                          h["cause"] is not None), h, sh))
     top = max(k for k, *_ in scored)
-    # every hypothesis placing the most resolved peaks proposes a labelling; the nominal probe's is
-    # always among them when it places as many (first), then the causes' by how closely they place
-    # the peaks. Where labellings differ (a peak that is torsion 1 under a length error and lateral 2
-    # under the nominal probe after a common scale), frequencies alone cannot decide: the labelling
-    # whose modal fit is best -- the baseline, or one catalog cause penalised by its likelihood-ratio
-    # threshold -- is taken (see _labelling_score)
-    cands = sorted((x for x in scored[1:] if x[0] == top), key=lambda x: x[1])
-    if scored[0][0] == top:
-        cands = [scored[0], *cands]
-    # only labellings accepting the most peaks compete (a chi-square over fewer peaks is lower: a
-    # labelling must not win by leaving a peak out)
+    # every hypothesis placing the most resolved peaks proposes a labelling, by how closely it places
+    # the peaks, and the nominal probe's labelling always competes (first), however many peaks it
+    # places. Where labellings differ (a peak that is torsion 1 under a length error and lateral 2
+    # under the nominal probe after a common scale; a torsion lowered by a soft clamp that no
+    # hypothesis places, labelled flapwise 3 under a point mass that places every peak),
+    # frequencies alone cannot decide: the labelling with the best goodness of fit -- its best model
+    # (the baseline, or one catalog cause penalised by its likelihood-ratio threshold) plus the price
+    # of the resolved lines it leaves unlabelled -- is taken (see _labelling_score, _unlabelled_price).
+    # Counting placed peaks first would let a labelling win by placing a peak wrongly; scoring alone
+    # would let a labelling win by leaving out a peak that no catalog model fits well (below)
+    cands = [scored[0], *sorted((x for x in scored[1:] if x[0] == top), key=lambda x: x[1])]
     distinct: dict[tuple, tuple] = {}
     for _, _, h, sh in cands:
         tab = _label_table(meas, fits, [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])], sh, df)
         lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
         distinct.setdefault(lab, (lab, tab, h, sh))
-    n_acc = max(sum(x is not None for x in lab) for lab in distinct)
-    options = [o for lab, o in distinct.items() if sum(x is not None for x in lab) == n_acc][:MAX_LABELLINGS]
+    # a labelling that agrees with another on every peak it labels and only leaves out lines the other
+    # places (each within the window of its predicted mode) does not compete: it proposes no other
+    # label for any line, it only deletes data, and a worse fit of the placed line is evidence about
+    # the model (a cause, an undeclared medium), which the modal engine judges, not about the labels
+    # (an undeclared air load moves flapwise 3 of a thin lever by ~3 %: dropping it halves the
+    # baseline's chi-square and would hide the very discrepancy to be diagnosed)
+    def _sub(a: tuple, b: tuple) -> bool:
+        return a != b and all(x is None or x == y for x, y in zip(a, b))
+
+    labs = list(distinct)
+    options = [distinct[a] for a in labs if not any(_sub(a, b) for b in labs)][:1 + MAX_LABELLINGS]
     from probedyn.diagnose.engine import EVIDENCE_MARGIN
 
     scores: list[tuple[float, str | None, dict]] = []
@@ -416,7 +429,8 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     nominal_first = options[0][2]["cause"] is None
     if len(options) > 1:
         for lab, tab, h, sh in options:
-            scores.append(_labelling_score(_modal_problem(meas, tab, base, L)))
+            sc, model, pars = _labelling_score(_modal_problem(meas, tab, base, L))
+            scores.append((sc + _unlabelled_price(tab), model, pars))
         order_ = np.argsort([x[0] for x in scores])
         k = int(order_[0])
         # the declared probe is prior information: labels that contradict its nominal ones must be
@@ -485,6 +499,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     c_cal = table[0].get("_c_cal") if table else None
     for t in table:
         t.pop("_c_cal", None)
+        t.pop("_mode_line", None)
     # the frequency scale reported is the nominal probe's (measured / nominal frequencies of the
     # matched modes); the labels may come from a hypothesis with its own scale s
     s_nominal = scored[0][3]
@@ -535,7 +550,11 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
                                   if sharp and not wide else "") + ": an electronic spur")
             else:
                 ft = {**ft, "Q": math.nan, "Q_sigma": math.nan, "note": "unresolved: frequency only"}
-        elif np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
+        # line-shape evidence that the peak is a mode of this lever (whatever its label): a resolved
+        # line whose Q is plausible (below Q_FACTOR x Q_fluid in a fluid; its area is checked below)
+        mode_line = not unresolved
+        if not unresolved and np.isfinite(near["Q_fluid"]) and ft["Q"] > Q_FACTOR * near["Q_fluid"]:
+            mode_line = False
             reasons.append(f"Q = {ft['Q']:.3g} exceeds {Q_FACTOR:g} x the {meas.medium_name}-damped Q_fluid = "
                            f"{near['Q_fluid']:.3g} of {near['family']} {near['order']}")
         ratio = (ft["area_m2"] / near["thermal_area_m2"]) if meas.temperature and near.get("thermal_area_m2") else None
@@ -547,7 +566,7 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
         accepted = not reasons
         if accepted:
             seen.add(key)
-        table.append({**ft, "accepted": accepted, "thermal_ratio": ratio, "family": near["family"] if accepted else None,
+        table.append({**ft, "accepted": accepted, "_mode_line": mode_line, "thermal_ratio": ratio, "family": near["family"] if accepted else None,
                       "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
                       "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons})
     # equipartition: the areas of the accepted peaks are k_B T / k_eff times one detector
@@ -560,13 +579,40 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
         for t in table:
             r = t["thermal_ratio"]
             if t["accepted"] and r and not (1 / AREA_FACTOR < r / c_cal < AREA_FACTOR):
-                t["accepted"] = False
+                t["accepted"] = t["_mode_line"] = False
                 t["reasons"] = [f"peak area {t['area_m2']:.3g} m^2 is {r / c_cal:.3g} x the thermal k_B T / k_eff of "
                                 f"{t['family']} {t['order']} (times the spectrum's common factor {c_cal:.3g})"]
                 t["family"] = t["order"] = None
     if table:
         table[0]["_c_cal"] = c_cal
     return table
+
+
+def _unlabelled_price(table: list[dict]) -> float:
+    """The goodness-of-fit price of the resolved lines a labelling leaves unlabelled.
+
+    A resolved line with a plausible Q (and area) is, by its line shape, a mode of the lever: the
+    detector sees every family through the off-axis, tilted spot. Labelled correctly, its rows
+    (frequency, and Q when measured) add a chi-square with that many degrees of freedom to the
+    labelling's fit; a labelling that leaves it out is charged the largest such contribution that is
+    still plausible, the ``1 - ALPHA / N`` quantile (the engine's level, N = number of peaks: the
+    look-elsewhere correction over the peaks). A labelling that places the line is therefore
+    preferred whenever its fit of it is consistent with the noise (incl. the model-form floor), and a
+    labelling that places it only by mislabelling other peaks -- a fit worse than any correct label
+    could give -- loses to the one that leaves it out. Unresolved lines (a spur, or a mode whose Q the
+    spectrum cannot measure) and lines whose Q or area no mode of the lever could have carry no such
+    evidence and cost nothing."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from probedyn.diagnose.engine import ALPHA
+
+    n = max(len(table), 1)
+    price = 0.0
+    for t in table:
+        if t.get("_mode_line") and not t["accepted"]:
+            d = 1 + int(bool(np.isfinite(t.get("Q", math.nan))))
+            price += float(chi2_dist.ppf(1 - ALPHA / n, d))
+    return price
 
 
 def _peak_sigma(meas: SpectrumData, acc: list[dict]) -> np.ndarray:
