@@ -65,12 +65,22 @@ Usage::
     NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 \\
         --no-accuracy --out benchmarks/results/modal-s8-265k-quiet-1thread.txt
 
+    # session 9 (gmsh's HXT mesher above meshes._gmsh.HXT_MIN_TETS predicted tetrahedra: ~9 %
+    # fewer tetrahedra at one size, so t/5.2 (265,278 DOFs) now matches maxh 2.045 um (268,128);
+    # t/5 gives 242,877): the quiet peer run, and the same with NUMBA_NUM_THREADS=1
+    .venv/bin/python benchmarks/modal.py --match 5.2:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s9-265k-quiet.txt
+    NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/modal.py --match 5.2:2.045e-6 --repeat 2 --variants-at 0 \
+        --no-accuracy --out benchmarks/results/modal-s9-265k-quiet-1thread.txt
+    .venv/bin/python benchmarks/modal.py --match 6.6:1.35e-6 --variants-at 0 --no-accuracy \
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s9-509k-quiet.txt
+
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
 smooth in maxh (``ngsolve_peer.py --count --maxh H`` meshes only and prints the DOFs; measured
 values in ``ngsolve_peer.MEASURED_P2``): maxh 2.045 um gives 268,128 DOFs for probedyn's
-264,588 (t/5), and 1.35 um 509,886 (1.34 um jumps to 1,089,375), so the "540k" size is
-matched at 509k with probedyn's t/6.35 (508,824).
+264,588 (t/5 with gmsh's Delaunay, up to session 8; 265,278 at t/5.2 with HXT from session 9), and 1.35 um 509,886 (1.34 um jumps to 1,089,375), so the "540k" size is
+matched at 509k with probedyn's t/6.35 (508,824; HXT from session 9: t/6.6, 509,802).
 
 265k DOFs need ~3 GiB, 540k ~7 GiB per process (check ``free -g``); the times depend on the
 load of the machine: compare the ratios of one run.
