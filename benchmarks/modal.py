@@ -65,12 +65,25 @@ Usage::
     NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 \\
         --no-accuracy --out benchmarks/results/modal-s8-265k-quiet-1thread.txt
 
+    # session 9 (gmsh's HXT mesher above meshes._gmsh.HXT_MIN_TETS predicted tetrahedra: ~9 %
+    # fewer tetrahedra at one size, so t/5.2 (265,278 DOFs) now matches maxh 2.045 um (268,128);
+    # t/5 gives 242,877): the quiet peer run, and the same with NUMBA_NUM_THREADS=1
+    .venv/bin/python benchmarks/modal.py --match 5.2:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s9-265k-quiet.txt
+    NUMBA_NUM_THREADS=1 .venv/bin/python benchmarks/modal.py --match 5.2:2.045e-6 --repeat 2 --variants-at 0 \
+        --no-accuracy --out benchmarks/results/modal-s9-265k-quiet-1thread.txt
+    .venv/bin/python benchmarks/modal.py --match 6.6:1.35e-6 --variants-at 0 --no-accuracy \
+        --ngsolve /work/ngsolve-venv/bin/python --out benchmarks/results/modal-s9-509k-quiet.txt
+    # the mesher A/B (session 8's Delaunay mesh at its own matched size, same code otherwise)
+    .venv/bin/python benchmarks/modal.py --match 5:2.045e-6 --repeat 2 --variants-at 0 --no-accuracy \
+        --delaunay --out benchmarks/results/modal-s9-265k-quiet-delaunay.txt
+
 The NGSolve venv (never a probedyn dependency): ``python3 -m venv /work/ngsolve-venv &&
 /work/ngsolve-venv/bin/pip install ngsolve scipy``.  Matching DOFs: Netgen's DOF count is not
 smooth in maxh (``ngsolve_peer.py --count --maxh H`` meshes only and prints the DOFs; measured
 values in ``ngsolve_peer.MEASURED_P2``): maxh 2.045 um gives 268,128 DOFs for probedyn's
-264,588 (t/5), and 1.35 um 509,886 (1.34 um jumps to 1,089,375), so the "540k" size is
-matched at 509k with probedyn's t/6.35 (508,824).
+264,588 (t/5 with gmsh's Delaunay, up to session 8; 265,278 at t/5.2 with HXT from session 9), and 1.35 um 509,886 (1.34 um jumps to 1,089,375), so the "540k" size is
+matched at 509k with probedyn's t/6.35 (508,824; HXT from session 9: t/6.6, 509,802).
 
 265k DOFs need ~3 GiB, 540k ~7 GiB per process (check ``free -g``); the times depend on the
 load of the machine: compare the ratios of one run.
@@ -352,6 +365,10 @@ def main() -> None:
     ap.add_argument("--mixed", action="store_true",
                     help="end to end with a single-precision factor and fem.eigen.mixed_eigsh at every size "
                          "(default: as ElasticModel.modes, from eigen.MIXED_MIN_DOFS free DOFs)")
+    ap.add_argument("--delaunay", action="store_true",
+                    help="gmsh's Delaunay 3D mesher at every size (up to session 8; from session 9 meshes above "
+                         "meshes._gmsh.HXT_MIN_TETS predicted tetrahedra use HXT): the mesher A/B, e.g. with "
+                         "--match 5:2.045e-6")
     ap.add_argument("--double", action="store_true",
                     help="end to end with the double factor and the block solver at every size (the session-6 path)")
     ap.add_argument("--quick", action="store_true", help="two small sizes only")
@@ -366,6 +383,10 @@ def main() -> None:
     ap.add_argument("--ngsolve", default=None, help="python interpreter with ngsolve (peer column)")
     ap.add_argument("--out", default=None, help="also write the table to this file (and .json beside it)")
     a = ap.parse_args()
+    if a.delaunay:
+        import probedyn.meshes._gmsh as gm
+
+        gm.HXT_MIN_TETS = float("inf")
     if a.one is not None:
         print(json.dumps(one(a.one, not a.no_variants, numpy_asm=not a.lean, arpack=not a.lean,
                              overlap=not a.no_overlap, mixed=True if a.mixed else (False if a.double else None))))
@@ -399,6 +420,7 @@ def main() -> None:
             first = rep == 0
             args = ["--one", str(d)] + ([] if (first and d in variants_at) else ["--no-variants"])
             r = run_sub(args + ([] if first else ["--lean"]) + (["--no-overlap"] if a.no_overlap else [])
+                        + (["--delaunay"] if a.delaunay else [])
                         + (["--mixed"] if a.mixed else []) + (["--double"] if a.double else []))
             runs.append(r)
             data.setdefault("runs", []).append(r)

@@ -95,3 +95,32 @@ def test_probe_rejects_micrometres_as_metres():
         probe.resolve({"thickness": -1e-6})
     with pytest.raises(ParameterError, match="not one of"):
         probe.resolve({"material": "cheese"})
+
+
+def test_only_large_meshes_use_hxt_and_the_openmp_thread_count_survives_it():
+    """gmsh's HXT mesher (session 9) is used above HXT_MIN_TETS predicted tetrahedra only: every
+    default probe / report / test mesh (up to 4 layers through the default cantilever) keeps the
+    Delaunay mesh and its cache key. HXT sets the calling thread's OpenMP thread count to 1 and
+    leaves it; gmsh_session must put it back (PARDISO's factorisation in this thread must run
+    with the thread count of its analysis in the background thread: with 1 vs 2 the float32
+    factor of the 265k model was useless and the mixed eigen-solver stalled)."""
+    import gmsh
+
+    from probedyn.meshes._gmsh import HXT_MIN_TETS, mesher_3d
+    from probedyn.meshes.cantilever import predicted_tets
+
+    for ett in (1, 2, 3, 4):
+        assert mesher_3d(predicted_tets(L, W, T, T / ett)) == "delaunay"
+    assert mesher_3d(predicted_tets(L, W, T, T / 5)) == "hxt"  # the 265k benchmark model
+    small = cantilever_mesh(L, W, T, options=MeshOptions(elements_through_thickness=1), use_cache=False)
+    assert "mesher_3d" not in small.meta["params"]  # the cache key of every small mesh is unchanged
+    before = gmsh.lib.omp_get_max_threads()
+    h = T / 5.2
+    assert predicted_tets(L, W, T, h) > HXT_MIN_TETS
+    b = cantilever_mesh(L, W, T, options=MeshOptions(element_size=h, elements_through_thickness=1), use_cache=False)
+    assert gmsh.lib.omp_get_max_threads() == before
+    assert b.meta["params"]["mesher_3d"] == "hxt"
+    m = b.mesh
+    assert element_volumes(m).sum() == pytest.approx(L * W * T, rel=1e-12)
+    assert _facet_area(m, m.boundaries["clamp"]) == pytest.approx(W * T, rel=1e-12)
+    assert np.all(element_volumes(m) > 0)
