@@ -182,8 +182,8 @@ def test_two_modes_in_one_window_are_labelled_by_the_fit_of_the_whole_set():
     (f ~ w / L^2) and torsion by 1 / (1 + e) (St Venant, w >> t: f ~ sqrt(G J / rho I_p) ~ t / w).
     At e = -1.5 % torsion 1 moves to 2.6738 MHz, whose nearest mode is lateral 2 (0.5 % off); the
     nearest labelling then needs e = +0.5 % for lateral 2 and e = -1.5 % for the lateral 1 peak: its
-    best fit (one parameter, three lines at 1e-4 relative) has chi^2 ~ 10^3, far above chi2_2(0.99)
-    = 9.2, while the true assignment (torsion 1, flapwise 3) is among those proposed and fits exactly."""
+    best fit (one parameter, four lines at 1e-4 relative) has chi^2 ~ 2e4, far above chi2_3(0.99)
+    = 11.3, while the true assignment (torsion 1, flapwise 3) is among those proposed and fits exactly."""
     import math
     from types import SimpleNamespace
 
