@@ -171,3 +171,59 @@ def test_a_peak_no_model_fits_well_is_not_dropped_by_its_labelling():
     prob = spectrum_problem(read_measurement(toml))
     acc = [(p["family"], p["order"]) for p in prob.peaks["peaks"] if p["accepted"]]
     assert acc == [("flapwise", 1), ("flapwise", 2), ("flapwise", 3)], prob.peaks["peaks"]
+
+
+def test_two_modes_in_one_window_are_labelled_by_the_fit_of_the_whole_set():
+    """Where two predicted modes lie in one peak's matching window, nearness cannot label the peaks:
+    every one-to-one assignment of the window's peaks to its modes is proposed (``_assignments``) and
+    the goodness of fit decides. Lever A's torsion 1 (2.6337 MHz) and flapwise 3 (2.6567 MHz) are
+    0.9 % apart, lateral 2 (2.66 MHz) in the same window. A width error w -> w (1 + e) leaves the
+    flapwise modes unchanged (Euler-Bernoulli: f ~ t / L^2, no w), moves lateral modes by (1 + e)
+    (f ~ w / L^2) and torsion by 1 / (1 + e) (St Venant, w >> t: f ~ sqrt(G J / rho I_p) ~ t / w).
+    At e = -1.5 % torsion 1 moves to 2.6738 MHz, whose nearest mode is lateral 2 (0.5 % off); the
+    nearest labelling then needs e = +0.5 % for lateral 2 and e = -1.5 % for the lateral 1 peak: its
+    best fit (one parameter, four lines at 1e-4 relative) has chi^2 ~ 2e4, far above chi2_3(0.99)
+    = 11.3, while the true assignment (torsion 1, flapwise 3) is among those proposed and fits exactly."""
+    import math
+    from types import SimpleNamespace
+
+    from scipy.optimize import minimize_scalar
+    from scipy.stats import chi2
+
+    from probedyn.diagnose.spectrum import MAX_ASSIGNMENTS, _assignments, _label_table
+
+    nominal = {("flapwise", 1): 1.5e5, ("lateral", 1): 1.3e6, ("torsion", 1): 2.6337e6, ("flapwise", 3): 2.6567e6,
+               ("lateral", 2): 2.66e6}
+    exponent = {"flapwise": 0, "lateral": 1, "torsion": -1}  # f ~ (1 + e)^exponent
+
+    def predicted(key, e):
+        return nominal[key] * (1 + e) ** exponent[key[0]]
+
+    e_true = -0.015
+    measured = [("flapwise", 1), ("lateral", 1), ("flapwise", 3), ("torsion", 1)]
+    fits = [{"f0_Hz": predicted(k, e_true), "fwhm_bins": 20.0, "Q": 400.0, "Q_sigma": 4.0, "area_m2": 1e-22}
+            for k in measured]
+    preds = [{"family": k[0], "order": k[1], "f_Hz": f, "Q_fluid": math.inf} for k, f in nominal.items()]
+    meas = SimpleNamespace(temperature=None, medium_name="vacuum")
+
+    def labels(tab):
+        return [(t["family"], t["order"]) if t["accepted"] else None for t in tab]
+
+    def best_chi2(lab, rel_sigma=1e-4):
+        def c2(e):
+            return sum(((ft["f0_Hz"] / predicted(k, e) - 1) / rel_sigma) ** 2 for ft, k in zip(fits, lab))
+        return minimize_scalar(c2, bounds=(-0.1, 0.1), method="bounded").fun
+
+    near = _label_table(meas, fits, preds, 1.0, 1.0)
+    assert labels(near) == [("flapwise", 1), ("lateral", 1), ("flapwise", 3), ("lateral", 2)]
+    alts = _assignments(fits, near, preds, 1.0)
+    # the two window peaks on three modes: 3 x 2 one-to-one assignments, the nearest one excluded
+    assert 1 <= len(alts) <= MAX_ASSIGNMENTS and len(alts) == 5
+    assert all(set(a) == {2, 3} for a in alts)
+    tabs = [_label_table(meas, fits, preds, 1.0, 1.0, force=a) for a in alts]
+    assert all(all(t["accepted"] for t in tab) for tab in tabs)  # no deletion: every peak labelled
+    cands = {tuple(labels(tab)): best_chi2(labels(tab)) for tab in tabs}
+    best = min(cands, key=cands.get)
+    assert list(best) == measured
+    assert cands[best] < 1e-6
+    assert best_chi2(labels(near)) > chi2.ppf(0.99, len(fits) - 1)

@@ -68,6 +68,7 @@ AREA_FACTOR = 100.0
 MAX_GRID_1D = 96  # values per parameter of a one-parameter cause's hypotheses (refined where the modes move)
 MAX_GRID_2D = 24  # per parameter of a two-parameter cause (a product grid)
 MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
+MAX_ASSIGNMENTS = 24  # one-to-one assignments of the peaks of a window holding several modes, per labelling
 CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
 
 
@@ -422,6 +423,26 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
 
     labs = list(distinct)
     options = [distinct[a] for a in labs if not any(_sub(a, b) for b in labs)][:1 + MAX_LABELLINGS]
+    # where two or more predicted modes lie within one peak's matching window (or two peaks compete
+    # for the same modes), nearness cannot label them: the line centre, the calibration and the
+    # model-form floor make the predicted frequencies uncertain by about the spacing of the modes
+    # (torsion 1 and flapwise 3 of a lever 0.9 % apart, lateral 2 in the same window), and under a
+    # hidden effect that moves the families differently the nearest mode is not the true one. Every
+    # one-to-one assignment of those peaks to those modes is proposed as a labelling (at most
+    # MAX_ASSIGNMENTS per labelling, the closest first) and the goodness of fit of the whole set
+    # decides, as between hypotheses; each assigns every peak the labelling assigns there (no
+    # deletion), so the nominal labelling and the declared-probe prior below still apply
+    seen_labs = {o[0] for o in options}
+    extra = []
+    for lab0, tab0, h, sh in list(options):
+        preds_h = [dict(p, f_Hz=f) for p, f in zip(preds, h["f_Hz"])]
+        for force in _assignments(fits, tab0, preds_h, sh):
+            tab = _label_table(meas, fits, preds_h, sh, df, force=force)
+            lab = tuple((t["family"], t["order"]) if t["accepted"] else None for t in tab)
+            if lab not in seen_labs and sum(x is not None for x in lab) >= sum(x is not None for x in lab0):
+                seen_labs.add(lab)
+                extra.append((lab, tab, h, sh))
+    options = options + extra
     from probedyn.diagnose.engine import EVIDENCE_MARGIN
 
     scores: list[tuple[float, str | None, dict]] = []
@@ -515,9 +536,59 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     return prob
 
 
-def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: float, df: float) -> list[dict]:
+def _assignments(fits: list[dict], table: list[dict], preds: list[dict], s: float) -> list[dict[int, int]]:
+    """The alternative one-to-one assignments of a labelling's peaks to the predicted modes within
+    their matching windows (MATCH_TOL after the common scale ``s``), where a window holds more than
+    one mode: ``{peak index: index into preds}`` for every peak of such a group, closest (least summed
+    squared log deviation) first, at most MAX_ASSIGNMENTS, the labelling's own assignment excluded.
+    Peaks taken are the accepted ones and those rejected only because a stronger peak took their
+    nearest mode (two peaks competing for the same modes)."""
+    import itertools
+
+    def cand(i):
+        lf = math.log(fits[i]["f0_Hz"])
+        return [j for j, p in enumerate(preds) if abs(lf - math.log(s * p["f_Hz"])) <= MATCH_TOL]
+
+    peaks = [i for i, t in enumerate(table)
+             if t["accepted"] or (t["reasons"] and all("already taken" in r for r in t["reasons"]))]
+    cands = {i: cand(i) for i in peaks}
+    # groups: peaks linked by a shared candidate mode
+    groups: list[tuple[list[int], set[int]]] = []
+    for i in peaks:
+        if not cands[i]:
+            continue
+        g = ([i], set(cands[i]))
+        for other in [x for x in groups if x[1] & g[1]]:
+            groups.remove(other)
+            g = (other[0] + g[0], other[1] | g[1])
+        groups.append(g)
+    groups = [g for g in groups if len(g[1]) > 1 and len(g[1]) >= len(g[0])]
+    if not groups:
+        return []
+    per_group = []
+    for pk, md in groups:
+        opts = [dict(zip(pk, perm)) for perm in itertools.permutations(sorted(md), len(pk))
+                if all(perm[k] in cands[i] for k, i in enumerate(pk))]
+        per_group.append(opts[:MAX_ASSIGNMENTS])
+
+    def cost(a):
+        return sum(math.log(fits[i]["f0_Hz"] / (s * preds[j]["f_Hz"])) ** 2 for i, j in a.items())
+
+    combos = []
+    for combo in itertools.islice(itertools.product(*per_group), 4 * MAX_ASSIGNMENTS):
+        a = {k: v for part in combo for k, v in part.items()}
+        combos.append(a)
+    own = {i: next((j for j, p in enumerate(preds) if (p["family"], p["order"]) == (table[i]["family"], table[i]["order"])), None)
+           for i in peaks}
+    combos = [a for a in combos if any(own.get(i) != j for i, j in a.items())]
+    return sorted(combos, key=cost)[:MAX_ASSIGNMENTS]
+
+
+def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: float, df: float,
+                 force: dict[int, int] | None = None) -> list[dict]:
     """The peak table under one set of predicted frequencies ``preds`` and common scale ``s``:
-    each peak's nearest mode, accepted or rejected with its reasons (see the module docstring)."""
+    each peak's nearest mode (or the mode ``force`` assigns it: ``{peak index: index into preds}``,
+    see _assignments), accepted or rejected with its reasons (see the module docstring)."""
     seen: set = set()
     table = []
     # the highest Q among the resolved lines: the loss mechanisms of one lever (thermoelastic, clamp,
@@ -528,9 +599,10 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     # within 7 %)
     q_res = [ft["Q"] for ft in fits if ft["fwhm_bins"] >= 2.0]
     q_res_max = max(q_res) if q_res else math.inf
-    for ft in fits:
+    for i_ft, ft in enumerate(fits):
         reasons = []
-        near = min(preds, key=lambda p: abs(math.log(ft["f0_Hz"] / (s * p["f_Hz"]))))
+        near = (preds[force[i_ft]] if force and i_ft in force
+                else min(preds, key=lambda p: abs(math.log(ft["f0_Hz"] / (s * p["f_Hz"])))))
         dev = ft["f0_Hz"] / (s * near["f_Hz"]) - 1
         if abs(dev) > MATCH_TOL:
             reasons.append(f"no mode of the probe model within {100 * MATCH_TOL:.0f} % (nearest: {near['family']} "
