@@ -162,12 +162,13 @@ def test_a_labelling_pays_for_the_resolved_lines_it_leaves_out():
 @pytest.mark.slow
 def test_a_peak_no_model_fits_well_is_not_dropped_by_its_labelling():
     """A labelling that only leaves out a line another labelling places (same labels elsewhere) does not
-    compete: it deletes data. The shipped thin lever in undeclared air (three flapwise lines of a
-    32-times averaged periodogram, the sidecar says vacuum): air loading moves flapwise 3 within the
+    compete: it deletes data. A thin lever in undeclared air (tests/data/thin_lever_psd_undeclared_air:
+    the shipped example up to session 8; three flapwise lines of a 32-times averaged periodogram, the
+    sidecar says vacuum): air loading moves flapwise 3 within the
     window but no catalog model fits the three lines to the noise, and leaving flapwise 3 out halves the
     baseline's chi^2 (237 + 11.4 against 489). The three lines are three flapwise modes (the sidecar's
     families, one lever): all three must stay labelled, in order."""
-    toml = Path(__file__).resolve().parents[1] / "examples" / "measurements" / "thermal_psd_air.toml"
+    toml = Path(__file__).resolve().parent / "data" / "thin_lever_psd_undeclared_air.toml"
     prob = spectrum_problem(read_measurement(toml))
     acc = [(p["family"], p["order"]) for p in prob.peaks["peaks"] if p["accepted"]]
     assert acc == [("flapwise", 1), ("flapwise", 2), ("flapwise", 3)], prob.peaks["peaks"]
