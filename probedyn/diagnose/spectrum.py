@@ -565,14 +565,14 @@ def _assignments(fits: list[dict], table: list[dict], preds: list[dict], s: floa
     groups = [g for g in groups if len(g[1]) > 1 and len(g[1]) >= len(g[0])]
     if not groups:
         return []
+    def cost(a):
+        return sum(math.log(fits[i]["f0_Hz"] / (s * preds[j]["f_Hz"])) ** 2 for i, j in a.items())
+
     per_group = []
     for pk, md in groups:
         opts = [dict(zip(pk, perm)) for perm in itertools.permutations(sorted(md), len(pk))
                 if all(perm[k] in cands[i] for k, i in enumerate(pk))]
-        per_group.append(opts[:MAX_ASSIGNMENTS])
-
-    def cost(a):
-        return sum(math.log(fits[i]["f0_Hz"] / (s * preds[j]["f_Hz"])) ** 2 for i, j in a.items())
+        per_group.append(sorted(opts, key=cost)[:MAX_ASSIGNMENTS])  # the closest first, then the cap
 
     combos = []
     for combo in itertools.islice(itertools.product(*per_group), 4 * MAX_ASSIGNMENTS):
