@@ -64,6 +64,9 @@ def gmsh_session(model_name: str = "probedyn", verbose: bool = False) -> Iterato
         try:
             gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
             gmsh.option.setNumber("General.Verbosity", 2 if verbose else 0)
+            # every session starts on gmsh's default 3D mesher: a reused gmsh keeps its options, and
+            # only the builders that choose by size (set_mesher_3d) may use HXT
+            gmsh.option.setNumber("Mesh.Algorithm3D", MESHERS_3D["delaunay"])
             gmsh.model.add(model_name)
             yield gmsh
         except Exception as exc:
