@@ -23,28 +23,24 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from toy_problem import ToyProblem  # noqa: E402
 
 
-class _Slope(Cause):
-    key, kind = "slope", "toy"
-    params = (CauseParam("s", "1", -10.0, 10.0, 0.0, "slope"),)
-
-    def effect(self, values, state):
-        pass
-
-
-class _Wave(Cause):
-    key, kind = "wave", "toy"
-    params = (CauseParam("c", "1", -10.0, 10.0, 0.0, "amplitude of cos(6 pi t)"),)
-
-    def effect(self, values, state):
-        pass
+def _toy_cause(key: str, name: str, description: str) -> Cause:
+    """A one-parameter toy cause (null value 0); the toy problem applies its effect itself."""
+    cls = type(f"_{key.title()}", (Cause,), {
+        "key": key, "kind": "toy", "params": (CauseParam(name, "1", -10.0, 10.0, 0.0, description),),
+        "effect": lambda self, values, state: None})
+    return cls()
 
 
-class _Bump(Cause):
-    key, kind = "bump", "toy"
-    params = (CauseParam("d", "1", -10.0, 10.0, 0.0, "amplitude of cos(2 pi t)"),)
+def _slope() -> Cause:
+    return _toy_cause("slope", "s", "slope")
 
-    def effect(self, values, state):
-        pass
+
+def _wave() -> Cause:
+    return _toy_cause("wave", "c", "amplitude of cos(6 pi t)")
+
+
+def _bump() -> Cause:
+    return _toy_cause("bump", "d", "amplitude of cos(2 pi t)")
 
 
 class _Toy(ToyProblem):
@@ -59,7 +55,7 @@ class _Toy(ToyProblem):
         self.y = 1.0 + 2.0 * self.t + extra(self.t) + self.noise * rng.standard_normal(len(self.t))
         self.groups = np.repeat(np.arange(8), 50)
         self.base_params = [CauseParam("b", "1", -5.0, 5.0, 0.0, "offset")]
-        self.causes = [_Slope(), _Wave()] + ([_Bump()] if bump else [])
+        self.causes = [_slope(), _wave()] + ([_bump()] if bump else [])
         self.extension_vs_model_error = opt_in
 
     def residuals(self, values, causes=()):
