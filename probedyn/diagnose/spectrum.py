@@ -417,9 +417,16 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     # label for any line, it only deletes data, and a worse fit of the placed line is evidence about
     # the model (a cause, an undeclared medium), which the modal engine judges, not about the labels
     # (an undeclared air load moves flapwise 3 of a thin lever by ~3 %: dropping it halves the
-    # baseline's chi-square and would hide the very discrepancy to be diagnosed)
+    # baseline's chi-square and would hide the very discrepancy to be diagnosed). Only the deletion
+    # of lines whose shape says they are modes (resolved, plausible Q and area: ``_mode_line``)
+    # counts: an unresolved line is a spur or a mode whose Q the spectrum cannot measure, which the
+    # labelling that leaves it out explains as well (it costs nothing in _unlabelled_price), so that
+    # labelling competes (a spur placed on lateral 1 under a width error must not remove the nominal
+    # labels flapwise 1 and 2 that leave the spur out)
     def _sub(a: tuple, b: tuple) -> bool:
-        return a != b and all(x is None or x == y for x, y in zip(a, b))
+        tab_b = distinct[b][1]
+        return a != b and all(x is None or x == y for x, y in zip(a, b)) and all(
+            t["_mode_line"] for x, y, t in zip(a, b, tab_b) if x is None and y is not None)
 
     labs = list(distinct)
     options = [distinct[a] for a in labs if not any(_sub(a, b) for b in labs)][:1 + MAX_LABELLINGS]
