@@ -134,6 +134,21 @@ def piezo_setup(probe_name: str, poling: str | None = None) -> PiezoSetup:
     raise ParameterError(f"probe '{probe_name}' has no piezoelectric actuation (smart probes: duo-bimorph, piezotube)")
 
 
+#: the element the coupled piezoelectric FEM assembles (its hexahedra are not implemented, they
+#: are refused); the one place for this choice: every model that must be the piezo FEM's
+#: mechanical body (the reduced actuated probe, the FEM-body plant with FEM gains) takes it here
+COUPLED_ELEMENT = "tet-p2"
+
+
+def coupled_values(values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` with ``element = auto`` resolved to the coupled FEM's :data:`COUPLED_ELEMENT`
+    (an explicit element is kept: the coupled model refuses one it cannot assemble)."""
+    v = dict(values)
+    if v.get("element", "auto") == "auto":
+        v["element"] = COUPLED_ELEMENT
+    return v
+
+
 def build_piezo_model(probe, values: dict[str, Any], layout: str | None = None, poling: str | None = None,
                       piezo_material: str | None = None) -> tuple[PiezoModel, PiezoSetup]:
     """The coupled model of a resolved probe: ``probe.build(values)`` + the piezo set-up.
@@ -143,9 +158,7 @@ def build_piezo_model(probe, values: dict[str, Any], layout: str | None = None, 
     setup = piezo_setup(probe.name, poling)
     mat_name = piezo_material or values.get("material", "pzt-5h")
     mat = get_piezo_material(mat_name)
-    if values.get("element") == "auto":  # the coupled FEM assembles P2 tetrahedra (hexahedra: refused)
-        values = {**values, "element": "tet-p2"}
-    mech = probe.build(values)
+    mech = probe.build(coupled_values(values))
     regions = {}
     for rname, pol in setup.regions.items():
         if pol == "radial":

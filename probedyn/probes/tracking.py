@@ -5,7 +5,9 @@ simulator are in ``schemes/tracking``.
 
 * body (J, K2, C2 at the holder): ``analytic`` (beam or tube + the holder as a point mass,
   eqs 3.1-3.3) or ``fem`` (``lumped/smart.py: reduce_from_fem``, first body mode per direction
-  at the holder end face; one FEM solve per geometry is cached for the process);
+  at the holder end face; one FEM solve per geometry is cached for the process; with the piezo
+  FEM's gains the body is built on the piezo FEM's element and mesh, ``piezo.coupled_values``,
+  so that ``body="fem"`` and ``body="reduced"`` are one discretisation);
 * gains: the analytic free stroke per volt (:mod:`probedyn.schemes.tracking.actuation`) at the
   holder (its end face for the FEM body, with the rigid holder's rotation), or a stroke matrix
   passed in (e.g. from the piezo FEM) - the one-line swap; ``provenance`` records which.
@@ -24,7 +26,7 @@ from probedyn.lumped.smart_analytic import end_body_first_mode_at
 from probedyn.probes import get_probe
 from probedyn.probes._smart import SmartProbe
 from probedyn.fem.piezo_materials import get_piezo_material
-from probedyn.probes.piezo import gamma_matrix_fem, piezo_model
+from probedyn.probes.piezo import coupled_values, gamma_matrix_fem, piezo_model
 from probedyn.schemes.tracking import actuation as act
 from probedyn.schemes.tracking.plants import SETUP, MechanicalPlant, smart_two_body
 
@@ -93,7 +95,7 @@ def _fem_body(probe: SmartProbe, v: dict[str, Any], n_body: int) -> tuple[np.nda
         raise ParameterError(f"{probe.name}: lumped directions {probe.lumped_directions} differ from the tracking plant's")
     desc = model.describe() if hasattr(model, "describe") else {}
     info = {"body": "FEM lumped model (lumped/smart.py reduce_from_fem): first body mode per direction at the holder end face",
-            "body_modes": lm.body_modes, "validity_hz": lm.second_body_hz, "dofs": desc.get("dofs")}
+            "body_element": probe.element(vv), "body_modes": lm.body_modes, "validity_hz": lm.second_body_hz, "dofs": desc.get("dofs")}
     return lm.J, lm.K2, lm.C2, info
 
 
@@ -186,7 +188,10 @@ def smart_plant(name: str, overrides: dict[str, Any] | None = None, *, body: str
         J, K2, C2, info = analytic_body(probe, v)
         holder_face = False
     elif body == "fem":
-        J, K2, C2, info = fem_body(probe, v)
+        # with the piezo FEM's gains the body is the piezo FEM's mechanical model (its element and
+        # mesh): body and stroke from one discretisation, the reduced body's (reduced_tracking)
+        fem_gains = isinstance(gains, str) and gains == "fem"
+        J, K2, C2, info = fem_body(probe, coupled_values(v) if fem_gains else v)
         holder_face = True
     else:
         raise ParameterError(f"body must be 'analytic', 'fem', 'reduced' or 'reduced-modal', got {body!r}")
