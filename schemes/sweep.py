@@ -831,7 +831,8 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
                         f"sweep chunk {i} ({cells}) failed: {type(exc).__name__}: {' '.join(str(exc).split())}; "
                         f"{kept()}"
                     ) from exc
-                if fut.status != "finished":  # cancelled: a worker or the scheduler went away
+                if isinstance(res, BaseException):  # cancelled: a worker or the scheduler went away
+                    # (not the future's status: a chunk fetched, then lost with its worker, is "lost")
                     why = _cluster_problem(client, where) or "the Dask worker running it died or left"
                     raise SchedulerError(f"sweep chunk {i} was lost: {why}; {kept()}")
                 if parts is not None:
@@ -855,6 +856,8 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
         # the scheduler died while a finished chunk was being fetched: Dask's CommClosedError (an
         # OSError without errno) or FutureCancelledError ("scheduler-connection-lost", an
         # asyncio CancelledError, a BaseException); our own writes raise OutputError, not OSError
+        if isinstance(exc, ProbedynError):  # ours, already worded (SchedulerError is a ConnectionError)
+            raise
         names = {c.__name__ for c in type(exc).__mro__}
         if isinstance(exc, (OSError, TimeoutError)) or names & {"CancelledError", "CommClosedError"}:
             problem = _cluster_problem(client, where) or f"a Dask call failed although the scheduler ({where}) answers"
