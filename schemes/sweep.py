@@ -402,18 +402,55 @@ _DASK_LOGGERS = ("distributed", "distributed.worker", "distributed.scheduler", "
                  "distributed.utils_perf", "distributed.worker_memory")
 
 
+class _DaskAsyncioNoise(logging.Filter):
+    """Drops asyncio's reports about Dask's own event-loop tasks ("Task exception was never
+    retrieved", "Task was destroyed but it is pending!"): a client whose worker or scheduler
+    died leaves such tasks behind (a gather waiting for a chunk that is being recomputed), and
+    asyncio would print them with a traceback long after the sweep reported the failure."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        if exc is not None and type(exc).__module__.split(".")[0] in ("distributed", "tornado"):
+            return False
+        try:
+            msg = record.getMessage()
+        except Exception:
+            return True
+        return f"{os.sep}distributed{os.sep}" not in msg
+
+
+_ASYNCIO_FILTER = _DaskAsyncioNoise()
+
+
 @contextlib.contextmanager
 def _quiet_dask() -> Any:
     """Silence Dask's own logging: a sweep reports failures itself, once, on one line.
 
     Not restored afterwards: a client that lost its scheduler keeps logging from its event-loop
-    thread after the sweep has returned (reconnection attempts, "closing client").
+    thread after the sweep has returned (reconnection attempts, "closing client"), and its
+    orphaned tasks are reported by asyncio when they are garbage-collected. Only Dask's loggers
+    and asyncio's records about Dask's tasks are affected.
     """
     import distributed  # noqa: F401  (its import configures these loggers: set them after)
 
     for name in _DASK_LOGGERS:
         logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    aio = logging.getLogger("asyncio")
+    if _ASYNCIO_FILTER not in aio.filters:
+        aio.addFilter(_ASYNCIO_FILTER)
     yield
+
+
+def _cluster_problem(client, where: str) -> str | None:
+    """What is wrong with the cluster now (one phrase), or None if the scheduler answers with workers."""
+    if client.status != "running":
+        return f"lost the connection to the Dask scheduler ({where})"
+    n = _n_workers(client, timeout=5.0)
+    if n is None:
+        return f"the Dask scheduler ({where}) does not answer"
+    if n == 0:
+        return f"the Dask scheduler ({where}) has no workers left (they died or left)"
+    return None
 
 
 def _connect(scheduler: str | None, workers: int, processes: bool, threads_per_worker: int,
@@ -768,13 +805,16 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
     unhealthy_since: float | None = None
     last_check = time.monotonic()
     try:
-        ac = as_completed(list(pending), loop=client.loop)
+        # results are gathered on the client's event loop (with_results), never by a blocking
+        # call here: a worker that dies while one of its finished chunks is fetched makes Dask
+        # recompute that chunk, and this loop keeps watching the cluster's health meanwhile
+        ac = as_completed(list(pending), loop=client.loop, with_results=True, raise_errors=False)
         while pending:
             fin = ac.next_batch(block=False)
             if not fin:
                 time.sleep(0.05)
-            pending.difference_update(fin)
-            for fut in fin:
+            for fut, res in fin:
+                pending.discard(fut)
                 i = index[fut.key]
                 if fut.status == "error":
                     exc = fut.exception(timeout=10)
@@ -791,28 +831,21 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
                         f"sweep chunk {i} ({cells}) failed: {type(exc).__name__}: {' '.join(str(exc).split())}; "
                         f"{kept()}"
                     ) from exc
-                if fut.status != "finished":  # cancelled or lost: a worker or the scheduler went away
-                    if client.status == "running" and _n_workers(client, timeout=5.0) is not None:
-                        why = "the Dask worker running it died or left"
-                    else:
-                        why = f"the connection to the Dask scheduler ({where}) dropped or it restarted"
+                if isinstance(res, BaseException):  # cancelled: a worker or the scheduler went away
+                    # (not the future's status: a chunk fetched, then lost with its worker, is "lost")
+                    why = _cluster_problem(client, where) or "the Dask worker running it died or left"
                     raise SchedulerError(f"sweep chunk {i} was lost: {why}; {kept()}")
-                res = fut.result(timeout=60)
                 if parts is not None:
                     _write_chunk(res, _chunk_path(parts, i))
                 else:
                     results[i] = res
+                fut.release()  # saved: a worker lost later must not make Dask recompute it
                 finished += 1
                 bar.update(1)
             now = time.monotonic()
             if pending and now - last_check >= POLL_S:
                 last_check = now
-                if client.status != "running":
-                    problem = f"lost the connection to the Dask scheduler ({where})"
-                else:
-                    n = _n_workers(client, timeout=5.0)
-                    problem = (f"the Dask scheduler ({where}) does not answer" if n is None else
-                               f"the Dask scheduler ({where}) has no workers left" if n == 0 else None)
+                problem = _cluster_problem(client, where)
                 if problem is None:
                     unhealthy_since = None
                 elif unhealthy_since is None:
@@ -823,10 +856,12 @@ def _execute(client, func, fixed, vectorized, seed, sig, todo, done, n_chunks, n
         # the scheduler died while a finished chunk was being fetched: Dask's CommClosedError (an
         # OSError without errno) or FutureCancelledError ("scheduler-connection-lost", an
         # asyncio CancelledError, a BaseException); our own writes raise OutputError, not OSError
+        if isinstance(exc, ProbedynError):  # ours, already worded (SchedulerError is a ConnectionError)
+            raise
         names = {c.__name__ for c in type(exc).__mro__}
         if isinstance(exc, (OSError, TimeoutError)) or names & {"CancelledError", "CommClosedError"}:
-            raise SchedulerError(f"the connection to the Dask scheduler ({where}) dropped "
-                                 f"({type(exc).__name__}); {kept()}") from None
+            problem = _cluster_problem(client, where) or f"a Dask call failed although the scheduler ({where}) answers"
+            raise SchedulerError(f"{problem} ({type(exc).__name__}); {kept()}") from None
         raise
     finally:
         bar.close()

@@ -514,26 +514,81 @@ def test_signal_during_work_exits_128_plus_signal_without_output(signum, code, t
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
 
 
+#: elements through the thickness that make the default cantilever a model the CLI announces
+#: before meshing (hexahedra: 131k DOFs >= fem.size.ANNOUNCE_DOFS; its own estimate: ~79 s)
+_LONG_JOB_LAYERS = 10
+
+
 @pytest.mark.slow
 def test_interrupt_of_a_child_process_mid_solve(tmp_path):
-    """A real SIGTERM to `probedyn modes --out` while it meshes/solves: 143, one line, no output folder."""
+    """A real SIGTERM to `probedyn modes --out` while it works: 143, one line, no output folder.
+
+    The signal arrives during the work by construction, not after a guessed sleep: the job is a
+    model large enough to be announced before it is meshed ("about 131k DOFs ... N s to assemble
+    and solve"), the signal is sent as soon as that line is on stderr, and the test checks that
+    the child was still running then. The job's own estimate (from the measured seconds per DOF)
+    must be >= 20 s: far beyond the ~0.5 s the interrupt takes, on a machine several times faster.
+    """
+    import queue
+    import re
     import subprocess
     import sys
+    import threading
     import time
 
+    from probedyn.fem.size import ANNOUNCE_DOFS
+
+    out = tmp_path / "o"
     p = subprocess.Popen([sys.executable, "-m", "probedyn.cli", "modes", "cantilever", "--n-modes", "4",
-                          "--set", "elements_through_thickness=3", "--out", str(tmp_path / "o")],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(5.0)
-    p.send_signal(signal.SIGTERM)
-    t0 = time.perf_counter()
-    out, err = p.communicate(timeout=30)
+                          "--set", f"elements_through_thickness={_LONG_JOB_LAYERS}", "--out", str(out)],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    lines: queue.Queue = queue.Queue()
+    reader = threading.Thread(target=lambda: [lines.put(ln) for ln in p.stderr] + [lines.put(None)], daemon=True)
+    reader.start()
+    err: list[str] = []
+    try:
+        announced = None
+        deadline = time.monotonic() + 120  # start-up (imports) on a loaded machine
+        while announced is None and time.monotonic() < deadline:
+            try:
+                ln = lines.get(timeout=1.0)
+            except queue.Empty:
+                continue
+            if ln is None:
+                break
+            err.append(ln)
+            m = re.search(r"about (\d+)k DOFs .* and (\d+) (s|min) to assemble and solve", ln)
+            if m:
+                announced = m
+        assert announced is not None, f"the job was not announced: {''.join(err)[-1000:]}"
+        running = p.poll() is None
+        p.send_signal(signal.SIGTERM)
+        t0 = time.perf_counter()
+        p.wait(timeout=30)
+        latency = time.perf_counter() - t0
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    reader.join(timeout=10)
+    while True:
+        try:
+            ln = lines.get_nowait()
+        except queue.Empty:
+            break
+        if ln is not None:
+            err.append(ln)
+    err_text = "".join(err)
+    estimate_s = int(announced.group(2)) * (60 if announced.group(3) == "min" else 1)
     TALLY.append({"id": "c1-child-term-modes", "class": 1, "category": "interrupted" if p.returncode == 143 else "wrong",
-                  "detail": err.strip()[-200:], "seconds": round(time.perf_counter() - t0, 2), "pending": None,
+                  "detail": err_text.strip()[-200:], "seconds": round(latency, 2), "pending": None,
                   "child": True})
-    assert p.returncode == 143, err
-    assert err.strip().splitlines()[-1] == "probedyn: interrupted" and "Traceback" not in err
-    assert not (tmp_path / "o").exists() and not [q for q in tmp_path.iterdir() if "probedyn-tmp" in q.name]
+    assert int(announced.group(1)) * 1000 >= ANNOUNCE_DOFS and estimate_s >= 20, announced.group(0)
+    assert running, "the child had finished before the signal"
+    assert p.returncode == 143, err_text
+    err_lines = err_text.strip().splitlines()  # the announcements, then the one-line interrupt
+    assert err_lines[-1] == "probedyn: interrupted" and all(ln.startswith("probedyn: ") for ln in err_lines)
+    assert not out.exists() and not [q for q in tmp_path.iterdir() if "probedyn-tmp" in q.name]
 
 
 # --------------------------------------------------------------------------------------------

@@ -128,6 +128,39 @@ def test_scheduler_without_workers_fails_after_the_worker_timeout(tmp_path):
 
 
 @pytest.mark.slow
+def test_one_of_two_workers_dying_mid_run_is_survived(tmp_path):
+    """A worker lost mid-run while another remains is no failure: Dask recomputes what the lost one
+    held (a running chunk, a finished one not yet fetched) on the other, the sweep only watches, and
+    the result is the uninterrupted one."""
+    from dask.distributed import LocalCluster
+
+    out = tmp_path / "a.nc"
+    grid = {"x": np.linspace(0, 1, 40)}
+    cl = LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp", dashboard_address=None)
+    try:
+        killed_at: list[int] = []
+
+        def kill():
+            parts = out.with_name("a.nc.parts")
+            while not parts.exists() or len(list(parts.glob("chunk-*"))) < 3:
+                time.sleep(0.05)
+            cl.sync(list(cl.workers.values())[0].close)
+            killed_at.append(len(list(parts.glob("chunk-*"))))
+
+        th = threading.Thread(target=kill, daemon=True)
+        th.start()
+        r = sw.run_sweep(slow_double, grid, out=out, scheduler=cl.scheduler_address, chunk_size=1, progress=False,
+                         worker_timeout=5.0, connect_timeout=1.0)
+        th.join(timeout=10)
+    finally:
+        with contextlib.suppress(Exception):
+            cl.close(timeout=5)
+    assert killed_at and killed_at[0] < 40  # the fault did happen, during the run
+    assert r.chunks_run == list(range(40)) and out.exists()
+    np.testing.assert_array_equal(r.dataset["y"].values, 2 * grid["x"])
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("what", ["workers", "scheduler"])
 def test_cluster_dying_mid_run_keeps_finished_chunks_for_resumption(what, tmp_path):
     from dask.distributed import LocalCluster
@@ -228,3 +261,37 @@ def test_failed_connection_leaves_no_parts_folder(tmp_path):
     with pytest.raises(sw.SchedulerError, match="cannot reach"):
         _run(addr, tmp_path / "a.nc")
     assert not list(tmp_path.iterdir())
+
+
+def test_asyncio_reports_about_orphaned_dask_tasks_are_dropped(caplog):
+    """A worker lost while a chunk was gathered leaves Dask tasks that fail after the sweep has
+    reported; asyncio would log "Task exception was never retrieved" with a traceback when they
+    are collected. The sweep's filter drops those records, and only those (a task of anyone else
+    failing unretrieved is still reported)."""
+    import asyncio
+    import gc
+    import logging
+
+    from distributed.client import AllExit
+
+    with sw._quiet_dask():
+        pass
+
+    def orphan(exc: BaseException) -> None:
+        async def fail():
+            raise exc
+
+        async def main():
+            asyncio.ensure_future(fail())  # never awaited, never retrieved
+            await asyncio.sleep(0.01)
+
+        asyncio.run(main())
+        gc.collect()
+
+    with caplog.at_level(logging.ERROR, logger="asyncio"):
+        orphan(AllExit())
+        dask_records = [r for r in caplog.records if r.name == "asyncio"]
+        orphan(ValueError("someone else's task"))
+        other_records = [r for r in caplog.records if r.name == "asyncio"]
+    assert dask_records == []
+    assert len(other_records) == 1 and "never retrieved" in other_records[0].getMessage()
