@@ -321,7 +321,9 @@ class Analysis:
 
     def __init__(self, ia: np.ndarray, ja: np.ndarray, options: dict | None = None) -> None:
         self.opts = {**PARDISO_OPTIONS, **(options or {})}
-        self.ia, self.ja = ia, ja
+        # the pattern compared in take() is a copy: the arrays handed to PARDISO are not read while
+        # phase 11 runs (MKL was seen to hold them 0-based mid-call: a reader got ia - 1)
+        self.ia, self.ja = ia.copy(), ja.copy()
         self.ps: _Pardiso | None = _Pardiso((ia, ja, np.zeros(ja.size)), 2, self.opts)
         self.error: Exception | None = None
         self.seconds = float("nan")
