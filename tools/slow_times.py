@@ -24,7 +24,7 @@ def slow_times(log: str) -> list[tuple[str, float, str]]:
     for m in re.finditer(r"^([0-9.]+)s (?:call|setup|teardown)\s+(.+?)\s*$", log, re.M):
         seconds[m.group(2)] += float(m.group(1))
     outcome = {m.group(2): m.group(1).lower() for m in
-               re.finditer(r"^(FAILED|ERROR|XFAIL|XPASS)\s+(\S+(?:\[[^\]]*\])?)", log, re.M)}
+               re.finditer(r"^(FAILED|ERROR|XFAIL|XPASS)\s+(.+?)(?: - .*)?$", log, re.M)}
     return sorted(((t, s, outcome.get(t, "passed")) for t, s in seconds.items()), key=lambda r: -r[1])
 
 
