@@ -445,10 +445,13 @@ class ForceCurveProblem:
         if d.E_sample is not None:
             self.E_star_declared = 1.0 / ((1 - d.nu_tip**2) / d.E_tip + (1 - d.nu_sample**2) / d.E_sample)
         Fs = max(np.ptp(d.force), 10 * self.sigma)
+        # the tilt's bound contains the tilt the far baseline shows (a strongly tilted record whose force range
+        # over the ramp is smaller than its far line's slope x span made the start fall outside it)
+        B1 = Fs / self.span if abs(b1) < Fs / self.span else 1.5 * abs(float(b1))
         self.base_params = [
             CauseParam("z_c", "m", float(d.z.min()), float(d.z.max()), zc0, "contact point (piezo position)"),
             CauseParam("b0", "N", -Fs, Fs, float(b0), "force offset of the baseline"),
-            CauseParam("b1", "N/m", -Fs / self.span, Fs / self.span, float(b1), "baseline tilt (virtual deflection)"),
+            CauseParam("b1", "N/m", -B1, B1, float(b1), "baseline tilt (virtual deflection)"),
         ]
         if self.E_star_declared is None:
             # E* = 1 / ((1 - nu_t^2) / E_t + (1 - nu_s^2) / E_s) < E_t / (1 - nu_t^2), the rigid-sample
