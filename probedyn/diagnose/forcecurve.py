@@ -445,9 +445,10 @@ class ForceCurveProblem:
         if d.E_sample is not None:
             self.E_star_declared = 1.0 / ((1 - d.nu_tip**2) / d.E_tip + (1 - d.nu_sample**2) / d.E_sample)
         Fs = max(np.ptp(d.force), 10 * self.sigma)
-        # the tilt's bound contains the tilt the far baseline shows (a strongly tilted record whose force range
-        # over the ramp is smaller than its far line's slope x span made the start fall outside it)
-        B1 = Fs / self.span if abs(b1) < Fs / self.span else 1.5 * abs(float(b1))
+        # the tilt's bound: the force range over the span, and at least 3x the tilt the far line shows -- a tilt
+        # of the opposite sign to the contact force cancels part of the range (stiff levers: a 2 % tilt of
+        # k over the span against the contact force), so the range alone can leave the true tilt out of bounds
+        B1 = max(Fs / self.span, 3.0 * abs(float(b1)))
         self.base_params = [
             CauseParam("z_c", "m", float(d.z.min()), float(d.z.max()), zc0, "contact point (piezo position)"),
             CauseParam("b0", "N", -Fs, Fs, float(b0), "force offset of the baseline"),
