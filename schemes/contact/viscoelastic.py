@@ -49,7 +49,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 __all__ = ["power_law", "sls_lever_curve", "sls_indentation_force", "lee_radok_constant_rate"]
 
@@ -64,7 +63,6 @@ def power_law(shape: str, R: float = 0.0, alpha: float = 0.0) -> tuple[float, fl
     raise ValueError(f"unknown indenter shape {shape!r} (sphere, cone)")
 
 
-@njit(cache=True)
 def _decay(dt, tau):
     """``(a, phi)``: e^{-dt/tau} and tau (1 - a) / dt (-> 1 for dt << tau)."""
     x = dt / tau
@@ -73,7 +71,6 @@ def _decay(dt, tau):
     return a, phi
 
 
-@njit(cache=True)
 def _kernel(t, zr, k, c, m, E_inf, s, tau):
     n = t.shape[0]
     F = np.zeros(n)
@@ -206,7 +203,6 @@ def _kernel(t, zr, k, c, m, E_inf, s, tau):
     return F
 
 
-@njit(cache=True)
 def _ting_state(j, th, Th, Dh, Gh, Hh, GGh, ti, a, phi, G_prev, d_prev, s, tau, E_inf):
     """Surface displacement under the tip at ti and the force, for t1 = T[j] + th (T[j+1] - T[j])."""
     if th > 0.0:
@@ -225,10 +221,25 @@ def _ting_state(j, th, Th, Dh, Gh, Hh, GGh, ti, a, phi, G_prev, d_prev, s, tau, 
     return dn, P
 
 
-@njit(cache=True)
 def _ting_h(j, th, Th, Dh, Gh, Hh, GGh, ti, a, phi, G_prev, d_prev, s, tau, E_inf, inv_k, y, k):
     dn, P = _ting_state(j, th, Th, Dh, Gh, Hh, GGh, ti, a, phi, G_prev, d_prev, s, tau, E_inf)
     return dn + P * inv_k - y
+
+
+_JIT: dict = {}
+
+
+def _compiled():
+    """The kernels compiled with numba on first use (cached on disk): the contact registry's discovery imports
+    this module, and listing the registry (CLI help) should not import numba."""
+    if not _JIT:
+        from numba import njit
+
+        g = globals()
+        for name in ("_decay", "_ting_state", "_ting_h", "_kernel"):  # callees first: numba binds globals
+            g[name] = njit(cache=True)(g[name])
+        _JIT["kernel"] = g["_kernel"]
+    return _JIT["kernel"]
 
 
 def sls_lever_curve(t, z_rel, k: float, c: float, m: float, E_inf: float, strength: float, tau: float) -> np.ndarray:
@@ -244,7 +255,7 @@ def sls_lever_curve(t, z_rel, k: float, c: float, m: float, E_inf: float, streng
         raise ValueError("times must increase")
     if not (strength >= 0 and tau > 0 and E_inf > 0 and k > 0):
         raise ValueError("need strength >= 0, tau > 0, E_inf > 0, k > 0")
-    return _kernel(t, z, float(k), float(c), float(m), float(E_inf), float(strength), float(tau))
+    return _compiled()(t, z, float(k), float(c), float(m), float(E_inf), float(strength), float(tau))
 
 
 def sls_indentation_force(t, delta, c: float, m: float, E_inf: float, strength: float, tau: float) -> np.ndarray:
