@@ -3,7 +3,10 @@
 Usage: ``python benchmarks/diagnose_rates_curves.py N_HIDDEN N_NULL [OUT.json]`` (default 50 50
 ``benchmarks/results/diagnose_rates_curves.json``); ``... spectra N_HIDDEN N_NULL [OUT.json]`` for the
 spectrum peak-identification study (:func:`run_spectrum_case`). Resumable: the JSON is rewritten after every
-case and cases already in it are skipped.
+case and cases already in it are skipped. ``... visco N_VISCO OUT.json NULL_SEEDS HIDDEN_SEEDS`` (seed lists
+comma-separated): the viscoelastic-sample study (:func:`visco_cases`; session 11: ``visco 12
+benchmarks/results/diagnose_rates_curves_visco.json`` with the 12 first time-column nulls and the 9 detectable
+time-column hidden cases of the 2000-series whose effect changes the contact branch).
 
 Truth (``tests/diagnose_truth_curves.py``, independent of the diagnosis): approach and retract of
 a lever over one of probedyn's contact registry laws (DMT with its van der Waals tail, JKR,
