@@ -3,7 +3,10 @@
 Usage: ``python benchmarks/diagnose_rates_curves.py N_HIDDEN N_NULL [OUT.json]`` (default 50 50
 ``benchmarks/results/diagnose_rates_curves.json``); ``... spectra N_HIDDEN N_NULL [OUT.json]`` for the
 spectrum peak-identification study (:func:`run_spectrum_case`). Resumable: the JSON is rewritten after every
-case and cases already in it are skipped.
+case and cases already in it are skipped. ``... visco N_VISCO OUT.json NULL_SEEDS HIDDEN_SEEDS`` (seed lists
+comma-separated): the viscoelastic-sample study (:func:`visco_cases`; session 11: ``visco 12
+benchmarks/results/diagnose_rates_curves_visco.json`` with the 12 first time-column nulls and the 9 detectable
+time-column hidden cases of the 2000-series whose effect changes the contact branch).
 
 Truth (``tests/diagnose_truth_curves.py``, independent of the diagnosis): approach and retract of
 a lever over one of probedyn's contact registry laws (DMT with its van der Waals tail, JKR,
@@ -54,7 +57,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose_truth_curves import CURVE_EFFECTS, EXPECTED, make_curve_case  # noqa: E402
+from diagnose_truth_curves import CURVE_EFFECTS, EXPECTED, VISCO_EFFECT, make_curve_case, make_visco_case  # noqa: E402
 
 from probedyn.diagnose.engine import run  # noqa: E402
 
@@ -65,6 +68,19 @@ def cases(n_hidden: int, n_null: int) -> list[tuple[int, str | None]]:
     out = []
     for i in range(max(n_hidden, n_null)):
         out += hid[i:i + 1] + nul[i:i + 1]
+    return out
+
+
+def visco_cases(n_visco: int, null_seeds: list[int], hidden_seeds: list[int] = ()) -> list[tuple[int, str | None]]:
+    """The viscoelastic study: ``n_visco`` viscoelastic-sample cases (seeds 2100 + i, their own generator
+    :func:`make_visco_case`), interleaved with the given null seeds (6000-series, unchanged generator) and
+    existing hidden seeds (2000-series, their effect from ``CURVE_EFFECTS`` as in :func:`cases`) rerun to
+    check that the new cause neither steals their findings nor is discovered on noise."""
+    vis = [(2100 + i, VISCO_EFFECT) for i in range(n_visco)]
+    other = [(s, None) for s in null_seeds] + [(s, CURVE_EFFECTS[(s - 2000) % len(CURVE_EFFECTS)]) for s in hidden_seeds]
+    out = []
+    for i in range(max(len(vis), len(other))):
+        out += vis[i:i + 1] + other[i:i + 1]
     return out
 
 
@@ -111,7 +127,7 @@ def identifiability(chi: dict, expected: str, containers: list[str]) -> dict:
 
 
 def run_case(folder: Path, seed: int, effect: str | None) -> dict:
-    path, truth = make_curve_case(folder, seed, effect)
+    path, truth = make_visco_case(folder, seed) if effect == VISCO_EFFECT else make_curve_case(folder, seed, effect)
     clean = truth.pop("force_clean")
     det = signal_chi2(path, clean, EXPECTED[effect][0]) if effect else None
     t0, c0 = time.perf_counter(), time.process_time()
@@ -137,6 +153,8 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
             fit = row["fitted"][main]
             true = truth["params"][main]
             row["recovery_error"] = abs(fit / true - 1.0)
+            if "tau" in truth["params"] and "tau" in row["fitted"]:
+                row["tau_error"] = abs(row["fitted"]["tau"] / truth["params"]["tau"] - 1.0)
             if "lam" in truth["params"] and "lam" in row["fitted"]:
                 row["lam_error"] = abs(row["fitted"]["lam"] / truth["params"]["lam"] - 1.0)
     return row
@@ -183,7 +201,7 @@ def summarize(rows: list[dict]) -> dict:
     nul = [r for r in rows if not r["effect"]]
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
     per = {}
-    for e in CURVE_EFFECTS:
+    for e in CURVE_EFFECTS + [VISCO_EFFECT]:
         rr = [r for r in eff if r["effect"] == e]
         if rr:
             re = [r["recovery_error"] for r in rr if "recovery_error" in r]
@@ -203,6 +221,8 @@ def summarize(rows: list[dict]) -> dict:
         "correct_in_group_rate": sum(r["correct_in_group"] for r in eff) / len(eff) if eff else None,
         "false_discovery_rate": sum(bool(r["findings"]) for r in nul) / len(nul) if nul else None,
         "median_recovery_error": float(np.median(rec)) if rec else None,
+        "median_tau_error": float(np.median([r["tau_error"] for r in eff if "tau_error" in r]))
+        if any("tau_error" in r for r in eff) else None,
         "median_lam_error": float(np.median([r["lam_error"] for r in eff if "lam_error" in r]))
         if any("lam_error" in r for r in eff) else None,
         "per_effect": per,
@@ -216,14 +236,14 @@ def summarize(rows: list[dict]) -> dict:
     }
 
 
-def main(argv: list[str]) -> dict:
+def main(argv: list[str], todo: list | None = None) -> dict:
     n_h = int(argv[1]) if len(argv) > 1 else 50
     n_n = int(argv[2]) if len(argv) > 2 else 50
     out = Path(argv[3]) if len(argv) > 3 else ROOT / "benchmarks" / "results" / "diagnose_rates_curves.json"
     data = json.loads(out.read_text()) if out.exists() else {"rows": []}
     done = {r["seed"] for r in data["rows"]}
     with tempfile.TemporaryDirectory() as tmp:
-        for seed, effect in cases(n_h, n_n):
+        for seed, effect in (cases(n_h, n_n) if todo is None else todo):
             if seed in done:
                 continue
             row = run_case(Path(tmp), seed, effect)
@@ -356,6 +376,11 @@ if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "summary":
         print(json.dumps(resummarize(Path(sys.argv[2]) if len(sys.argv) > 2 else
                                      ROOT / "benchmarks" / "results" / "diagnose_rates_curves.json"), indent=1, default=float))
+    elif len(sys.argv) > 1 and sys.argv[1] == "visco":
+        # visco N_VISCO OUT.json [NULL_SEEDS (comma-separated)] [HIDDEN_SEEDS (comma-separated)]
+        seeds = lambda i: [int(x) for x in sys.argv[i].split(",") if x] if len(sys.argv) > i else []  # noqa: E731
+        todo = visco_cases(int(sys.argv[2]), seeds(4), seeds(5))
+        print(json.dumps(main(["", "0", "0", sys.argv[3]], todo), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "spectra":
         print(json.dumps(main_spectra(sys.argv[1:]), indent=1, default=float))
     else:

@@ -154,6 +154,155 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
 
 
 # ------------------------------------------------------------------------------------------
+# A viscoelastic sample (standard linear solid): brute-force Lee-Radok / Ting with the lever
+# ------------------------------------------------------------------------------------------
+
+#: the viscoelastic cases' effect name, cause and main parameter (seeds 2100 + i: the 2000-series generator
+#: above is unchanged)
+VISCO_EFFECT = "viscoelastic-sample"
+EXPECTED[VISCO_EFFECT] = ("viscoelastic-sample", "strength")
+
+
+def visco_lever_truth(t, z_rel, k: float, E_inf: float, s: float, tau: float, R: float, refine: int = 4):
+    """Force on a lever (stiffness k) over a standard-linear-solid half-space ``E(t) = E_inf (1 + s e^{-t/tau})``
+    indented by a sphere of radius R, along the piezo record ``z_rel(t)`` (towards the sample, 0 at the
+    undeformed surface) -- written independently of :mod:`probedyn.schemes.contact.viscoelastic`: the
+    hereditary integrals are **summed by brute force** (O(N^2), Stieltjes sums with the kernel at the
+    midpoint of every step) on a grid ``refine`` times finer than the samples (the piezo path linear in
+    between); while the contact grows (Lee & Radok 1960) the lever equation ``delta + P / k = z_rel`` is
+    solved for delta by Brent's method; after the largest contact (Ting 1966) for the time t1 at which
+    ``int_{t1}^{t} E(t - u) d delta(u) = 0`` (its condition solved for delta(t) at given t1, the lever
+    equation for t1 by Brent's method); the contact is lost when no t1 after the first touch satisfies
+    it (no adhesion). Returns the force at the samples."""
+    from scipy.optimize import brentq
+
+    t = np.asarray(t, float)
+    z_rel = np.asarray(z_rel, float)
+    tf = np.concatenate([np.linspace(t[i], t[i + 1], refine + 1)[:-1] for i in range(len(t) - 1)] + [t[-1:]])
+    zf = np.interp(tf, t, z_rel)
+    cg = 4.0 / 3.0 * math.sqrt(R)
+    g = lambda d: cg * max(d, 0.0) ** 1.5  # noqa: E731
+    E = lambda x: E_inf * (1.0 + s * np.exp(-x / tau))  # noqa: E731
+    N = len(tf)
+    dl = np.zeros(N)  # surface displacement under the tip (tip position while in contact)
+    gl = np.zeros(N)
+    F = np.zeros(N)
+    m = -1  # last index of the growing contact
+    t0 = None  # index of the step in which the contact starts
+    lost = False
+    for n in range(N):
+        if lost or (t0 is None and zf[n] <= 0.0):
+            dl[n] = min(zf[n], 0.0) if t0 is None else 0.0
+            continue
+        if t0 is None:
+            t0 = n - 1 if n > 0 else 0
+            dl[t0] = 0.0
+            gl[t0] = 0.0
+        tm = 0.5 * (tf[t0 + 1:n + 1] + tf[t0:n]) if n > t0 else np.zeros(0)
+        w = E(tf[n] - tm)  # kernel at the midpoints of steps t0 .. n-1 -> n
+        # growing contact: P = sum w (g_j - g_{j-1}) with the last increment unknown
+        hist_g = float(np.dot(w[:-1], np.diff(gl[t0:n]))) if n - t0 > 1 else 0.0
+
+        def lever_grow(d):
+            return d + (hist_g + w[-1] * (g(d) - gl[n - 1])) / k - zf[n]
+
+        d_prev_max = dl[m] if m >= 0 else 0.0
+        if lever_grow(d_prev_max) <= 0.0:  # the root lies beyond the largest contact so far: Lee-Radok
+            hi = max(zf[n], d_prev_max) + 1e-12
+            d = brentq(lever_grow, d_prev_max, hi, xtol=1e-16, rtol=1e-13) if lever_grow(hi) > 0 else hi
+            dl[n], gl[n] = d, g(d)
+            F[n] = hist_g + w[-1] * (gl[n] - gl[n - 1])
+            m = n
+            continue
+        # shrinking contact (Ting): t1 = t0 + x (x in [0, m - t0] in steps of the loading history)
+        dd_load = np.diff(dl[t0:m + 1])
+        dg_load = np.diff(gl[t0:m + 1])
+        dd_un = np.diff(dl[m:n])  # unloading increments m -> n-1 (known)
+
+        def at_t1(x):
+            j = int(min(math.floor(x), m - t0 - 1)) if m > t0 else 0
+            f = x - j
+            # partial step j (t0+j .. t0+j+1): the part after t1 counts in Ting's condition, before it in P
+            full_after = slice(j + 1, None)
+            c_load = float(np.dot(w[full_after][: len(dd_load) - j - 1], dd_load[j + 1:])) + w[j] * (1 - f) * dd_load[j]
+            c_un = float(np.dot(w[m - t0:n - t0 - 1], dd_un)) if n - 1 > m else 0.0
+            P = float(np.dot(w[:j], dg_load[:j])) + w[j] * f * dg_load[j]
+            # Ting's condition with the last increment (n-1 -> n) unknown: solved for delta_n
+            d_n = dl[n - 1] - (c_load + c_un) / w[-1]
+            return d_n, P
+
+        def lever_shrink(x):
+            d_n, P = at_t1(x)
+            return d_n + P / k - zf[n]
+
+        X = float(m - t0)
+        if lever_shrink(0.0) >= 0.0:  # contact lost: the tip is above the recovering surface
+            lost = True
+            continue
+        x = brentq(lever_shrink, 0.0, X, xtol=1e-13) if lever_shrink(X) > 0 else X
+        dl[n], F[n] = at_t1(x)
+    return np.interp(t, tf, F)
+
+
+def make_visco_case(outdir: Path, seed: int, *, n: int = 300) -> tuple[Path, dict]:
+    """A Hertz sphere on a soft **viscoelastic** sample (standard linear solid, relaxed modulus E_inf
+    1-30 MPa, relaxation strength s = E_0 / E_inf - 1 in 0.05-2, relaxation time tau 0.02-2 x the
+    approach time), approach and retract at speeds differing by a factor 1, 3 or 10 (the JPK QI example:
+    10), recorded with times (the law needs them), a tilted offset baseline and white noise as
+    :func:`make_curve_case`; truth by :func:`visco_lever_truth`. The declared sample modulus (half of
+    the cases) is the relaxed one."""
+    rng = np.random.default_rng(seed)
+    k = float(10 ** rng.uniform(-0.5, 1.0))
+    R = float(rng.choice([8e-9, 20e-9, 30e-9]))
+    E_s = float(10 ** rng.uniform(6.0, 7.5))
+    noise = float(10 ** rng.uniform(-10.3, -9.7))
+    declare_E = bool(rng.integers(2))
+    s = float(10 ** rng.uniform(math.log10(0.05), math.log10(2.0)))
+    Es_star = 1 / ((1 - NU_TIP**2) / E_TIP + (1 - NU_S**2) / E_s)
+    Fmax = float(rng.uniform(15e-9, 60e-9))
+    dmax = (Fmax / (4 / 3 * Es_star * math.sqrt(R))) ** (2 / 3)
+    z_c = float(rng.uniform(-5e-9, 5e-9))
+    z_top = z_c + dmax + Fmax / k
+    z_far = z_c - max(40e-9, 1.5 * Fmax / k)
+    dt_app = float(rng.uniform(1e-3, 5e-3))
+    speed_ratio = float(rng.choice([1.0, 3.0, 10.0]))
+    T_app = n * dt_app
+    tau = float(T_app * 10 ** rng.uniform(math.log10(0.02), math.log10(2.0)))
+    z_app = np.linspace(z_far, z_top, n)
+    z_ret = z_app[::-1]
+    t = np.concatenate([np.arange(n) * dt_app, (n - 1) * dt_app + np.arange(1, n + 1) * dt_app / speed_ratio])
+    z = np.concatenate([z_app, z_ret])
+    F = visco_lever_truth(t, z - z_c, k, Es_star, s, tau, R)
+    b0 = float(rng.normal(0, 5e-9))
+    b1 = float(rng.normal(0, 0.02) * k)
+    clean = F + b0 + b1 * z
+    Fm = clean + noise * rng.standard_normal(len(F))
+    seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
+    fmt = ["deflection_V", "deflection_m", "force_N"][int(rng.integers(3))]
+    sens = float(rng.uniform(20e-9, 100e-9))
+    if fmt == "deflection_V":
+        col, noise_line = Fm / (k * sens), f"deflection = {noise / (k * sens)!r}"
+    elif fmt == "deflection_m":
+        col, noise_line = Fm / k, f"deflection = {noise / k!r}"
+    else:
+        col, noise_line = Fm, f"force = {noise!r}"
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    name = f"curve_{seed}"
+    np.savetxt(outdir / f"{name}.csv", np.column_stack([z, col, seg, t]), delimiter=",",
+               header=f"z_m,{fmt},segment,time_s", comments="", fmt=["%.10e", "%.10e", "%d", "%.9e"])
+    sample = f"\n[sample]\nE = {E_s!r}\nnu = {NU_S!r}\n" if declare_E else ""
+    lever = f"k = {k!r}\n" + (f"sensitivity = {sens!r}\n" if fmt == "deflection_V" else "")
+    (outdir / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\n{lever}\n[tip]\nradius = {R!r}\n'
+        f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n")
+    truth = {"effect": VISCO_EFFECT, "params": {"strength": s, "tau": tau}, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0,
+             "b1": b1, "noise": noise, "R_nom": R, "declared_E": declare_E, "format": fmt, "time_column": True,
+             "speed_ratio": speed_ratio, "snap_in": False, "force_clean": clean}
+    return outdir / f"{name}.toml", truth
+
+
+# ------------------------------------------------------------------------------------------
 # Thermal spectra of the probe's FEM modes
 # ------------------------------------------------------------------------------------------
 

@@ -54,12 +54,17 @@ def test_nested_never_worse_force_curve(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", ["modal", "force", "friction"])
+@pytest.mark.parametrize("kind", ["modal", "force", "force-timed", "friction"])
 def test_nested_never_worse_whole_catalog(tmp_path, kind):
     if kind == "modal":
         path, _ = make_modal_case(tmp_path, 1003, None, "C", truth_kind="timoshenko")
     elif kind == "force":
         path, _ = make_force_case(tmp_path, 7, "adhesion-dmt")
+    elif kind == "force-timed":  # a record with times: every force cause, viscoelastic-sample included
+        from diagnose_truth_curves import make_visco_case
+
+        path, _ = make_visco_case(tmp_path, 2100)
+        assert "viscoelastic-sample" in [c.key for c in make_problem(path).causes]
     else:
         path, _ = make_friction_case(tmp_path, 11, "viscous-friction")
     _nested_never_worse(make_problem(path))

@@ -137,6 +137,8 @@ class ForceState:
     lam: float | None = None  # Maugis transition parameter (md)
     alpha: float = 0.0  # cone half-angle [rad] of a conical tip (0: the sphere of radius R)
     z_shift: float = 0.0  # the retract's true piezo position minus the recorded one [m] (hysteresis)
+    visco_strength: float = 0.0  # SLS relaxation strength E_0 / E_inf - 1 of the sample (0: elastic; E_star = E_inf)
+    visco_tau: float = 1.0  # SLS relaxation time [s]
     transforms: list = field(default_factory=list)
 
 
@@ -443,10 +445,14 @@ class ForceCurveProblem:
         if d.E_sample is not None:
             self.E_star_declared = 1.0 / ((1 - d.nu_tip**2) / d.E_tip + (1 - d.nu_sample**2) / d.E_sample)
         Fs = max(np.ptp(d.force), 10 * self.sigma)
+        # the tilt's bound: the force range over the span, and at least 3x the tilt the far line shows -- a tilt
+        # of the opposite sign to the contact force cancels part of the range (stiff levers: a 2 % tilt of
+        # k over the span against the contact force), so the range alone can leave the true tilt out of bounds
+        B1 = max(Fs / self.span, 3.0 * abs(float(b1)))
         self.base_params = [
             CauseParam("z_c", "m", float(d.z.min()), float(d.z.max()), zc0, "contact point (piezo position)"),
             CauseParam("b0", "N", -Fs, Fs, float(b0), "force offset of the baseline"),
-            CauseParam("b1", "N/m", -Fs / self.span, Fs / self.span, float(b1), "baseline tilt (virtual deflection)"),
+            CauseParam("b1", "N/m", -B1, B1, float(b1), "baseline tilt (virtual deflection)"),
         ]
         if self.E_star_declared is None:
             # E* = 1 / ((1 - nu_t^2) / E_t + (1 - nu_s^2) / E_s) < E_t / (1 - nu_t^2), the rigid-sample
@@ -460,10 +466,13 @@ class ForceCurveProblem:
         self.nfev_per_param = 30
         self.max_starts = 3
         self.causes = []
+        self.not_offered = {}  # causes the record cannot inform, with the reason (a missing column)
         for cls in catalog("force"):
             c = cls().constrain(self)
             if c is not None:
                 self.causes.append(c)
+            elif getattr(cls, "requires", None) and not (set(cls.changes) & self.known):
+                self.not_offered[cls.key] = f"needs {cls.requires}"
 
     def supports(self, what: str) -> bool:
         return True
@@ -483,7 +492,7 @@ class ForceCurveProblem:
         probability (``-inf`` without a jump; :func:`_jump_alternatives`)."""
         d = self.data
         st = self.state(values, causes)
-        F, F_alt, w = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k, self.dz)
+        F, F_alt, w = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k, self.dz, d.time)
         out = []
         for G in (F, F_alt):
             G = G + st.b0 + st.b1 * d.z + st.drift * self.tau
@@ -585,9 +594,21 @@ class ForceCurveProblem:
             self.separation = False
         return out
 
-    def _curve(self, st: ForceState, z_rel, segment, k, dz=None):
+    def _curve(self, st: ForceState, z_rel, segment, k, dz=None, t=None):
         """The lever's force along ``z_rel``; with ``dz`` (the samples' piezo intervals) the triple
-        ``(F, F_alt, log_w)`` of :func:`lever_curve_registry` (laws without jumps: ``log_w`` = -inf)."""
+        ``(F, F_alt, log_w)`` of :func:`lever_curve_registry` (laws without jumps: ``log_w`` = -inf).
+        A viscoelastic sample (``st.visco_strength > 0``) needs the samples' times ``t`` (increasing:
+        the record's order): the Lee-Radok / Ting lever curve of :mod:`probedyn.schemes.contact.viscoelastic`
+        (no jumps; without times, e.g. the synthetic curves of :meth:`predict_observables`, the relaxed
+        elastic law)."""
+        if st.visco_strength > 0 and t is not None:
+            from probedyn.schemes.contact.viscoelastic import power_law, sls_lever_curve
+
+            if st.contact is not None and st.W > 0 or st.alpha >= ALPHA_MIN:
+                raise ProbedynError("the viscoelastic contact is implemented for a non-adhesive sphere only")
+            c, m = power_law("sphere", st.R)
+            F = sls_lever_curve(t, z_rel, k, c, m, st.E_star, st.visco_strength, st.visco_tau)
+            return F if dz is None else (F, F, np.full(len(F), -np.inf))
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         if model is None:
             F = lever_curve(z_rel, segment, Pl, Pu, k, self.span)  # Hertz, cone: monotone, no jumps
@@ -651,9 +672,11 @@ class ForceCurveProblem:
         d = self.data
         return {"kind": "force", "points": self.n, "approach": int((d.segment == 0).sum()),
                 "retract": int((d.segment == 1).sum()), "k_N_per_m": d.k, "tip_radius_m": d.tip_radius,
-                "sample_E_declared": d.E_sample, "sigma_force_N": self.sigma, "noise_stated": d.noise_stated}
+                "sample_E_declared": d.E_sample, "sigma_force_N": self.sigma, "noise_stated": d.noise_stated,
+                "time_column": d.time is not None, "causes_not_offered": dict(self.not_offered)}
 
     def model_description(self) -> dict[str, Any]:
         return {"baseline": "linear lever + Hertz contact, quasi-static equilibrium with snap-in / pull-off at the "
                             "folds where the force gradient exceeds k; baseline offset and tilt",
-                "contact_registry": "probedyn.schemes.contact (dmt, jkr, md) for the adhesion causes"}
+                "contact_registry": "probedyn.schemes.contact (dmt, jkr, md) for the adhesion causes; "
+                                    "schemes.contact.viscoelastic (Lee-Radok / Ting, SLS) for a viscoelastic sample"}
