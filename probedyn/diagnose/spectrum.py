@@ -194,7 +194,8 @@ def _window(freq: np.ndarray, psd: np.ndarray, line: dict) -> tuple[np.ndarray, 
 
 
 def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log: float, averages: int | None = None,
-                pair: tuple[float, float] | None = None, n_tests: int = 1) -> dict[str, Any] | None:
+                pair: tuple[float, float] | None = None, n_tests: int = 1,
+                others: list[dict] | None = None) -> dict[str, Any] | None:
     """Two SHO lines on the background of ``single`` (a :func:`fit_line` result) in its window, by the
     same likelihood (Gamma deviance of the averaged periodogram, else log-space least squares), and
     the likelihood-ratio test of the two lines against the one.
@@ -227,11 +228,20 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     if single.get("fwhm_bins", 0.0) < 2.0 or not np.isfinite(single.get("Q", math.nan)):
         return None
     fw, pw = _window(freq, psd, single)
+    f0, Q0 = single["f0_Hz"], single["Q"]
+    fwhm = f0 / Q0
+    # other detected peaks inside the window (a resolved neighbour mode): their bins (+- 3 of their
+    # widths) are left out of both fits, else the second line would be spent on a neighbour's flank
+    keep = np.ones(len(fw), bool)
+    for o in others or ():
+        if o is single or abs(o["f0_Hz"] - f0) < fwhm:
+            continue
+        wo = 3 * max(o["f0_Hz"] / o["Q"] if np.isfinite(o.get("Q", math.nan)) else 0.0, 2 * float(np.median(np.diff(freq))))
+        keep &= np.abs(fw - o["f0_Hz"]) > wo
+    fw, pw = fw[keep], pw[keep]
     if len(fw) < 12:
         return None
     df = float(np.median(np.diff(freq)))
-    f0, Q0 = single["f0_Hz"], single["Q"]
-    fwhm = f0 / Q0
     A0 = single["area_m2"] * 2 / (math.pi * f0 * Q0)  # sho_psd amplitude of the single line
     B0, B1 = single["white_floor"], single["one_over_f_at_window_start"]
 
@@ -254,7 +264,7 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     if pair is not None and 0 < abs(pair[1] - pair[0]) < 2 * fwhm:
         seps.insert(0, abs(pair[1] - pair[0]))
     for d in seps:
-        for w in (0.5, 0.8, 0.2):  # share of the (blend's) peak height of the lower line
+        for w in (0.7, 0.3):  # share of the (blend's) peak height of the lower line
             # a blend of two lines of Q_i is broader than either: each line is narrower (Q up to ~2 Q0)
             q = lq + math.log10(1.6)
             starts.append([f0 - d / 2, f0 + d / 2, q, q, math.log10(A0 * w / 1.6**2), math.log10(A0 * (1 - w) / 1.6**2),
@@ -273,7 +283,15 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     if best is None:
         return None
     dev2 = float(np.sum(best.fun**2))
-    dev1 = float(np.sum(res_single(fw, pw, single, s_log, averages) ** 2))
+    # the one line re-fitted on the same bins (the nested model: the second line's area -> 0)
+    def res1(v):
+        return res(np.array([v[0], v[0], v[1], v[1], v[2], lo[5], v[3], v[4]]))
+
+    v0 = np.clip([f0, lq, math.log10(A0), math.log10(B0), math.log10(max(B1, 1e-300))],
+                 [lo[0], lo[2], lo[4], lo[6], lo[7]], [hi[0], hi[2], hi[4], hi[6], hi[7]])
+    r1 = least_squares(res1, v0, bounds=([lo[0], lo[2], lo[4], lo[6], lo[7]], [hi[0], hi[2], hi[4], hi[6], hi[7]]),
+                       x_scale=[fwhm / 4, 0.3, 0.3, 0.3, 0.3])
+    dev1 = min(float(np.sum(r1.fun**2)), float(np.sum(res_single(fw, pw, single, s_log, averages) ** 2)))
     lr = dev1 - dev2
     thr = float(chi2_dist.ppf(1 - ALPHA / max(n_tests, 1), 3))
     if not lr > thr:
@@ -748,7 +766,8 @@ def _split_doublets(freq, psd, fits: list[dict], scored: list, preds: list[dict]
     out: list[dict] = []
     changed = False
     for i, ft in enumerate(fits):
-        d = fit_doublet(freq, psd, ft, s_log, averages, pair=pairs[i], n_tests=len(pairs)) if i in pairs else None
+        d = (fit_doublet(freq, psd, ft, s_log, averages, pair=pairs[i], n_tests=len(pairs), others=fits)
+             if i in pairs else None)
         if d is None:
             out.append(ft)
             continue
