@@ -10,6 +10,11 @@
    (white plus 1/f). Its full width ``f0 / Q`` is compared with the frequency resolution: a line
    narrower than 2 bins is *unresolved* (a sinusoid -- an electronic spur -- or a resonance whose
    Q the spectrum cannot measure).
+   Where two predicted modes fall inside a peak's matching window, the peak may be an unresolved
+   doublet (two modes closer than their line width): two SHO lines are fitted by the same likelihood
+   and kept when the likelihood ratio passes chi^2_3 at the engine's level (:func:`fit_doublet`); the
+   two lines then compete for labels as two peaks, with the pair's (profile, correlation-inflated)
+   centre uncertainties.
 3. **Identification against the model.** The probe's FEM (the modal baseline) predicts every
    mode's frequency and family, and in a declared medium the Sader quality factor of its
    flapwise modes, ``Q <= Q_fluid`` (``1/Q = 1/Q_int + 1/Q_fluid``); with a declared temperature it
@@ -58,7 +63,7 @@ from probedyn.diagnose.formats import ModalData, SpectrumData
 from probedyn.diagnose.modal import ModalProblem
 from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode
 
-__all__ = ["spectrum_problem", "fit_line", "detect_peaks", "sho_psd"]
+__all__ = ["spectrum_problem", "fit_line", "fit_doublet", "detect_peaks", "sho_psd"]
 
 K_B = 1.380649e-23
 MATCH_TOL = 0.03
