@@ -779,9 +779,12 @@ def _split_doublets(freq, psd, fits: list[dict], scored: list, preds: list[dict]
         changed = True
         for k, ln in enumerate(d["lines"]):
             other = d["lines"][1 - k]
-            out.append({**ln, "doublet": {"partner_Hz": other["f0_Hz"], "likelihood_ratio": d["lr"],
-                                          "threshold": d["threshold"], "rho_centres": d["rho_f"],
-                                          "one_line": d["single"]}})
+            note = (f"one of two lines in one peak (unresolved doublet with {other['f0_Hz']:.6g} Hz; two SHO lines "
+                    f"against one: likelihood ratio {d['lr']:.3g} > {d['threshold']:.3g}; one line would have had "
+                    f"Q {d['single']['Q']:.3g} at {d['single']['f0_Hz']:.6g} Hz)")
+            out.append({**ln, "notes": [note], "doublet": {"partner_Hz": other["f0_Hz"], "likelihood_ratio": d["lr"],
+                                                          "threshold": d["threshold"], "rho_centres": d["rho_f"],
+                                                          "one_line": d["single"]}})
     return out if changed else None
 
 
@@ -887,6 +890,8 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
         accepted = not reasons
         if accepted:
             seen.add(key)
+        if "notes" in ft:  # a list per table (notes are added to the chosen labelling's table)
+            ft = {**ft, "notes": list(ft["notes"])}
         table.append({**ft, "accepted": accepted, "_mode_line": mode_line, "thermal_ratio": ratio, "family": near["family"] if accepted else None,
                       "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
                       "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons})
