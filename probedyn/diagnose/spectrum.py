@@ -74,6 +74,7 @@ MAX_GRID_1D = 96  # values per parameter of a one-parameter cause's hypotheses (
 MAX_GRID_2D = 24  # per parameter of a two-parameter cause (a product grid)
 MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
 MAX_ASSIGNMENTS = 24  # one-to-one assignments of the peaks of a window holding several modes, per labelling
+DOUBLET_PLACES = 4  # independent centres of a second line within +- 1 width of a peak (resolved to ~1/2 width)
 CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
 
 
@@ -237,7 +238,9 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     fwhm = f0 / Q0
     # other detected peaks inside the window (a resolved neighbour mode): their bins (+- 3 of their
     # widths) are left out of both fits, else the second line would be spent on a neighbour's flank
-    keep = np.ones(len(fw), bool)
+    # the test's bins: the pair's core, f0 +- 4 widths (the pair lies within +- 1 width; a line's shape
+    # beyond 4 widths carries little of it, and far from the peak a neighbour's flank would dominate)
+    keep = np.abs(fw - f0) <= 4 * fwhm
     for o in others or ():
         if o is single or abs(o["f0_Hz"] - f0) < fwhm:
             continue
@@ -247,22 +250,49 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     if len(fw) < 12:
         return None
     df = float(np.median(np.diff(freq)))
+    # the other detected lines' tails (their one-line fits) are part of the background of both fits: a
+    # neighbour mode's flank rises across the window, which white + 1/f (falling) cannot follow, and a
+    # second line would otherwise be spent on it
+    tails = np.zeros(len(fw))
+    for o in others or ():
+        if o is not single and np.isfinite(o.get("Q", math.nan)) and abs(o["f0_Hz"] - f0) >= fwhm:
+            tails += sho_psd(fw, o["f0_Hz"], o["Q"], o["area_m2"] * 2 / (math.pi * o["f0_Hz"] * o["Q"]))
     A0 = single["area_m2"] * 2 / (math.pi * f0 * Q0)  # sho_psd amplitude of the single line
     B0, B1 = single["white_floor"], single["one_over_f_at_window_start"]
 
     def model(u):
         return (sho_psd(fw, u[0], 10 ** u[2], 10 ** u[4]) + sho_psd(fw, u[1], 10 ** u[3], 10 ** u[5])
-                + 10 ** u[6] + 10 ** u[7] * (fw[0] / fw))
+                + 10 ** u[6] + 10 ** u[7] * (fw[0] / fw) + tails)
 
     def res(u):
         if averages:
             return gamma_deviance_residuals(pw, model(u), averages)
         return (np.log(model(u)) - np.log(np.maximum(pw, 1e-300))) / s_log
 
+    # the one line re-fitted on these bins with the neighbours' tails (the nested model: the second
+    # line's area -> 0), with its Q free as in fit_line: the first fit's Q may be biased by a neighbour
+    # mode's flank, and the pair's Q bounds below are relative to this one line
+    ql_hi = max(math.log10(f0 / (2 * df)), math.log10(Q0))
+    b1_lo = [f0 - fwhm, math.log10(0.5), math.log10(A0) - 6, math.log10(B0) - 4, math.log10(max(B1, 1e-300)) - 4]
+    b1_hi = [f0 + fwhm, ql_hi, math.log10(A0) + 3, math.log10(B0) + 2, math.log10(max(B1, 1e-300)) + 2]
+
+    def res1(v):
+        return res(np.array([v[0], v[0], v[1], v[1], v[2], v[2] - 12, v[3], v[4]]))
+
+    r1 = least_squares(res1, np.clip([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(max(B1, 1e-300))],
+                                     b1_lo, b1_hi), bounds=(b1_lo, b1_hi), x_scale=[fwhm / 4, 0.3, 0.3, 0.3, 0.3])
+    dev1 = float(np.sum(r1.fun**2))
+    f0, Q0, A0, B0, B1 = float(r1.x[0]), 10 ** r1.x[1], 10 ** r1.x[2], 10 ** r1.x[3], 10 ** r1.x[4]
+    fwhm = f0 / Q0
     lq = math.log10(Q0)
-    lo = [f0 - fwhm, f0 - fwhm, lq - 1.0, lq - 1.0, math.log10(A0) - 6, math.log10(A0) - 6,
+    # each line of a pair is a mode of this lever: at least about as narrow as the blend of the two
+    # (Q >= Q0 / 1.5, the one line's Q with room for its scatter) -- a broad low line would be
+    # background, not a mode -- and resolved (width >= 2 bins, as for a labelled line: a narrower
+    # second line is a spur or one bin's scatter, and its Q could not be measured)
+    q_lo, q_hi = lq - math.log10(1.5), max(min(lq + 1.5, math.log10(f0 / (2 * df))), lq)
+    lo = [f0 - fwhm, f0 - fwhm, q_lo, q_lo, math.log10(A0) - 6, math.log10(A0) - 6,
           math.log10(B0) - 4, math.log10(max(B1, 1e-300)) - 4]
-    hi = [f0 + fwhm, f0 + fwhm, lq + 1.5, lq + 1.5, math.log10(A0) + 3, math.log10(A0) + 3,
+    hi = [f0 + fwhm, f0 + fwhm, q_hi, q_hi, math.log10(A0) + 3, math.log10(A0) + 3,
           math.log10(B0) + 2, math.log10(max(B1, 1e-300)) + 2]
     starts = []
     seps = [0.5 * fwhm, 0.25 * fwhm]
@@ -288,17 +318,11 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     if best is None:
         return None
     dev2 = float(np.sum(best.fun**2))
-    # the one line re-fitted on the same bins (the nested model: the second line's area -> 0)
-    def res1(v):
-        return res(np.array([v[0], v[0], v[1], v[1], v[2], lo[5], v[3], v[4]]))
-
-    v0 = np.clip([f0, lq, math.log10(A0), math.log10(B0), math.log10(max(B1, 1e-300))],
-                 [lo[0], lo[2], lo[4], lo[6], lo[7]], [hi[0], hi[2], hi[4], hi[6], hi[7]])
-    r1 = least_squares(res1, v0, bounds=([lo[0], lo[2], lo[4], lo[6], lo[7]], [hi[0], hi[2], hi[4], hi[6], hi[7]]),
-                       x_scale=[fwhm / 4, 0.3, 0.3, 0.3, 0.3])
-    dev1 = min(float(np.sum(r1.fun**2)), float(np.sum(res_single(fw, pw, single, s_log, averages) ** 2)))
     lr = dev1 - dev2
-    thr = float(chi2_dist.ppf(1 - ALPHA / max(n_tests, 1), 3))
+    # the level: ALPHA over the peaks tested and over the independent places the second line can take
+    # (its centre ranges over 2 widths, resolved to about half a width: 4), the look-elsewhere effect
+    # of a parameter (the centre) that is undefined under the one-line hypothesis
+    thr = float(chi2_dist.ppf(1 - ALPHA / (DOUBLET_PLACES * max(n_tests, 1)), 3))
     if not lr > thr:
         return None
     dof = max(len(fw) - 8, 1)
@@ -326,7 +350,7 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
                       "window_Hz": list(single["window_Hz"]), "deviance": dev2})
     lines.sort(key=lambda x: x["f0_Hz"])
     return {"lines": lines, "lr": lr, "threshold": thr, "rho_f": rho, "single": {
-        "f0_Hz": f0, "Q": Q0, "area_m2": single["area_m2"]}}
+        "f0_Hz": f0, "Q": Q0, "area_m2": A0 * math.pi * f0 * Q0 / 2}}
 
 
 def _profile_sigma(res, u: np.ndarray, k: int, lo, hi, dev: float, scale: float, h0: float) -> float:
@@ -363,16 +387,6 @@ def _profile_sigma(res, u: np.ndarray, k: int, lo, hi, dev: float, scale: float,
             h *= 2.0
         widths.append(h if w is None else w)
     return float(max(widths))
-
-
-def res_single(fw: np.ndarray, pw: np.ndarray, line: dict, s_log: float, averages: int | None) -> np.ndarray:
-    """Residuals of a :func:`fit_line` result on the bins ``fw`` of its window (same likelihood)."""
-    f0, Q = line["f0_Hz"], line["Q"]
-    A = line["area_m2"] * 2 / (math.pi * f0 * Q)
-    m = sho_psd(fw, f0, Q, A) + line["white_floor"] + line["one_over_f_at_window_start"] * (fw[0] / fw)
-    if averages:
-        return gamma_deviance_residuals(pw, m, averages)
-    return (np.log(m) - np.log(np.maximum(pw, 1e-300))) / s_log
 
 
 def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]:
