@@ -7,7 +7,7 @@ Gamma(N, S/N) scatter of an N-times averaged periodogram. Tolerances:
 
 * centres: each recovered centre within its stated sigma's 3.4-fold (two-sided 1 % over the 16 centres of
   the fixed draws, Bonferroni: z = 3.4), the pair kept in every draw (at one full width apart the split's
-  likelihood ratio is ~25-40 against the threshold 11.3: measured 30/30 split);
+  likelihood ratio is ~20-40 against the threshold chi2_3(1 - 0.01/4) = 14.3: measured 20/20 split);
 * single lines: the split must not be found more often than the test's level alpha = 0.01 allows: with
   n draws the count must stay below the binomial(n, alpha) upper 0.1 % quantile (a real rate of 5 alpha
   fails it with probability > 50 % at n = 200; the fast test's n = 10 only guards against a gross
