@@ -212,17 +212,21 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     each mode its own k_B T / k_eff), and its centre is neither mode's. Two SHO lines are the model of
     the thermal motion of two modes (their thermal forces are independent, so the PSDs add).
 
-    The second line has 3 parameters (centre, Q, area); the split is kept when the deviance drops by
-    more than the chi^2_3 quantile at 1 - ALPHA / n_tests (the engine's level, ``n_tests`` the peaks
-    tested: the look-elsewhere correction). The centres are bounded to the single line's centre
-    +- its full width (an unresolved pair; lines further apart show as two peaks), which also keeps the
-    search for the second line local, so the null distribution of the statistic stays near chi^2_3
-    (measured: ``tests/test_diagnose_doublet.py``). ``pair``: the predicted pair's frequencies (the
-    hypothesis' modes in the window, after its scale), used as one start.
+    The test runs on the pair's core (f0 +- 4 widths) against the one line re-fitted on the same bins,
+    both on a white + 1/f background plus the tails of the other detected lines (``others``: their
+    one-line fits; peaks inside the core are masked). Each line of the pair is a mode: its centre within
+    the one line's centre +- its width (an unresolved pair), Q >= the one line's Q / 1.5 (the components
+    of a blend are narrower than the blend) and resolved (width >= 2 bins). The second line has 3
+    parameters (centre, Q, area); the split is kept when the deviance drops by more than the chi^2_3
+    quantile at 1 - ALPHA / (DOUBLET_PLACES n_tests): the engine's level over the peaks tested and
+    over the independent places of the second line's centre (undefined under one line: the
+    look-elsewhere effect). Measured false-split rate on single lines: ``tests/test_diagnose_doublet.py``.
+    ``pair``: the predicted pair's frequencies (the hypothesis' modes in the window, after its scale),
+    used as one start.
 
     Returns None if the split is not supported; else ``{"lines": [two fit_line-like dicts, low
     frequency first], "lr": ..., "threshold": ..., "rho_f": correlation of the centres}``. Each centre's
-    sigma is the fit's marginal sigma times sqrt(1 + |rho|): an unresolved pair's centres are
+    sigma is its profile-likelihood half-width (:func:`_profile_sigma`) times sqrt(1 + |rho|): an unresolved pair's centres are
     correlated (the mean is fixed by the data far better than the split), the modal fit takes
     independent rows, and sigma_i^2 (1 + |rho|) on the diagonal bounds the 2 x 2 covariance from above
     (D - C is positive semi-definite), so a pair's chi-square is never counted with more precision
