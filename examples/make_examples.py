@@ -36,8 +36,9 @@ comments the diagnosis does not read, how the file was made and what is hidden:
   meshed unstretched (stretch 1). The hidden particle was chosen so that flapwise 3 and torsion 1 (2.64 /
   2.54 MHz) stay resolved lines at the seed's Q_int = 209. Tried first (session 9, 06:15 UTC): a compliant
   clamp, c_rot = 0.03, pulls flapwise 3 onto torsion 1 (2.531 / 2.514 MHz, line widths ~13 kHz); the
-  diagnosis fits the blend as ONE line (Q 117, flapwise 3 off by 12 sigma) and ends partly-explained
-  (a diagnosis limit, reported in docs/diagnose.md section 5); c_rot = 0.01 is confounded with a length
+  diagnosis fitted the blend as ONE line (Q 117, flapwise 3 off by 12 sigma) and ended partly-explained
+  (a diagnosis limit, docs/diagnose.md section 5; since session 11 the pair is split into its two lines and
+  the case reads confounded length-error / clamp-compliance, section 2); c_rot = 0.01 is confounded with a length
   error (the clamp <-> length class of the rate studies), an honest report but not a one-cause lesson.
 * ``ffm_stickslip_speeds`` -- three friction loops (trace and retrace, interval-mean samples, 8
   lattice periods): speed v and 10 v at 5 nN, v at 10 nN, from the Langevin Prandtl-Tomlinson tip
