@@ -154,17 +154,28 @@ def _face_nodal_areas(model, face):
     return d * (area / d.sum())
 
 
+def tip_overrides(tip: dict | None) -> dict:
+    """The cantilever probe's tip parameters of a truth's ``tip`` (``shape``, ``height`` [m],
+    ``half_angle`` [rad]); {} without a tip."""
+    if not tip:
+        return {}
+    return {"tip_shape": tip["shape"], "tip_height": float(tip["height"]), "tip_half_angle": float(tip["half_angle"])}
+
+
 def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
-              detector=None) -> dict:
+              detector=None, tip: dict | None = None) -> dict:
     """Vacuum frequencies [Hz] of the MODES of lever ``lever`` carrying ``effect`` (FEM, ``ett``
     elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`).
     ``detector(model) -> (node index, unit direction)``: also return each MODE's mass-normalised
-    displacement there along that direction (``"detector_disp"``, for thermal spectra)."""
+    displacement there along that direction (``"detector_disp"``, for thermal spectra).
+    ``tip``: a meshed tip (:func:`tip_overrides`; P2 tetrahedra, ``ett`` layers through the
+    thickness -- the diagnosis meshes a tipped lever with 3); a thickness error leaves the tip as
+    it is (a thicker lever carrying the same tip), as on a real lever."""
     from probedyn.fem.model import PointMass
 
     probe = _probe()
     geo = lever_geometry(lever)
-    over = dict(geo, elements_through_thickness=ett)
+    over = dict(geo, elements_through_thickness=ett, **tip_overrides(tip))
     if effect == "thickness-error":
         over["thickness"] = geo["thickness"] * params["t_ratio"]
     elif effect == "width-error":
@@ -223,26 +234,34 @@ def timoshenko_truth(lever: str) -> dict:
 # ------------------------------------------------------------------------------------------
 
 
-def _key(lever, effect, params, ett) -> str:
-    s = json.dumps([lever, effect, {k: round(float(v), 12) for k, v in sorted(params.items())}, ett])
+def _key(lever, effect, params, ett, tip=None) -> str:
+    items = [lever, effect, {k: round(float(v), 12) for k, v in sorted(params.items())}, ett]
+    if tip:  # untipped keys unchanged
+        items.append(tip_overrides(tip))
+    s = json.dumps(items)
     return hashlib.sha1(s.encode()).hexdigest()[:16]
 
 
-def cached_fem_truth(lever, effect, params, ett=TRUTH_ETT, compute: bool = True) -> dict:
-    cache = json.loads(CACHE.read_text()) if CACHE.exists() else {}
-    k = _key(lever, effect, params, ett)
+#: tipped truths (P2 tetrahedra, 50-170 k DOFs, a minute each) are cached outside the repository
+TIP_CACHE = Path(os.environ.get("PROBEDYN_TRUTH_CACHE", Path.home() / ".cache" / "probedyn-truths")) / "modal_tip.json"
+
+
+def cached_fem_truth(lever, effect, params, ett=TRUTH_ETT, compute: bool = True, tip: dict | None = None) -> dict:
+    path = TIP_CACHE if tip else CACHE
+    cache = json.loads(path.read_text()) if path.exists() else {}
+    k = _key(lever, effect, params, ett, tip)
     if k in cache:
         return cache[k]
     if not compute:
         raise KeyError(f"FEM truth {lever} {effect} {params} not cached (run tests/diagnose_truth.py)")
-    out = fem_truth(lever, effect, params, ett)
-    out.update(lever=lever, effect=effect, params=params, ett=ett)
-    cache = json.loads(CACHE.read_text()) if CACHE.exists() else {}
+    out = fem_truth(lever, effect, params, ett, tip=tip)
+    out.update(lever=lever, effect=effect, params=params, ett=ett, **({"tip": tip} if tip else {}))
+    cache = json.loads(path.read_text()) if path.exists() else {}
     cache[k] = out
-    CACHE.parent.mkdir(exist_ok=True)
-    tmp = CACHE.with_suffix(".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(cache, indent=0, sort_keys=True))
-    os.replace(tmp, CACHE)
+    os.replace(tmp, path)
     return out
 
 
@@ -288,23 +307,26 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
 def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, noise: float = 1e-3,
                     q_noise: float = 0.05, with_Q: bool | None = None, declared_medium: str | None = "vacuum",
                     truth_kind: str = "fem", compute: bool = True, params: dict | None = None,
-                    name: str | None = None) -> tuple[Path, dict]:
+                    name: str | None = None, tip: dict | None = None) -> tuple[Path, dict]:
     """Write a modal measurement of lever ``lever`` (a name of LEVERS or a geometry dict, whose truth is
     solved uncached) with a hidden ``effect`` (None: noise only); ``params``: the effect's parameters
-    (default: drawn from ``seed``); ``name``: the file stem (default ``modal_<seed>``)."""
+    (default: drawn from ``seed``); ``name``: the file stem (default ``modal_<seed>``); ``tip``: the lever
+    carries a meshed tip (:func:`tip_overrides`, FEM truths only), declared in the sidecar's [probe]."""
     rng = np.random.default_rng(seed)
     if params is None:
         params = draw_modal_effect(effect, lever, rng) if effect else {}
     g = lever_geometry(lever)
     if truth_kind == "timoshenko":
+        if tip:
+            raise ValueError("a Timoshenko truth has no tip")
         tr = timoshenko_truth(lever)
         modes = MODES[:5]
         f = np.array(tr["freqs"][:5])
     else:
         fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
         fem_effect = effect if effect != "fluid-loading" else None
-        tr = (cached_fem_truth(lever, fem_effect, fem_params, compute=compute) if isinstance(lever, str)
-              else fem_truth(lever, fem_effect, fem_params))
+        tr = (cached_fem_truth(lever, fem_effect, fem_params, compute=compute, tip=tip) if isinstance(lever, str)
+              else fem_truth(lever, fem_effect, fem_params, tip=tip))
         modes = MODES
         f = np.array(tr["freqs"])
     Q_int = float(10 ** rng.uniform(3, 4.5))
@@ -333,10 +355,11 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
     med = "" if declared_medium is None else f'[medium]\nname = "{declared_medium}"\n'
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "modal"\ndata = "{name}.csv"\n\n[probe]\nname = "cantilever"\n'
-        f"length = {g['length']!r}\nwidth = {g['width']!r}\nthickness = {g['thickness']!r}\n\n{med}\n"
+        f"length = {g['length']!r}\nwidth = {g['width']!r}\nthickness = {g['thickness']!r}\n"
+        + "".join(f"{k} = {v!r}\n" for k, v in tip_overrides(tip).items()) + f"\n{med}\n"
         f"[noise]\nfrequency_rel = {noise!r}\nQ_rel = {q_noise!r}\n")
     truth = {"effect": effect, "params": params, "lever": lever, "truth_kind": truth_kind, "Q_int": Q_int,
-             **{k: v for k, v in tr.items() if k in ("xi_node",)}}
+             **{k: v for k, v in tr.items() if k in ("xi_node",)}, **({"tip": tip} if tip else {})}
     return outdir / f"{name}.toml", truth
 
 

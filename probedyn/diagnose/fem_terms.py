@@ -83,13 +83,15 @@ def axial_gradient_matrix(model, axis: int) -> sp.csr_matrix:
     return sp.kron(G, sp.identity(3), format="csr")
 
 
-def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024) -> tuple[np.ndarray, np.ndarray]:
+def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
+                            elements: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Projected stiffness split by derivative directions, and the projected axial gradients.
 
     Returns ``Ks`` of shape (3, 3, r, r), ``Ks[j, l] = int (d_j Phi)^T C (d_l Phi) dV`` (so that
     ``Phi^T K Phi = sum_jl Ks[j, l]``), and ``G`` of shape (3, r, r),
     ``G[a] = int sum_i (d_a Phi_i)^T (d_a Phi_i) dV``. Same quadrature and material field as
-    :func:`probedyn.fem.elasticity.assemble_stiffness`.
+    :func:`probedyn.fem.elasticity.assemble_stiffness`. ``elements``: integrate over these elements
+    only (e.g. a meshed tip, which a geometric stretch maps differently).
     """
     from skfem.quadrature import get_quadrature
 
@@ -111,8 +113,9 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024) -> tuple[
     # derivative direction j keeps the entries whose second index is j
     sel_rows = [[(I, a) for I, (a, b) in enumerate(pairs) if b == j] + [(I, b) for I, (a, b) in enumerate(pairs)
                 if a != b and a == j] for j in range(3)]
-    for start in range(0, nel, chunk):
-        sel = np.arange(start, min(start + chunk, nel))
+    els = np.arange(nel) if elements is None else np.asarray(elements, int)
+    for start in range(0, els.size, chunk):
+        sel = els[start:start + chunk]
         ne = sel.size
         invDF = mapping.invDF(X, tind=sel)
         detDF = np.abs(mapping.detDF(X, tind=sel))
@@ -150,7 +153,8 @@ def _voigt_tensor(s: np.ndarray) -> np.ndarray:
     return T
 
 
-def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
+def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024, elements: np.ndarray | None = None,
+                        internal_force: bool = False):
     """``dK/ds_a V`` at s = 1 for the three axes a, shape (3, N, n): the first derivative of the
     stiffness under a stretch of the mesh along a, minus the volume term,
     ``sum_l (K_al + K_la) V``, whose difference with ``K V`` gives ``dK/ds_a V = (K - K_a. - K_.a) V``.
@@ -173,8 +177,10 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
     n = V.shape[1]
     U = np.asarray(V).reshape(model.n_nodes, 3, n)
     out = np.zeros((3, model.n_nodes, 3, n))
-    for start in range(0, nel, chunk):
-        sel = np.arange(start, min(start + chunk, nel))
+    kv = np.zeros((model.n_nodes, 3, n)) if internal_force else None  # K V over the elements (``internal_force``)
+    els = np.arange(nel) if elements is None else np.asarray(elements, int)  # ``elements``: these only
+    for start in range(0, els.size, chunk):
+        sel = els[start:start + chunk]
         ne = sel.size
         invDF = mapping.invDF(X, tind=sel)
         detDF = np.abs(mapping.detDF(X, tind=sel))
@@ -189,6 +195,8 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
             eps[:, :, I] = H[:, :, a, a] if a == b else H[:, :, b, a] + H[:, :, a, b]
         sig = _voigt_tensor(np.matmul(C, eps)) * wq  # (e, q, 3, 3, n)
         nodes = edofs[:, sel].T  # (e, nloc)
+        if kv is not None:
+            np.add.at(kv, nodes, np.einsum("eqja,eqijn->eain", g, sig, optimize=True))
         for ax in range(3):
             ea = np.zeros_like(eps)
             for I, (a, b) in enumerate(_VOIGT):
@@ -205,4 +213,5 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024) -> np.ndarray:
             f = np.einsum("eqa,eqin->eain", g[:, :, ax, :], sig[:, :, :, ax, :], optimize=True)
             f += np.einsum("eqja,eqijn->eain", g, siga, optimize=True)
             np.add.at(out[ax], nodes, f)
-    return out.reshape(3, model.n_nodes * 3, n)
+    out = out.reshape(3, model.n_nodes * 3, n)
+    return (out, kv.reshape(model.n_nodes * 3, n)) if internal_force else out

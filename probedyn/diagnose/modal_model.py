@@ -73,6 +73,7 @@ from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, fac
 from probedyn.diagnose.hydrodynamics import sader_gamma
 from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
+from probedyn.fem.elasticity import assemble_mass as el_mass
 from probedyn.fem.materials import Material
 from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
@@ -144,14 +145,61 @@ ORDER_RANGE = (min(p for _, p in DEFAULT_ACCURACY.values()), 4.0)
 GCI_SAFETY = (1.25, 3.0)
 
 
-def stretched(m0: ElasticModel, sc, cls=ElasticModel, **kw) -> ElasticModel:
+def tip_region(model: ElasticModel, thickness_axis: int) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """A meshed tip of ``model`` (its region named ``tip``): the tip's element mask, its mesh nodes
+    and the coordinate along ``thickness_axis`` of the plane it is attached by (the nodes it shares
+    with the lever); None without one (or on a mesh whose nodes are not its vertices)."""
+    names = list(model.region_names)
+    if "tip" not in names or model.mesh.doflocs.shape[1] != model.mesh.p.shape[1]:
+        return None
+    te = np.asarray(model.elem_region) == names.index("tip")
+    if not te.any() or te.all():
+        return None
+    t = model.mesh.t
+    nodes = np.unique(t[:, te])
+    shared = np.intersect1d(nodes, np.unique(t[:, ~te]))
+    if not shared.size:
+        return None
+    return te, nodes, float(np.mean(model.mesh.p[thickness_axis, shared]))
+
+
+def stretch_points(X: np.ndarray, sc, tip=None, thickness_axis: int = 2) -> np.ndarray:
+    """Node coordinates ``X`` (3, n) under the geometric stretch ``sc``: the lever's nodes by the
+    affine map ``x_i -> s_i x_i``; the nodes of a meshed tip (``tip``: :func:`tip_region`) by the
+    same in-plane stretch but *translated*, not stretched, through the thickness (a thicker lever
+    carries the same tip: its height and mass do not follow the lever's thickness). The two maps
+    agree on the attachment plane (a conforming mesh), and each is affine, so the stiffness split
+    of :func:`~probedyn.diagnose.fem_terms.reduced_stiffness_split` stays exact region by region."""
+    sc = np.asarray(sc, float)
+    Y = X * sc[:, None]
+    if tip is not None:
+        _, nodes, plane = tip
+        a = thickness_axis
+        Y[a, nodes] = X[a, nodes] + (sc[a] - 1.0) * plane
+    return Y
+
+
+def _tip_sensitivity(m: ElasticModel, tip_elems: np.ndarray, V: np.ndarray, axis: int, lam: np.ndarray) -> np.ndarray:
+    """The tip elements' part of ``(dK/ds_axis - lam dM/ds_axis) V`` under a stretch of the whole
+    mesh (``K_tip V - S_tip V - lam M_tip V``, :func:`~probedyn.diagnose.fem_terms.stretch_sensitivity`)."""
+    Mt = el_mass(m.mesh, np.where(tip_elems, m.elem_density, 0.0), element=m.element, basis=m.basis)
+    St, KtV = stretch_sensitivity(m, V, elements=np.nonzero(tip_elems)[0], internal_force=True)
+    return (KtV - St[axis]) - (Mt @ V) * lam[None, :]
+
+
+def stretched(m0: ElasticModel, sc, cls=ElasticModel, tip_map=None, **kw) -> ElasticModel:
     """The model ``m0`` with its mesh stretched by ``sc`` along the three axes (an affine map of
-    every node: a valid mesh of the stretched body with anisotropic elements); materials,
-    clamps, point masses and springs are kept (``kw`` overrides constructor arguments)."""
+    every node: a valid mesh of the stretched body with anisotropic elements; with ``tip_map`` =
+    (:func:`tip_region`, thickness axis) a meshed tip is translated through the thickness instead,
+    :func:`stretch_points`); materials, clamps, point masses and springs are kept (``kw``
+    overrides constructor arguments)."""
     sc = np.asarray(sc, float)
     mesh = m0.mesh
     if np.any(sc != 1.0):
-        mesh = dataclasses.replace(mesh, doflocs=mesh.doflocs * sc[:, None])
+        if tip_map is not None and tip_map[0] is not None:
+            mesh = dataclasses.replace(mesh, doflocs=stretch_points(mesh.doflocs, sc, *tip_map))
+        else:
+            mesh = dataclasses.replace(mesh, doflocs=mesh.doflocs * sc[:, None])
     bundle = dataclasses.replace(m0.bundle, mesh=mesh, path=None,
                                  points={k: np.asarray(v) * sc for k, v in m0.bundle.points.items()})
     args = dict(regions={name: (mat, R) for name, mat, R in zip(m0.region_names, m0.materials, m0.orientations)},
@@ -260,6 +308,8 @@ class FEMBaseline:
         fv = m.mesh.p[:, np.unique(m.mesh.facets[:, f])]
         self.clamp_centroid = fv.mean(axis=1)
         self.t = float(np.ptp(fv[self.thickness_axis])) or float(self.extent[self.thickness_axis])
+        # a meshed tip: geometric causes stretch the lever, the tip keeps its height (stretch_points)
+        self.tip = tip_region(m, self.thickness_axis)
         self.w = float(np.ptp(fv[self.width_axis])) or float(self.extent[self.width_axis])
         self.clamp_normal = face_normal(m, self.clamp_face)
         self.has_top = "top" in (m.mesh.boundaries or {})
@@ -587,7 +637,12 @@ class ReducedModal:
             Sa = stretch_sensitivity(m, Phi0)
             KP, MP = K @ Phi0, M @ Phi0
             for a in range(3):
-                blocks["stretch"].append(ksolve((KP - Sa[a]) - MP * lam0[None, :]))
+                F = (KP - Sa[a]) - MP * lam0[None, :]
+                if base.tip is not None and a == base.thickness_axis:
+                    # the tip is translated, not stretched, through the thickness: its elements
+                    # contribute nothing to dK/ds and dM/ds along that axis (stretch_points)
+                    F -= _tip_sensitivity(m, base.tip[0], Phi0, a, lam0)
+                blocks["stretch"].append(ksolve(F))
             # clamp: rigid motions and the foundation's face displacement under the root reactions
             X = m.basis.doflocs - base.clamp_centroid[:, None]
             rig = np.zeros((m.n_nodes, 3, 6))
@@ -681,6 +736,10 @@ class ReducedModal:
         Mel = m._Mel if m._Mel is not None else M
         self.M_el = _sym(P.T @ (Mel @ P))
         self.M_fixed = self.M_r - self.M_el
+        self.M_tip = None  # the meshed tip's share of M_el (translated, not stretched, through the thickness)
+        if base.tip is not None:
+            Mt = el_mass(m.mesh, np.where(base.tip[0], m.elem_density, 0.0), element=m.element, basis=m.basis)
+            self.M_tip = _sym(P.T @ (Mt @ P))
         self.K_r = _sym(P.T @ (K @ P))
         self.Sn_r = P.T @ (directional(Sface, nn) @ P)
         self.St_r = P.T @ (directional(Sface, np.eye(3) - nn) @ P)
@@ -692,6 +751,7 @@ class ReducedModal:
             self.top_r = P.T @ (directional(face_mass_scalar(m, "top"), np.outer(e, e)) @ P)
         self._fam_forms = _family_forms(m, P)
         self._Ks = None  # stretch split (lazy: only geometric causes need it)
+        self._Ks_tip = None  # the meshed tip's part of it
         self._sub: dict = {}
         self._term_cache: dict[str, np.ndarray] = {}
         self._path_xi = np.linspace(0.0, 1.0, 101)
@@ -747,6 +807,14 @@ class ReducedModal:
             Ks, _ = reduced_stiffness_split(self.base.model, self.Phi)
             self._Ks = Ks
         return self._Ks
+
+    @property
+    def Ks_tip(self) -> np.ndarray | None:
+        """The meshed tip's elements' part of :attr:`Ks` (None without a tip)."""
+        if self._Ks_tip is None and self.base.tip is not None:
+            self._Ks_tip = reduced_stiffness_split(self.base.model, self.Phi,
+                                                   elements=np.nonzero(self.base.tip[0])[0])[0]
+        return self._Ks_tip
 
     def path_ops(self) -> np.ndarray:
         """(101, 3, r) reduced displacement operators on the mass path (xi = 0, 0.01, ..., 1)."""
@@ -807,12 +875,14 @@ class _Sub:
         self.K = P(red.K_r)
         self.M_el = P(red.M_el)
         self.M_fixed = P(red.M_fixed)
+        self.M_tip = None if red.M_tip is None else P(red.M_tip)
         self.Sn = P(red.Sn_r)
         self.St = P(red.St_r)
         self.G = P(red.G_r)
         self.top = None if red.top_r is None else P(red.top_r)
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
         self._Ks = None
+        self._Ks_tip = None
         self._path = None
         self._terms: dict[str, np.ndarray] = {}
 
@@ -821,6 +891,12 @@ class _Sub:
         if self._Ks is None:
             self._Ks = np.einsum("ri,jlrs,sk->jlik", self.T, self.red.Ks, self.T, optimize=True)
         return self._Ks
+
+    @property
+    def Ks_tip(self) -> np.ndarray | None:
+        if self._Ks_tip is None and self.red.Ks_tip is not None:
+            self._Ks_tip = np.einsum("ri,jlrs,sk->jlik", self.T, self.red.Ks_tip, self.T, optimize=True)
+        return self._Ks_tip
 
     def path_operator(self, xi: float) -> np.ndarray:
         if self._path is None:
@@ -845,12 +921,21 @@ class _Sub:
         base = self.red.base
         sc = np.asarray(s.scale, float)
         vol = float(np.prod(sc))
+        # a meshed tip is stretched in-plane only (stretch_points): its own factors
+        tip = self.M_tip is not None and np.any(sc != 1.0)
+        sct = sc.copy()
+        sct[base.thickness_axis] = 1.0
+        vol_t = float(np.prod(sct))
         if np.any(sc != 1.0):
             Ks = self.Ks
+            Kt = self.Ks_tip if tip else None
             K = np.zeros_like(self.K)
             for j in range(3):
                 for l in range(3):
-                    K += (vol / (sc[j] * sc[l])) * Ks[j, l]
+                    if Kt is None:
+                        K += (vol / (sc[j] * sc[l])) * Ks[j, l]
+                    else:
+                        K += (vol / (sc[j] * sc[l])) * (Ks[j, l] - Kt[j, l]) + (vol_t / (sct[j] * sct[l])) * Kt[j, l]
             K = s.E_factor * K + (self.K - Ks.sum(axis=(0, 1)))
         else:
             K = s.E_factor * self.K if s.E_factor != 1.0 else self.K.copy()
@@ -860,7 +945,10 @@ class _Sub:
             K += fa * (kn * self.Sn + kt * self.St)
         if s.axial_stress:
             K += s.axial_stress * (vol / sc[base.axis] ** 2) * self.G
-        M = (vol * s.rho_factor) * self.M_el + self.M_fixed
+        if tip:
+            M = s.rho_factor * (vol * (self.M_el - self.M_tip) + vol_t * self.M_tip) + self.M_fixed
+        else:
+            M = (vol * s.rho_factor) * self.M_el + self.M_fixed
         for xi, mass in s.masses:
             if mass:
                 A = self.path_operator(xi)
@@ -1000,7 +1088,8 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
             pms.append(PointMass(tuple(base.mass_path(np.array([xi]))[:, 0] * sc), mass))
     compliant = s.clamp[0] >= C_MIN or s.clamp[1] >= C_MIN
     clamp = [c for c in m0.clamp if not (compliant and c == base.clamp_face)]
-    model = stretched(m0, sc, _ExtendedModel, regions=regions, clamp=clamp, point_masses=pms,
+    model = stretched(m0, sc, _ExtendedModel, tip_map=(base.tip, base.thickness_axis), regions=regions, clamp=clamp,
+                      point_masses=pms,
                       name=m0.name + " (extended)")
     extra_K = None
     extra_M = None
