@@ -73,6 +73,12 @@ def run_case(folder, case):
            "declared_medium": case.get("declared_medium"), "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt, "cpu_s": dc,
            "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"]}
+    return add_outcome(row, res, effect, truth)
+
+
+def add_outcome(row: dict, res: dict, effect: str | None, truth: dict) -> dict:
+    """``row`` with the diagnosis' first finding and its group, and for a hidden effect whether it
+    is first / in the group and the relative error of its main parameter (:data:`MAIN`)."""
     if res["findings"]:
         f0 = res["findings"][0]
         group = [f0["cause"], *f0.get("confounded_with", [])]
@@ -129,21 +135,26 @@ def summarize(rows):
 def study(n_effect: int, n_null: int, out: str):
     outp = Path(out)
     rows = json.loads(outp.read_text())["rows"] if outp.exists() else []
-    done = {r["seed"] for r in rows}
     cases = modal_cases(n_effect, n_null)
     eff = [c for c in cases if c["effect"]]
     nul = [c for c in cases if not c["effect"]]
     mixed = []  # interleaved (effect, null, ...) so that a run cut short still measures both rates
     for i in range(max(len(eff), len(nul))):
         mixed += eff[i:i + 1] + nul[i:i + 1]
+    return run_cases(mixed, rows, outp, run_case, ("seed", "effect", "lever", "truth_kind", "verdict", "findings",
+                                                   "recovery_error", "runtime_s", "cpu_s"))
+
+
+def run_cases(mixed: list, rows: list, outp: Path, run, keys: tuple) -> dict:
+    """Run the cases of ``mixed`` not yet in ``rows`` with ``run(folder, case)``, printing ``keys`` of
+    each row and rewriting ``outp`` atomically after every case (resumable); the summary."""
+    done = {r["seed"] for r in rows}
     with tempfile.TemporaryDirectory() as d:
         for case in mixed:
             if case["seed"] in done:
                 continue
-            rows.append(run_case(d, case))
-            print(json.dumps({k: rows[-1].get(k) for k in ("seed", "effect", "lever", "truth_kind", "verdict", "findings",
-                                                           "recovery_error", "runtime_s", "cpu_s")}, default=float),
-                  flush=True)
+            rows.append(run(d, case))
+            print(json.dumps({k: rows[-1].get(k) for k in keys}, default=float), flush=True)
             tmp = outp.with_suffix(".tmp")
             tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
             os.replace(tmp, outp)

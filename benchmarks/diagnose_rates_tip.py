@@ -18,9 +18,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -29,7 +27,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from diagnose_rates import CODE, MAIN, summarize  # noqa: E402
+from diagnose_rates import CODE, add_outcome, run_cases, summarize  # noqa: E402
 from diagnose_truth import LEVERS, MODAL_EFFECTS, make_modal_case  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose  # noqa: E402
@@ -75,42 +73,20 @@ def run_case(folder, case) -> dict:
            "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"],
            "fem_dofs": b.model.dofs, "floor": prob.mf_floor,
            "disc_rel": [float(x) for x in prob.disc / prob.data.freq]}
-    if res["findings"]:
-        f0 = res["findings"][0]
-        row.update(first=f0["cause"], group=[f0["cause"], *f0.get("confounded_with", [])])
-    if effect:
-        row["correct_first"] = bool(res["findings"]) and res["findings"][0]["cause"] == effect
-        row["correct_in_group"] = effect in row.get("group", [])
-        if row["correct_first"] and effect in MAIN:
-            name, null = MAIN[effect]
-            fit = res["findings"][0]["parameters"].get(name, {}).get("value")
-            if fit is not None:
-                row["recovery_error"] = abs(fit - truth["params"][name]) / abs(truth["params"][name] - null)
-    return row
+    return add_outcome(row, res, effect, truth)
 
 
 def study(n_effect: int, n_null: int, out: str, levers: str = "ABC") -> dict:
     outp = Path(out)
     rows = json.loads(outp.read_text())["rows"] if outp.exists() else []
-    done = {r["seed"] for r in rows}
     cases = tip_cases(n_effect, n_null, levers)
     eff = [c for c in cases if c["effect"]]
     nul = [c for c in cases if not c["effect"]]
     mixed = []
     for i in range(max(len(eff), len(nul))):
         mixed += nul[i:i + 1] + eff[i:i + 1]
-    with tempfile.TemporaryDirectory() as d:
-        for case in mixed:
-            if case["seed"] in done:
-                continue
-            rows.append(run_case(d, case))
-            print(json.dumps({k: rows[-1].get(k) for k in ("seed", "effect", "lever", "verdict", "findings",
-                                                           "recovery_error", "cpu_s", "truth_cpu_s", "fem_dofs")},
-                             default=float), flush=True)
-            tmp = outp.with_suffix(".tmp")
-            tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
-            os.replace(tmp, outp)
-    return summarize(rows)
+    return run_cases(mixed, rows, outp, run_case, ("seed", "effect", "lever", "verdict", "findings",
+                                                   "recovery_error", "cpu_s", "truth_cpu_s", "fem_dofs"))
 
 
 if __name__ == "__main__":

@@ -54,6 +54,19 @@ def _monotone_curve(z_rel, P, k: float) -> np.ndarray:
     return np.asarray(P(0.5 * (lo + hi)), float)
 
 
+
+def _as_recorded(Fm, noise: float, k: float, rng):
+    """The force record as an instrument exports it, drawn from ``rng``: deflection in V (with a drawn
+    sensitivity), deflection in m, or force; returns (column name, sensitivity, column, the sidecar's
+    noise line)."""
+    fmt = ["deflection_V", "deflection_m", "force_N"][int(rng.integers(3))]
+    sens = float(rng.uniform(20e-9, 100e-9))
+    if fmt == "deflection_V":
+        return fmt, sens, Fm / (k * sens), f"deflection = {noise / (k * sens)!r}"
+    if fmt == "deflection_m":
+        return fmt, sens, Fm / k, f"deflection = {noise / k!r}"
+    return fmt, sens, Fm, f"force = {noise!r}"
+
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
@@ -126,14 +139,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     clean = F + b0 + b1 * z + drift * tau
     Fm = clean + noise * rng.standard_normal(len(F))
     seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
-    fmt = ["deflection_V", "deflection_m", "force_N"][int(rng.integers(3))]
-    sens = float(rng.uniform(20e-9, 100e-9))
-    if fmt == "deflection_V":
-        col, noise_line = Fm / (k * sens), f"deflection = {noise / (k * sens)!r}"
-    elif fmt == "deflection_m":
-        col, noise_line = Fm / k, f"deflection = {noise / k!r}"
-    else:
-        col, noise_line = Fm, f"force = {noise!r}"
+    fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     with_time = bool(rng.integers(2))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -278,14 +284,7 @@ def make_visco_case(outdir: Path, seed: int, *, n: int = 300) -> tuple[Path, dic
     clean = F + b0 + b1 * z
     Fm = clean + noise * rng.standard_normal(len(F))
     seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
-    fmt = ["deflection_V", "deflection_m", "force_N"][int(rng.integers(3))]
-    sens = float(rng.uniform(20e-9, 100e-9))
-    if fmt == "deflection_V":
-        col, noise_line = Fm / (k * sens), f"deflection = {noise / (k * sens)!r}"
-    elif fmt == "deflection_m":
-        col, noise_line = Fm / k, f"deflection = {noise / k!r}"
-    else:
-        col, noise_line = Fm, f"force = {noise!r}"
+    fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     name = f"curve_{seed}"
