@@ -141,3 +141,34 @@ def test_viscoelastic_case_named_and_recovered(tmp_path):
     s = f0["parameters"]["strength"]
     # within 4 of its own standard errors of the truth (an uncertainty that cannot be right fails here)
     assert abs(s["value"] - truth["params"]["strength"]) <= 4 * s["sigma"]
+
+
+def test_separating_measurements_ramp_rate_and_tip_radius(tmp_path):
+    """The observables that separate a viscoelastic sample from elastic causes: an elastic contact
+    predicts the same approach force at every ramp rate; the SLS sample relaxes on a slower ramp
+    and stiffens on a faster one, bounded by the elastic curves of its relaxed and instantaneous
+    moduli (E_inf <= E(t) <= E_0); a tip-radius error predicts another imaged radius."""
+    prob, truth = _problem(tmp_path)
+    keys = [c.key for c in prob.causes]
+    visco = prob.causes[keys.index("viscoelastic-sample")]
+    radius = prob.causes[keys.index("tip-radius-error")]
+    v = {p.name: p.null for p in prob.base_params}
+
+    def obs(values, causes):
+        return {m["measure"]: m for m in prob.predict_observables(values, causes)}
+
+    slow, fast = ("approach force at the deepest point, ramp 10x slower",
+                  "approach force at the deepest point, ramp 10x faster")
+    el = obs(v, ())
+    assert el[slow]["value"] == el[fast]["value"]  # elastic: rate independent
+    s, tau = truth["params"]["strength"], truth["params"]["tau"]
+    vi = obs({**v, "strength": s, "tau": tau}, (visco,))
+    E_inf = v.get("E_star", prob.E_star_declared)  # the baseline's modulus plays the relaxed one
+    stiff = obs({**v, "E_star": E_inf * (1 + s)}, ())  # elastic at the instantaneous modulus E_0
+    assert el[slow]["value"] <= vi[slow]["value"] < vi[fast]["value"]
+    assert vi[fast]["value"] - vi[slow]["value"] > 3 * vi[slow]["sigma"]  # resolvable: tau within the ramp
+    assert vi[fast]["value"] <= stiff[fast]["value"] * (1 + 1e-9)
+    imaged = "tip radius imaged independently (SEM / tip characteriser)"
+    tr = obs({**v, "r_ratio": 1.5}, (radius,))
+    assert tr[imaged]["value"] == pytest.approx(1.5 * el[imaged]["value"], rel=1e-12)
+    assert vi[imaged]["value"] == el[imaged]["value"]

@@ -124,6 +124,11 @@ def hertz(delta, E_star: float, R: float):
     return 4.0 / 3.0 * E_star * math.sqrt(R) * d**1.5
 
 
+#: relative uncertainty of an independent tip-radius measurement (SEM or blind tip reconstruction of a
+#: 5-50 nm apex: ~1-3 nm, i.e. about a tenth of the radius); used only to name a separating measurement
+TIP_IMAGING_REL_SIGMA = 0.1
+
+
 @dataclass
 class ForceState:
     z_c: float  # contact point [m]
@@ -656,16 +661,33 @@ class ForceCurveProblem:
         return out
 
     def predict_observables(self, values, causes) -> list[dict[str, Any]]:
-        """Pull-off force and the snap-in jump of a curve with a lever 10x softer, and the retract
-        force at the approach's largest load: measurements that separate adhesion laws."""
+        """Measurements that separate confounded causes: the pull-off force with a lever 10x softer
+        and 10x stiffer (adhesion laws), and, where the record has times, the approach force at the
+        record's deepest point with the same piezo path run 10x slower and 10x faster. An elastic
+        contact (any radius, modulus or tip shape) predicts the same force at every rate; a
+        viscoelastic sample relaxes on the slower ramp and stiffens on the faster one (Lee-Radok /
+        Ting), so the ramp rate is what separates it from a tip-radius error (Hertz: the force
+        depends on E* sqrt(R) only) unless the relaxation is much slower than the ramp (then the
+        sample is simply stiffer than declared). Hence also the tip radius imaged independently
+        (SEM or a tip characteriser), with an uncertainty of :data:`TIP_IMAGING_REL_SIGMA` of the
+        declared radius."""
         d = self.data
         st = self.state(values, causes)
-        out = []
+        out = [{"measure": "tip radius imaged independently (SEM / tip characteriser)", "value": float(st.R),
+                "sigma": TIP_IMAGING_REL_SIGMA * d.tip_radius, "unit": "m"}]
         for label, kf in (("pull-off force with a lever 10x softer", 0.1), ("pull-off force with a lever 10x stiffer", 10.0)):
             z = np.concatenate([np.linspace(-0.2, 0.2, 400), np.linspace(0.2, -0.2, 400)]) * self.span
             seg = np.concatenate([np.zeros(400, int), np.ones(400, int)])
             F = self._curve(st, z, seg, d.k * kf)
             out.append({"measure": label, "value": float(F[seg == 1].min()), "sigma": self.sigma, "unit": "N"})
+        if d.time is not None:
+            z_rel = d.z + st.z_shift * (d.segment == 1) - st.z_c
+            app = np.flatnonzero(d.segment == 0)
+            deepest = app[np.argmax(z_rel[app])]
+            for label, tf in (("approach force at the deepest point, ramp 10x slower", 10.0),
+                              ("approach force at the deepest point, ramp 10x faster", 0.1)):
+                F = self._curve(st, z_rel, d.segment, d.k, t=(d.time - d.time[0]) * tf)
+                out.append({"measure": label, "value": float(F[deepest]), "sigma": self.sigma, "unit": "N"})
         return out
 
     def describe(self) -> dict[str, Any]:
