@@ -733,16 +733,8 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     prob = _modal_problem(meas, table, fit_base, L)
     prob.kind = meas.kind
     prob.identification_baseline = base
-    # the folds of the cross-validation (one mode left out) start from the null and from the full-data
-    # optimum of the cause's parameters (engine: ``cv_warm``). A cause located by several modes (a point
-    # mass: mass and position) has several (mass, position) pairs that fit four of five modes about
-    # equally well; started from the null only, a fold ends in whichever the optimizer reaches (or
-    # stalls short of any), and the held-out mode then condemns the cause for the optimizer's path,
-    # not for its physics: a point mass fitting five modes to chi2 5.9 lost its held-out evidence
-    # to a modulus error at chi2 162. The fold's optimum is still fitted on its training modes only
-    # (the held-out mode can only choose between training-optimal basins); single-basin causes are
-    # unaffected (both starts reach the same optimum).
-    prob.cv_warm = True
+    # the folds start from the null and from the full-data optimum (ModalProblem.cv_warm: a point mass
+    # fitting five modes to chi2 5.9 had lost its held-out evidence to a modulus error at chi2 162)
     c_cal = table[0].get("_c_cal") if table else None
     for t in table:
         t.pop("_c_cal", None)
