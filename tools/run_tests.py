@@ -23,13 +23,18 @@ import tempfile
 from pathlib import Path
 
 
+def _status(rc: int) -> int:
+    """A shell's exit status for a child's return code (killed by signal N: 128 + N)."""
+    return 128 - rc if rc < 0 else rc
+
+
 def run(argv: list[str]) -> int:
     with tempfile.TemporaryDirectory(prefix="probedyn-tests-") as tmp:
         log = Path(tmp) / "outcome.json"
         env = {**os.environ, "PROBEDYN_CRASH_LOG": str(log)}
         rc = subprocess.call([sys.executable, "-m", "pytest", *argv], env=env)
         if rc != 1 or not log.exists():  # 1: tests failed (2-5: interrupted, internal or usage error, none collected)
-            return 128 - rc if rc < 0 else rc  # pytest itself killed by a signal (e.g. -n 0 and a crash)
+            return _status(rc)  # also pytest itself killed by a signal (e.g. -n 0 and a crash)
         out = json.loads(log.read_text())
     crashed, failed = set(out["crashed"]), set(out["failed"])
     if not crashed or not failed <= crashed:
@@ -41,8 +46,7 @@ def run(argv: list[str]) -> int:
     rc = subprocess.call([sys.executable, "-m", "pytest", "-o", "addopts=-ra", "-p", "no:xdist", *ids])
     if rc < 0:  # killed by a signal again: the fault is reproducible
         print(f"[probedyn] the rerun crashed again (signal {-rc}): the fault is not a one-off", file=sys.stderr)
-        return 128 - rc
-    return rc
+    return _status(rc)
 
 
 if __name__ == "__main__":

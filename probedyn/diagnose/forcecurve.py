@@ -489,6 +489,11 @@ class ForceCurveProblem:
             c.effect(values, st)
         return st
 
+    def _z_rel(self, st: ForceState) -> np.ndarray:
+        """The piezo positions relative to the contact point, the retract shifted by the piezo hysteresis."""
+        d = self.data
+        return d.z + st.z_shift * (d.segment == 1) - st.z_c
+
     def predict(self, values, causes=()) -> np.ndarray:
         return self._predict_branches(values, causes)[0]
 
@@ -497,7 +502,7 @@ class ForceCurveProblem:
         probability (``-inf`` without a jump; :func:`_jump_alternatives`)."""
         d = self.data
         st = self.state(values, causes)
-        F, F_alt, w = self._curve(st, d.z + st.z_shift * (d.segment == 1) - st.z_c, d.segment, d.k, self.dz, d.time)
+        F, F_alt, w = self._curve(st, self._z_rel(st), d.segment, d.k, self.dz, d.time)
         out = []
         for G in (F, F_alt):
             G = G + st.b0 + st.b1 * d.z + st.drift * self.tau
@@ -515,7 +520,7 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
-        delta = d.z + st.z_shift * (d.segment == 1) - st.z_c - Fx / d.k
+        delta = self._z_rel(st) - Fx / d.k
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)
         dP = np.empty(self.n)
@@ -681,7 +686,7 @@ class ForceCurveProblem:
             F = self._curve(st, z, seg, d.k * kf)
             out.append({"measure": label, "value": float(F[seg == 1].min()), "sigma": self.sigma, "unit": "N"})
         if d.time is not None:
-            z_rel = d.z + st.z_shift * (d.segment == 1) - st.z_c
+            z_rel = self._z_rel(st)
             app = np.flatnonzero(d.segment == 0)
             deepest = app[np.argmax(z_rel[app])]
             for label, tf in (("approach force at the deepest point, ramp 10x slower", 10.0),
