@@ -3,6 +3,7 @@
 * Meshes are cached in a per-run temporary folder (``PROBEDYN_CACHE``) unless the caller set
   one, so tests never read a cache left by another run or by a user.
 * Plots use the non-interactive Agg backend; pyvista renders off-screen.
+* OpenBLAS and MKL run one thread per test process (two xdist workers on two cores).
 """
 
 import os
@@ -12,6 +13,9 @@ import tempfile
 import pytest
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # see probedyn/__init__.py
+# MKL (PARDISO) one thread per test process: two xdist workers share two cores, and every native fault
+# seen in MKL came from runs with more MKL threads than cores (docs/developing.md, "Native faults")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 if "PROBEDYN_CACHE" not in os.environ:
@@ -59,3 +63,41 @@ def pytest_sessionfinish(session, exitstatus):
 
         with open(os.environ["PROBEDYN_CRASH_LOG"], "w") as f:  # the runner's own temporary file
             json.dump({k: sorted(v) for k, v in _CRASH.items()}, f)
+
+
+# -- file-by-file scheduling that survives a crashed worker ------------------------------------------
+# pytest-xdist 3.8's ``--dist loadfile`` scheduler hangs the whole run when a worker crashes after the
+# last file was handed out (seen in CI: the run stopped at 96 % until the job's time limit). Two
+# defects of ``LoadScopeScheduling``: ``remove_node`` puts *every* file the dead worker ever ran back
+# in the queue, finished ones too, and a finished file handed to the replacement worker sends it no
+# test, so no report ever comes back to reschedule it; and a worker given a single test holds it
+# (it runs a test only once it knows the next one, or is told to shut down), which nobody tells it
+# when the queue is already empty. The subclass re-queues only files with tests left, keeps giving a
+# worker files until it holds two tests, and shuts a worker down as soon as the queue is empty
+# (tests/test_run_tests.py crashes a worker at every test of a small suite).
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    if config.getvalue("dist") != "loadfile":
+        return None  # xdist's own scheduler for the other modes
+    from xdist.scheduler import LoadFileScheduling
+
+    class CrashSafeLoadFile(LoadFileScheduling):
+        def remove_node(self, node):
+            workload = self.assigned_work.get(node, {})
+            for scope in [s for s, unit in workload.items() if all(unit.values())]:
+                del workload[scope]  # a finished file is not run again
+            return super().remove_node(node)
+
+        def _reschedule(self, node):
+            if node.shutting_down:
+                return
+            if self.workqueue and self._pending_of(self.assigned_work[node]) <= 2:
+                self._assign_work_unit(node)
+            while self.workqueue and self._pending_of(self.assigned_work[node]) < 2:
+                self._assign_work_unit(node)
+            if not self.workqueue:
+                node.shutdown()
+
+    return CrashSafeLoadFile(config, log)
