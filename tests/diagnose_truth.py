@@ -184,6 +184,8 @@ def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT
         over["length"] = geo["length"] + params["dL"]
     elif effect == "modulus-error":
         over["youngs_modulus"] = E_SI * params["e_ratio"]
+    elif effect == "crystal-anisotropy":  # the cubic crystal meshed as such (the cause interpolates C)
+        over["material"] = params["material"]
     values = probe.resolve(over)
     model = probe.build(values)
     extra = {}
@@ -235,7 +237,7 @@ def timoshenko_truth(lever: str) -> dict:
 
 
 def _key(lever, effect, params, ett, tip=None) -> str:
-    items = [lever, effect, {k: round(float(v), 12) for k, v in sorted(params.items())}, ett]
+    items = [lever, effect, {k: v if isinstance(v, str) else round(float(v), 12) for k, v in sorted(params.items())}, ett]
     if tip:  # untipped keys unchanged
         items.append(tip_overrides(tip))
     s = json.dumps(items)
@@ -297,6 +299,8 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
         s_cr = math.pi**2 * E_SI * g["thickness"] ** 2 / (48 * g["length"] ** 2)
         v = -rng.uniform(0.1, 0.6) if rng.uniform() < 0.3 else 10 ** rng.uniform(np.log10(0.2), np.log10(5))
         return {"sigma": float(v * s_cr)}
+    if effect == "crystal-anisotropy":  # single-crystal silicon along <110> (cubic), diagnosed as isotropic silicon
+        return {"material": "silicon-110", "a_crystal": 1.0}  # a_crystal: the cause's value for this truth
     if effect == "fluid-loading":
         name = str(rng.choice(["water", "ethanol", "air"]))
         rho_f, eta_f = {"water": (997.0, 8.9e-4), "ethanol": (789.0, 1.07e-3), "air": (1.18, 1.85e-5)}[name]

@@ -84,14 +84,16 @@ def axial_gradient_matrix(model, axis: int) -> sp.csr_matrix:
 
 
 def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
-                            elements: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                            elements: np.ndarray | None = None, materials=None) -> tuple[np.ndarray, np.ndarray]:
     """Projected stiffness split by derivative directions, and the projected axial gradients.
 
     Returns ``Ks`` of shape (3, 3, r, r), ``Ks[j, l] = int (d_j Phi)^T C (d_l Phi) dV`` (so that
     ``Phi^T K Phi = sum_jl Ks[j, l]``), and ``G`` of shape (3, r, r),
     ``G[a] = int sum_i (d_a Phi_i)^T (d_a Phi_i) dV``. Same quadrature and material field as
     :func:`probedyn.fem.elasticity.assemble_stiffness`. ``elements``: integrate over these elements
-    only (e.g. a meshed tip, which a geometric stretch maps differently).
+    only (e.g. a meshed tip, which a geometric stretch maps differently). ``materials``: per-region
+    objects with a Voigt ``C`` in the material's own axes to integrate instead of the model's (e.g.
+    only their shear block, :func:`probedyn.diagnose.modal_model.shear_part`).
     """
     from skfem.quadrature import get_quadrature
 
@@ -123,7 +125,8 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
         Ue = U[edofs[:, sel].T].reshape(ne, 1, nloc, 3 * r)  # (e, 1, nloc, 3r)
         H = np.matmul(g, Ue).reshape(ne, -1, 3, 3, r)  # H[e, q, j, i, r] = d_j u_i
         x_qp = mapping.F(X, tind=sel)
-        C = el.stiffness_field(model.elem_region, model.materials, model.orientations, x_qp, elements=sel)
+        C = el.stiffness_field(model.elem_region, model.materials if materials is None else materials,
+                               model.orientations, x_qp, elements=sel)
         sw = np.sqrt(detDF * W[None, :])[:, :, None, None]
         E = []
         for j in range(3):

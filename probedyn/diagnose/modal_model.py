@@ -25,6 +25,12 @@ Extended model (:class:`ModalState`): what the causes change --
 * ``scale``: an affine stretch of the geometry along x, y, z (thickness, width, length errors);
   exact through :func:`probedyn.diagnose.fem_terms.reduced_stiffness_split`;
 * ``E_factor``, ``rho_factor``: all elastic constants / the density scaled;
+* ``crystal``: the fraction ``a`` of the way from each region's declared isotropic material to the
+  single crystal it approximates (:data:`CRYSTALS`: isotropic "silicon" -> cubic "silicon-110",
+  lever axis along <110> on a (001) wafer), ``C = C_iso + a (C_crystal - C_iso)``; regions without
+  a crystal are unchanged. Linear in C, so the reduced model uses the same stiffness split as the
+  stretch, of ``C_crystal - C_iso`` alone (:func:`crystal_delta`), and the full re-solve the
+  interpolated material;
 * ``masses``: point masses ``(xi, m)`` on the *mass path*, the line parallel to the beam axis
   through the centroid of the clamp face, ``xi = 0`` at the clamp plane and 1 at the far end;
 * ``clamp``: the clamp face as an **elastic foundation** instead of a rigid clamp: normal
@@ -74,7 +80,7 @@ from probedyn.diagnose.hydrodynamics import sader_gamma
 from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.elasticity import assemble_mass as el_mass
-from probedyn.fem.materials import Material
+from probedyn.fem.materials import Material, get_material
 from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
 
@@ -103,6 +109,7 @@ class Term:
 class ModalState:
     scale: np.ndarray = field(default_factory=lambda: np.ones(3))
     E_factor: float = 1.0
+    crystal: float = 0.0  # fraction from the isotropic model to the crystal (CRYSTALS)
     rho_factor: float = 1.0
     masses: list = field(default_factory=list)  # (xi, kg)
     clamp: tuple[float, float] = (0.0, 0.0)  # (c_rot, c_trans), 0 = rigid
@@ -143,6 +150,29 @@ ORDER_RANGE = (min(p for _, p in DEFAULT_ACCURACY.values()), 4.0)
 #: Roache's safety factors of the grid convergence index: 1.25 on an order observed from three
 #: meshes, 3 when it could not be observed (two meshes, or non-monotone differences)
 GCI_SAFETY = (1.25, 3.0)
+
+
+#: the single crystal an isotropic material of the catalog approximates, in the probe's axes
+#: (x along the lever): isotropic "silicon" (E = 169 GPa along <110>, nu = 0.28) is cubic silicon with
+#: the lever along <110> on a (001) wafer (fem/materials.py, Hopcroft et al. 2010)
+CRYSTALS = {"silicon": "silicon-110"}
+
+
+def crystal_delta(mat: Material, R=None) -> np.ndarray | None:
+    """``C_crystal - C_iso`` (Voigt, Pa) of a region whose material has a crystal in :data:`CRYSTALS`
+    and no orientation of its own (``R`` None: the crystal's constants are in the probe's axes), else None."""
+    name = CRYSTALS.get(getattr(mat, "name", None))
+    if name is None or R is not None:
+        return None
+    return np.asarray(get_material(name).C, float) - np.asarray(mat.C, float)
+
+
+@dataclass(frozen=True)
+class _StiffnessPart:
+    """A region's stiffness part for :func:`~probedyn.diagnose.fem_terms.reduced_stiffness_split`
+    (not a material: a difference of two stiffnesses is not positive definite)."""
+
+    C: np.ndarray
 
 
 def tip_region(model: ElasticModel, thickness_axis: int) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -594,7 +624,9 @@ class ReducedModal:
       Winkler foundation takes under the mode's root reaction (its normal and tangential parts:
       ``u_face = S^-1 R / k``);
     * ``mass``: static responses to unit forces on the mass path (at four positions);
-    * ``prestress``: ``K^-1 G phi_i``.
+    * ``prestress``: ``K^-1 G phi_i``;
+    * ``crystal``: ``K^-1 dK phi_i`` with ``dK`` the stiffness of ``C_crystal - C_iso``
+      (:func:`crystal_delta`; only when a region has a crystal).
 
     One factorisation of the clamped stiffness serves every block. A state uses the blocks its
     effects need (``blocks_for``): a smaller eigenproblem, and no cross-talk from shapes the
@@ -605,7 +637,7 @@ class ReducedModal:
     written as quadratic forms on the basis.
     """
 
-    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress")
+    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal")
 
     def __init__(self, base: FEMBaseline, n_modes: int | None = None, n_mass_corr: int = 4) -> None:
         t0 = time.perf_counter()
@@ -679,6 +711,14 @@ class ReducedModal:
             # prestress
             self.Gfull = axial_gradient_matrix(m, base.axis)
             blocks["prestress"].append(ksolve(self.Gfull @ Phi0))
+            # the crystal's elastic constants: first-order shape changes K^-1 dK phi (dM = 0)
+            deltas = [crystal_delta(mat, R) for mat, R in zip(m.materials, m.orientations)]
+            if any(d is not None for d in deltas):
+                from probedyn.fem import elasticity as el
+
+                parts = [_StiffnessPart(np.zeros((6, 6)) if d is None else d) for d in deltas]
+                dK = el.assemble_stiffness(m.mesh, m.elem_region, parts, m.orientations, element=m.element, basis=m.basis)
+                blocks["crystal"].append(ksolve(dK @ Phi0))
         finally:
             fac.release()
         # union basis, block by block in the order of BLOCKS: each block is made orthogonal (in the
@@ -752,6 +792,7 @@ class ReducedModal:
         self._fam_forms = _family_forms(m, P)
         self._Ks = None  # stretch split (lazy: only geometric causes need it)
         self._Ks_tip = None  # the meshed tip's part of it
+        self._Kg: dict[bool, np.ndarray | None] = {}  # the same splits of crystal_delta (lazy: crystal)
         self._sub: dict = {}
         self._term_cache: dict[str, np.ndarray] = {}
         self._path_xi = np.linspace(0.0, 1.0, 101)
@@ -770,6 +811,8 @@ class ReducedModal:
             need.append("mass")
         if s.axial_stress:
             need.append("prestress")
+        if s.crystal:
+            need.append("crystal")
         if s.terms:  # a cause's own matrix: all shapes
             need = list(ReducedModal.BLOCKS)
         return tuple(need)
@@ -815,6 +858,21 @@ class ReducedModal:
             self._Ks_tip = reduced_stiffness_split(self.base.model, self.Phi,
                                                    elements=np.nonzero(self.base.tip[0])[0])[0]
         return self._Ks_tip
+
+    def Kg(self, tip: bool = False) -> np.ndarray | None:
+        """:attr:`Ks` (``tip``: :attr:`Ks_tip`) of ``C_crystal - C_iso`` alone (:func:`crystal_delta`)."""
+        if tip not in self._Kg:
+            m = self.base.model
+            if tip and self.base.tip is None:
+                self._Kg[tip] = None
+            else:
+                parts = []
+                for mat, R in zip(m.materials, m.orientations):
+                    d = crystal_delta(mat, R)
+                    parts.append(_StiffnessPart(np.zeros((6, 6)) if d is None else d))
+                els = np.nonzero(self.base.tip[0])[0] if tip else None
+                self._Kg[tip] = reduced_stiffness_split(m, self.Phi, elements=els, materials=parts)[0]
+        return self._Kg[tip]
 
     def path_ops(self) -> np.ndarray:
         """(101, 3, r) reduced displacement operators on the mass path (xi = 0, 0.01, ..., 1)."""
@@ -883,6 +941,7 @@ class _Sub:
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
         self._Ks = None
         self._Ks_tip = None
+        self._Kg: dict[bool, np.ndarray | None] = {}
         self._path = None
         self._terms: dict[str, np.ndarray] = {}
 
@@ -897,6 +956,12 @@ class _Sub:
         if self._Ks_tip is None and self.red.Ks_tip is not None:
             self._Ks_tip = np.einsum("ri,jlrs,sk->jlik", self.T, self.red.Ks_tip, self.T, optimize=True)
         return self._Ks_tip
+
+    def Kg(self, tip: bool = False) -> np.ndarray | None:
+        if tip not in self._Kg:
+            A = self.red.Kg(tip)
+            self._Kg[tip] = None if A is None else np.einsum("ri,jlrs,sk->jlik", self.T, A, self.T, optimize=True)
+        return self._Kg[tip]
 
     def path_operator(self, xi: float) -> np.ndarray:
         if self._path is None:
@@ -926,19 +991,26 @@ class _Sub:
         sct = sc.copy()
         sct[base.thickness_axis] = 1.0
         vol_t = float(np.prod(sct))
-        if np.any(sc != 1.0):
-            Ks = self.Ks
-            Kt = self.Ks_tip if tip else None
-            K = np.zeros_like(self.K)
+        def stretched_sum(Ks: np.ndarray, Kt: np.ndarray | None) -> np.ndarray:
+            out = np.zeros_like(self.K)
             for j in range(3):
                 for l in range(3):
                     if Kt is None:
-                        K += (vol / (sc[j] * sc[l])) * Ks[j, l]
+                        out += (vol / (sc[j] * sc[l])) * Ks[j, l]
                     else:
-                        K += (vol / (sc[j] * sc[l])) * (Ks[j, l] - Kt[j, l]) + (vol_t / (sct[j] * sct[l])) * Kt[j, l]
+                        out += (vol / (sc[j] * sc[l])) * (Ks[j, l] - Kt[j, l]) + (vol_t / (sct[j] * sct[l])) * Kt[j, l]
+            return out
+
+        if np.any(sc != 1.0):
+            Ks = self.Ks
+            K = stretched_sum(Ks, self.Ks_tip if tip else None)
+            if s.crystal:
+                K += s.crystal * stretched_sum(self.Kg(), self.Kg(True) if tip else None)
             K = s.E_factor * K + (self.K - Ks.sum(axis=(0, 1)))
         else:
             K = s.E_factor * self.K if s.E_factor != 1.0 else self.K.copy()
+            if s.crystal:
+                K += (s.E_factor * s.crystal) * self.Kg().sum(axis=(0, 1))
         if penalty:
             kn, kt = base.clamp_stiffness(*s.clamp, scale=sc)
             fa = base.clamp_face_factor(sc)
@@ -1061,10 +1133,17 @@ class _ExtendedModel(ElasticModel):
         return self._K, self._M
 
 
-def _scaled_material(mat: Material, e: float, r: float) -> Material:
-    if e == 1.0 and r == 1.0:
+def _scaled_material(mat: Material, e: float, r: float, a: float = 0.0, R=None) -> Material:
+    """``mat`` with its stiffness ``e (C + a (C_crystal - C))`` and density ``r rho``."""
+    d = crystal_delta(mat, R) if a else None
+    if e == 1.0 and r == 1.0 and d is None:
         return mat
-    return Material(mat.name, np.asarray(mat.C) * e, mat.density * r, mat.note + f"; diagnose: C x {e:.6g}, rho x {r:.6g}")
+    C = np.asarray(mat.C, float)
+    if d is not None:
+        C = C + a * d
+    return Material(mat.name, e * C, mat.density * r,
+                    mat.note + f"; diagnose: C x {e:.6g}" + (f", {a:.6g} of the way to {CRYSTALS[mat.name]}" if d is not None
+                                                            else "") + f", rho x {r:.6g}")
 
 
 def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], n_modes: int | None = None
@@ -1080,7 +1159,7 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     t0 = time.perf_counter()
     m0 = base.model
     sc = np.asarray(s.scale, float)
-    regions = {name: (_scaled_material(mat, s.E_factor, s.rho_factor), R)
+    regions = {name: (_scaled_material(mat, s.E_factor, s.rho_factor, s.crystal, R), R)
                for name, mat, R in zip(m0.region_names, m0.materials, m0.orientations)}
     pms = list(m0.point_masses)
     for xi, mass in s.masses:
