@@ -175,6 +175,15 @@ class _StiffnessPart:
     C: np.ndarray
 
 
+def crystal_parts(model: ElasticModel) -> list[_StiffnessPart] | None:
+    """Per region of ``model``, its :func:`crystal_delta` (zero for a region without a crystal), as the
+    ``materials`` of an assembly or a stiffness split; None when no region has a crystal."""
+    deltas = [crystal_delta(mat, R) for mat, R in zip(model.materials, model.orientations)]
+    if all(d is None for d in deltas):
+        return None
+    return [_StiffnessPart(np.zeros((6, 6)) if d is None else d) for d in deltas]
+
+
 def tip_region(model: ElasticModel, thickness_axis: int) -> tuple[np.ndarray, np.ndarray, float] | None:
     """A meshed tip of ``model`` (its region named ``tip``): the tip's element mask, its mesh nodes
     and the coordinate along ``thickness_axis`` of the plane it is attached by (the nodes it shares
@@ -712,11 +721,10 @@ class ReducedModal:
             self.Gfull = axial_gradient_matrix(m, base.axis)
             blocks["prestress"].append(ksolve(self.Gfull @ Phi0))
             # the crystal's elastic constants: first-order shape changes K^-1 dK phi (dM = 0)
-            deltas = [crystal_delta(mat, R) for mat, R in zip(m.materials, m.orientations)]
-            if any(d is not None for d in deltas):
+            parts = crystal_parts(m)
+            if parts is not None:
                 from probedyn.fem import elasticity as el
 
-                parts = [_StiffnessPart(np.zeros((6, 6)) if d is None else d) for d in deltas]
                 dK = el.assemble_stiffness(m.mesh, m.elem_region, parts, m.orientations, element=m.element, basis=m.basis)
                 blocks["crystal"].append(ksolve(dK @ Phi0))
         finally:
@@ -792,7 +800,7 @@ class ReducedModal:
         self._fam_forms = _family_forms(m, P)
         self._Ks = None  # stretch split (lazy: only geometric causes need it)
         self._Ks_tip = None  # the meshed tip's part of it
-        self._Kg: dict[bool, np.ndarray | None] = {}  # the same splits of crystal_delta (lazy: crystal)
+        self._Kc: dict[bool, np.ndarray | None] = {}  # the same splits of crystal_delta (lazy: crystal)
         self._sub: dict = {}
         self._term_cache: dict[str, np.ndarray] = {}
         self._path_xi = np.linspace(0.0, 1.0, 101)
@@ -859,20 +867,17 @@ class ReducedModal:
                                                    elements=np.nonzero(self.base.tip[0])[0])[0]
         return self._Ks_tip
 
-    def Kg(self, tip: bool = False) -> np.ndarray | None:
+    def Kc(self, tip: bool = False) -> np.ndarray | None:
         """:attr:`Ks` (``tip``: :attr:`Ks_tip`) of ``C_crystal - C_iso`` alone (:func:`crystal_delta`)."""
-        if tip not in self._Kg:
+        if tip not in self._Kc:
             m = self.base.model
-            if tip and self.base.tip is None:
-                self._Kg[tip] = None
+            parts = crystal_parts(m)
+            if (tip and self.base.tip is None) or parts is None:
+                self._Kc[tip] = None
             else:
-                parts = []
-                for mat, R in zip(m.materials, m.orientations):
-                    d = crystal_delta(mat, R)
-                    parts.append(_StiffnessPart(np.zeros((6, 6)) if d is None else d))
                 els = np.nonzero(self.base.tip[0])[0] if tip else None
-                self._Kg[tip] = reduced_stiffness_split(m, self.Phi, elements=els, materials=parts)[0]
-        return self._Kg[tip]
+                self._Kc[tip] = reduced_stiffness_split(m, self.Phi, elements=els, materials=parts)[0]
+        return self._Kc[tip]
 
     def path_ops(self) -> np.ndarray:
         """(101, 3, r) reduced displacement operators on the mass path (xi = 0, 0.01, ..., 1)."""
@@ -941,7 +946,7 @@ class _Sub:
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
         self._Ks = None
         self._Ks_tip = None
-        self._Kg: dict[bool, np.ndarray | None] = {}
+        self._Kc: dict[bool, np.ndarray | None] = {}
         self._path = None
         self._terms: dict[str, np.ndarray] = {}
 
@@ -957,11 +962,11 @@ class _Sub:
             self._Ks_tip = np.einsum("ri,jlrs,sk->jlik", self.T, self.red.Ks_tip, self.T, optimize=True)
         return self._Ks_tip
 
-    def Kg(self, tip: bool = False) -> np.ndarray | None:
-        if tip not in self._Kg:
-            A = self.red.Kg(tip)
-            self._Kg[tip] = None if A is None else np.einsum("ri,jlrs,sk->jlik", self.T, A, self.T, optimize=True)
-        return self._Kg[tip]
+    def Kc(self, tip: bool = False) -> np.ndarray | None:
+        if tip not in self._Kc:
+            A = self.red.Kc(tip)
+            self._Kc[tip] = None if A is None else np.einsum("ri,jlrs,sk->jlik", self.T, A, self.T, optimize=True)
+        return self._Kc[tip]
 
     def path_operator(self, xi: float) -> np.ndarray:
         if self._path is None:
@@ -1004,13 +1009,13 @@ class _Sub:
         if np.any(sc != 1.0):
             Ks = self.Ks
             K = stretched_sum(Ks, self.Ks_tip if tip else None)
-            if s.crystal:
-                K += s.crystal * stretched_sum(self.Kg(), self.Kg(True) if tip else None)
+            if s.crystal and self.Kc() is not None:  # None: no region has a crystal
+                K += s.crystal * stretched_sum(self.Kc(), self.Kc(True) if tip else None)
             K = s.E_factor * K + (self.K - Ks.sum(axis=(0, 1)))
         else:
             K = s.E_factor * self.K if s.E_factor != 1.0 else self.K.copy()
-            if s.crystal:
-                K += (s.E_factor * s.crystal) * self.Kg().sum(axis=(0, 1))
+            if s.crystal and self.Kc() is not None:
+                K += (s.E_factor * s.crystal) * self.Kc().sum(axis=(0, 1))
         if penalty:
             kn, kt = base.clamp_stiffness(*s.clamp, scale=sc)
             fa = base.clamp_face_factor(sc)
