@@ -74,7 +74,8 @@ def pytest_sessionfinish(session, exitstatus):
 # (it runs a test only once it knows the next one, or is told to shut down), which nobody tells it
 # when the queue is already empty. The subclass re-queues only files with tests left, keeps giving a
 # worker files until it holds two tests, and shuts a worker down as soon as the queue is empty
-# (tests/test_run_tests.py crashes a worker at every test of a small suite).
+# (tests/test_run_tests.py crashes a worker in the last file of a small suite, at its first and its
+# last test; docs/developing.md, "Native faults", also at every test of an 8-file suite).
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -93,7 +93,7 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
     :func:`probedyn.fem.elasticity.assemble_stiffness`. ``elements``: integrate over these elements
     only (e.g. a meshed tip, which a geometric stretch maps differently). ``materials``: per-region
     objects with a Voigt ``C`` in the material's own axes to integrate instead of the model's (e.g.
-    only their shear block, :func:`probedyn.diagnose.modal_model.shear_part`).
+    a crystal's difference from its isotropic model, :func:`probedyn.diagnose.modal_model.crystal_parts`).
     """
     from skfem.quadrature import get_quadrature
 
