@@ -128,7 +128,8 @@ def test_causes_the_folds_do_not_resolve_are_confounded():
     cv = NS(folds=[np.array([i]) for i in range(5)])
 
     def cand(cv_r, chi2, k, ev):
-        return {"fit": NS(cv_r=np.array(cv_r, float), chi2=chi2), "k": k, "evidence_cv": ev}
+        r = np.array(cv_r, float)  # one held-out residual per fold; its score -2 ln p = r^2 + const
+        return {"fit": NS(cv_r=r, cv_fold=r**2, chi2=chi2), "k": k, "evidence_cv": ev}
 
     lead = cand([1.0, -1.0, 0.5, 1.0, -0.5], 3.0, 2, 100.0)
     # per-fold differences of held-out chi^2 (lead - rival): the rival predicts two folds worse
@@ -138,7 +139,7 @@ def test_causes_the_folds_do_not_resolve_are_confounded():
     assert _heldout_diff_se(lead, rival, cv) == pytest.approx(se, rel=1e-12)
     assert 5.5 > EVIDENCE_MARGIN and 5.5 <= HELDOUT_SE_FACTOR * se  # outside the margin, inside 2 SE
     assert _unresolved(lead, rival, cv, EVIDENCE_MARGIN)  # in sample: 0.7 - 1 nats behind
-    far = dict(rival, fit=NS(cv_r=rival["fit"].cv_r, chi2=261.0))  # same folds, chi^2 261 in sample
+    far = dict(rival, fit=NS(cv_r=rival["fit"].cv_r, cv_fold=rival["fit"].cv_fold, chi2=261.0))  # same folds, chi^2 261 in sample
     assert not _unresolved(lead, far, cv, EVIDENCE_MARGIN)
     resolved = dict(rival, evidence_cv=100.0 - 2.5 * HELDOUT_SE_FACTOR * se)
     assert not _unresolved(lead, resolved, cv, EVIDENCE_MARGIN)

@@ -108,6 +108,30 @@ def test_spectrum_example_names_the_hidden_particle_in_declared_air(capsys):
 
 
 @pytest.mark.slow
+def test_timeseries_example_of_a_plain_lever_claims_nothing(capsys):
+    """tip_motion_timeseries: a thermally driven tip record of the nominal lever (two flapwise
+    modes, no hidden effect) reduced to a PSD: both peaks labelled, nothing claimed. The labellings
+    compared include ones that place no peak (the doublet and assignment proposals); such a
+    labelling fits no rows and is scored by the price of the lines it leaves out (it once reached
+    the modal problem with no mode and failed with a traceback)."""
+    res = _diagnose("tip_motion_timeseries", capsys)
+    assert res["verdict"] == "no-significant-discrepancy" and not res["findings"]
+
+
+def test_a_modal_problem_without_modes_is_a_data_error(tmp_path):
+    from probedyn.core.errors import DataFormatError
+    from probedyn.diagnose.formats import read_measurement
+    from probedyn.diagnose.modal import ModalProblem
+
+    meas = read_measurement(EX / "afm_cantilever_modes.toml")
+    keep = np.zeros(len(meas.freq), bool)
+    empty = type(meas)(**{k: (v[keep] if isinstance(v, np.ndarray) and v.shape[:1] == keep.shape else v)
+                          for k, v in vars(meas).items()})
+    with pytest.raises(DataFormatError, match="no mode frequency"):
+        ModalProblem(empty)
+
+
+@pytest.mark.slow
 def test_friction_example_names_the_hidden_viscous_friction(capsys):
     """ffm_stickslip_speeds: the hidden viscous friction is the first finding, gamma within 3 sigma."""
     mk = _maker()

@@ -26,6 +26,9 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    nats, **capped at** ``Delta chi2 / 2``: the in-sample log likelihood ratio at the maximum is an
    upper bound of any Bayes factor for the cause (for every prior, the marginal likelihood is
    below the maximum likelihood), so held-out evidence can never exceed what the data carry.
+   A problem with ``heldout_predictive`` (modal, spectra) scores a held-out group by its
+   predictive density, the fold's parameter uncertainty included (:meth:`CrossValidation.heldout`):
+   a group that alone informs a parameter is not held to a value the other groups' noise set.
    With fewer than three groups: ``evidence = Delta chi2 / 2 - k`` (Akaike).
    Claimed: significant baseline, LR test passed, evidence > 0.
 5. **Confounding.** Every claimed cause within ``EVIDENCE_MARGIN`` = ln 10 = 2.30 nats (a Bayes
@@ -136,6 +139,7 @@ class Fit:
     cv_r: np.ndarray | None = None
     start: str = ""
     nuisance: Any = None
+    cv_fold: np.ndarray | None = None  # per fold: -2 ln(held-out predictive density) + const
 
     @property
     def k(self) -> int:
@@ -314,6 +318,33 @@ class Fitter:
         best.chi2 = float(np.sum(best.r[m] ** 2))
         return best
 
+    def jacobian(self, fit: Fit, step: float = 1e-4) -> np.ndarray:
+        """``d r / d u`` on every row at ``fit``'s optimum, the problem seeing ``fit.mask`` as its
+        training data (central differences, one-sided at a bound)."""
+        prob = self.problem
+        has_tm, has_nu = hasattr(prob, "train_mask"), hasattr(prob, "nuisance")
+        if has_tm:
+            prob.train_mask = fit.mask
+        if has_nu:
+            prob.fixed_nuisance = fit.nuisance
+        try:
+            cols = []
+            for j, p in enumerate(fit.plist):
+                lo, hi = _u_bounds(p)
+                a, b = max(fit.u[j] - step, lo), min(fit.u[j] + step, hi)
+                rs = []
+                for x in (a, b):
+                    v = dict(fit.values)
+                    v[p.name] = _from_u(p, x)
+                    rs.append(self.residuals(v, fit.causes))
+                cols.append((rs[1] - rs[0]) / (b - a))
+            return np.array(cols).T if cols else np.zeros((len(fit.r), 0))
+        finally:
+            if has_tm:
+                prob.train_mask = None
+            if has_nu:
+                prob.fixed_nuisance = None
+
     # -- nested fits ------------------------------------------------------------------------
     def base_starts(self) -> list[dict[str, float]]:
         ps = list(self.problem.base_params)
@@ -469,11 +500,43 @@ class CrossValidation:
             self._ref[key] = hit
         return hit
 
-    def heldout(self, causes: tuple) -> tuple[float, np.ndarray]:
+    def heldout(self, fit: Fit) -> None:
+        """Set ``fit.cv_r`` (each group's residuals predicted by the fit of ``fit.causes`` to the
+        other groups), ``fit.cv_fold`` (per fold, -2 ln of the held-out group's predictive density
+        up to a constant shared by every model) and their sum ``fit.cv``.
+
+        The score is ``e^T e`` (the fold's optimum taken as exact), or -- a problem with
+        ``heldout_predictive`` -- the linearised posterior predictive ``e^T (I + S)^-1 e +
+        ln det(I + S)``, ``S = J_g C J_g^T``: the fold's parameter uncertainty carried to the
+        held-out group, ``C = (J_-g^T J_-g + P)^-1`` from the whitened Jacobian at the fold's optimum
+        (:meth:`Fitter.jacobian`; training rows ``J_-g``, held-out rows ``J_g``) and the prior
+        precision ``P`` of the parameters' uniform bounds (``12 / span^2`` in the fit coordinates).
+        Where a held-out group is the only one that informs a parameter (a torsion mode for an anisotropic shear modulus), the fold's
+        value of it is whatever the other groups' noise makes it, and ``e^T e`` condemns the cause
+        for predicting what nothing told it; the predictive density spreads that prediction over
+        the prior instead and charges the Occam factor ``ln det(I + S) / 2`` (Laplace; Vehtari,
+        Gelman & Gabry 2017 for LOO as a predictive density). Where the training groups determine
+        the parameters, ``S`` is small and the score is ``e^T e``."""
         out = np.full(self.n, np.nan)
-        for fold, f in zip(self.folds, self.fold_fits(causes)):
+        pred = bool(getattr(self.F.problem, "heldout_predictive", False))
+        scores = []
+        for fold, f in zip(self.folds, self.fold_fits(fit.causes)):
             out[fold] = f.r[fold]
-        return float(np.nansum(out**2)), out
+            e = out[fold]
+            ok = np.isfinite(e)
+            e = e[ok]
+            if not (pred and f.k):
+                scores.append(float(e @ e))
+                continue
+            J = self.F.jacobian(f)
+            Jt, Jg = J[f.mask], J[fold][ok]
+            P = np.diag([12.0 / (hi - lo) ** 2 for lo, hi in map(_u_bounds, f.plist)])
+            C = np.linalg.pinv(Jt.T @ Jt + P, hermitian=True)
+            A = np.eye(len(e)) + Jg @ C @ Jg.T
+            _, logdet = np.linalg.slogdet(A)
+            scores.append(float(e @ np.linalg.solve(A, e) + logdet))
+        fit.cv_r, fit.cv_fold = out, np.array(scores)
+        fit.cv = float(np.sum(fit.cv_fold))
 
 
 def heldout_statistic(fit: Fit, cv_r: np.ndarray, folds: list[np.ndarray]) -> tuple[float, float, int]:
@@ -696,7 +759,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     if significant and any(d["lr_pass"] for d in cands):
         if use_cv:
             cv.full_fits[()] = base
-            base.cv, base.cv_r = cv.heldout(())
+            cv.heldout(base)
         # in order of the in-sample improvement; the evidence is capped at Delta chi2 / 2, so a
         # cause whose cap is below the best evidence so far minus the margin can neither win nor
         # be confounded with the winner: it is not cross-validated (exact pruning)
@@ -923,12 +986,9 @@ def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> No
         cv.full_fits[tuple(c.key for c in causes)] = fit
         cv.full_fits.setdefault(tuple(c.key for c in ref.causes), ref)
         if ref.cv is None:
-            ref.cv, ref.cv_r = cv.heldout(ref.causes)
-        fit.cv, fit.cv_r = cv.heldout(causes)
-        per_group = []
-        for fold in cv.folds:
-            per_group.append(np.nansum(ref.cv_r[fold] ** 2) - np.nansum(fit.cv_r[fold] ** 2))
-        per_group = np.array(per_group)
+            cv.heldout(ref)
+        cv.heldout(fit)
+        per_group = ref.cv_fold - fit.cv_fold
         e_cv = 0.5 * (ref.cv - fit.cv)
         d["evidence_cv"] = e_cv
         d["evidence_se"] = 0.5 * float(np.sqrt(len(per_group) * np.var(per_group))) if len(per_group) > 1 else None
@@ -954,11 +1014,12 @@ def _unresolved(best: dict, d: dict, cv: CrossValidation | None, margin: float) 
 
 def _heldout_diff_se(a: dict, b: dict, cv: CrossValidation | None) -> float:
     """Standard error (nats) of the held-out evidence difference of two claimed causes: half the
-    ``sqrt(n var)`` of their per-fold held-out chi^2 differences (0 without cross-validation)."""
-    ra, rb = a["fit"].cv_r, b["fit"].cv_r
+    ``sqrt(n var)`` of their per-fold held-out score differences (:meth:`CrossValidation.heldout`;
+    0 without cross-validation)."""
+    ra, rb = a["fit"].cv_fold, b["fit"].cv_fold
     if cv is None or ra is None or rb is None or len(cv.folds) < 2:
         return 0.0
-    diff = np.array([np.nansum(ra[fold] ** 2) - np.nansum(rb[fold] ** 2) for fold in cv.folds])
+    diff = ra - rb
     return 0.5 * float(np.sqrt(len(diff) * np.var(diff)))
 
 
@@ -1066,7 +1127,7 @@ def _final(problem, F: Fitter, current: Fit, base: Fit, cv, folds, use_cv) -> di
             r_full2 = full(fit2.values, fit2.causes)
             if np.sum(r_full2**2) < np.sum(r_full**2):
                 fit = Fit(fit2.causes, fit2.plist, fit2.u, fit2.values, fit2.r - 0.0, fit2.chi2, fit2.n, fit2.J,
-                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start)
+                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start, cv_fold=fit.cv_fold)
                 r_full = r_full2
             else:
                 break
@@ -1081,7 +1142,7 @@ def _final(problem, F: Fitter, current: Fit, base: Fit, cv, folds, use_cv) -> di
     ho = None
     if use_cv and cv is not None and current.causes:
         if fit.cv_r is None:
-            fit.cv, fit.cv_r = cv.heldout(fit.causes)
+            cv.heldout(fit)
         cv_r = fit.cv_r + (r_after - fit.r)  # the reduced model's defect, carried to the held-out predictions
         T, p_ho, nho = heldout_statistic(fit, cv_r, folds)
         ho = {"heldout_rms": _rms(cv_r), "heldout_statistic": T, "heldout_n": nho, "heldout_p_value": p_ho}

@@ -676,7 +676,9 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     nominal_first = options[0][2]["cause"] is None
     if len(options) > 1:
         for lab, tab, h, sh in options:
-            sc, model, pars = _labelling_score(_modal_problem(meas, tab, base, L))
+            # a labelling that places no peak fits nothing (chi^2 0 on no rows): only its price counts
+            sc, model, pars = (_labelling_score(_modal_problem(meas, tab, base, L))
+                               if any(t["accepted"] for t in tab) else (0.0, None, {}))
             scores.append((sc + _unlabelled_price(tab), model, pars))
         order_ = np.argsort([x[0] for x in scores])
         k = int(order_[0])
