@@ -511,9 +511,9 @@ class CrossValidation:
         held-out group, ``C = (J_-g^T J_-g + P)^-1`` from the whitened Jacobian at the fold's optimum
         (:meth:`Fitter.jacobian`; training rows ``J_-g``, held-out rows ``J_g``) and the prior
         precision ``P`` of the parameters' uniform bounds (``12 / span^2`` in the fit coordinates).
-        Where a held-out group is the only one that informs a parameter (a torsion mode for an anisotropic shear modulus), the fold's
-        value of it is whatever the other groups' noise makes it, and ``e^T e`` condemns the cause
-        for predicting what nothing told it; the predictive density spreads that prediction over
+        Where a held-out group is the only one that informs a parameter (a torsion mode for an
+        anisotropic shear modulus), the fold's value of it is whatever the other groups' noise makes
+        it, and ``e^T e`` condemns the cause for predicting what nothing told it; the predictive density spreads that prediction over
         the prior instead and charges the Occam factor ``ln det(I + S) / 2`` (Laplace; Vehtari,
         Gelman & Gabry 2017 for LOO as a predictive density). Where the training groups determine
         the parameters, ``S`` is small and the score is ``e^T e``."""
