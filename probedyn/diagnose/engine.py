@@ -513,10 +513,11 @@ class CrossValidation:
         precision ``P`` of the parameters' uniform bounds (``12 / span^2`` in the fit coordinates).
         Where a held-out group is the only one that informs a parameter (a torsion mode for an
         anisotropic shear modulus), the fold's value of it is whatever the other groups' noise makes
-        it, and ``e^T e`` condemns the cause for predicting what nothing told it; the predictive density spreads that prediction over
-        the prior instead and charges the Occam factor ``ln det(I + S) / 2`` (Laplace; Vehtari,
-        Gelman & Gabry 2017 for LOO as a predictive density). Where the training groups determine
-        the parameters, ``S`` is small and the score is ``e^T e``."""
+        it, and ``e^T e`` condemns the cause for predicting what nothing told it; the predictive
+        density spreads that prediction over the prior instead and charges the Occam factor
+        ``ln det(I + S) / 2`` (Laplace; Vehtari, Gelman & Gabry 2017 for LOO as a predictive
+        density). Where the training groups determine the parameters, ``S`` is small and the score
+        is ``e^T e``."""
         out = np.full(self.n, np.nan)
         pred = bool(getattr(self.F.problem, "heldout_predictive", False))
         scores = []
