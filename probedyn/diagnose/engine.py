@@ -51,7 +51,8 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    parameter that only the held-out group informs, which is right against the baseline (whose model
    error the noise model carries: discretisation, model form) but not after a claimed cause, whose
    own model error has no stated size -- a second cause supported by one group at a time is not
-   separable from that error (session 15: 4 of 4 such second findings on single-effect truths).
+   separable from that error (session 15: it removes the four second findings the predictive score
+   had added on single-effect truths; docs/diagnose.md §6.v).
 7. **Gain.** The final model is re-solved with the full model where the fits used a reduced
    one (modal: the FEM; defect-corrected refit if the reduction's error exceeds 0.3 sigma), and
    the residual, held-out residual and chi^2 after are computed from that.
