@@ -123,6 +123,37 @@ def test_parsimony_prefers_the_contained_limit():
     assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
 
 
+def test_a_contained_limit_is_never_pruned_before_the_parsimony_rule():
+    """engine._score_in_order: a cause whose evidence cap is below the winner's evidence minus the margin
+    is not cross-validated, except a limit of a passing container, which the parsimony rule's LR arm can
+    still hand the lead (seed 2067: DMT 4.7 behind Maugis-Dugdale in chi^2, below chi2_1(0.99) = 6.63,
+    its cap 0.07 nats below the pruning line). The same numbers end with DMT first."""
+    from probedyn.diagnose.causes.adhesion import AdhesionDMT, AdhesionMD
+    from probedyn.diagnose.causes.deflection_drift import DeflectionDrift
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN, _parsimony, _score_in_order
+
+    class _F:
+        values = {"W": 0.1, "lam": 0.26}
+
+    def row(c, dchi2):
+        return {"cause": c(), "fit": _F(), "dchi2": dchi2, "k": len(c.params), "lr_pass": True, "evidence": None}
+
+    md, dmt, drift = row(AdhesionMD, 24270.54), row(AdhesionDMT, 24265.79), row(DeflectionDrift, 24265.79)
+    scored = []
+
+    def score(d):  # evidence at its cap, as the rate study's held-out scores were
+        scored.append(d["cause"].key)
+        d["evidence"] = 0.5 * d["dchi2"]
+
+    cands = [drift, dmt, md]
+    _score_in_order(cands, EVIDENCE_MARGIN, score)
+    assert 0.5 * dmt["dchi2"] < md["evidence"] - EVIDENCE_MARGIN  # below the pruning line ...
+    assert "adhesion-dmt" in scored and not dmt.get("pruned")  # ... and scored: a limit of the container
+    assert drift.get("pruned") and drift["evidence"] is None  # the same cap, not a limit: pruned (exact)
+    claimed = sorted([d for d in cands if d["evidence"] is not None], key=lambda d: -d["evidence"])
+    assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
+
+
 def test_spectrum_spur_rejected_modes_identified(tmp_path):
     """Thermal PSD of the probe's FEM modes (a finer mesh than the diagnosis', equipartition with the
     FEM's modal stiffness at the tip, chi^2 periodogram scatter) with a one-bin spur below f1: the
