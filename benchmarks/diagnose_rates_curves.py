@@ -57,7 +57,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose_truth_curves import CURVE_EFFECTS, EXPECTED, VISCO_EFFECT, make_curve_case, make_visco_case  # noqa: E402
+from diagnose_truth_curves import (CURVE_EFFECTS, DETECTOR_EFFECTS, EXPECTED, VISCO_EFFECT, make_curve_case,  # noqa: E402
+                                   make_visco_case)
 
 from probedyn.diagnose.engine import run  # noqa: E402
 
@@ -82,6 +83,20 @@ def visco_cases(n_visco: int, null_seeds: list[int], hidden_seeds: list[int] = (
     for i in range(max(len(vis), len(other))):
         out += vis[i:i + 1] + other[i:i + 1]
     return out
+
+
+def detector_cases(n_each: int, n_null: int, n_hidden: int, part: int = 0, parts: int = 1) -> list[tuple[int, str | None]]:
+    """The detector-effect study (session 17): ``2 n_each`` cases of the detector effects (seeds 2200 + i,
+    ``DETECTOR_EFFECTS`` alternating), interleaved with the ``n_null`` noise-only cases (6000-series), then the
+    ``n_hidden`` hidden cases of the 2000-series rerun (do the new causes steal their findings?); ``part`` of
+    ``parts`` takes every ``parts``-th case of that order (processes of one run)."""
+    det = [(2200 + i, DETECTOR_EFFECTS[i % len(DETECTOR_EFFECTS)]) for i in range(2 * n_each)]
+    nul = [(6000 + i, None) for i in range(n_null)]
+    out = []
+    for i in range(max(len(det), len(nul))):
+        out += det[i:i + 1] + nul[i:i + 1]
+    out += [(2000 + i, CURVE_EFFECTS[i % len(CURVE_EFFECTS)]) for i in range(n_hidden)]
+    return out[part::parts]
 
 
 def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None) -> dict:
@@ -201,7 +216,7 @@ def summarize(rows: list[dict]) -> dict:
     nul = [r for r in rows if not r["effect"]]
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
     per = {}
-    for e in CURVE_EFFECTS + [VISCO_EFFECT]:
+    for e in CURVE_EFFECTS + [VISCO_EFFECT] + DETECTOR_EFFECTS:
         rr = [r for r in eff if r["effect"] == e]
         if rr:
             re = [r["recovery_error"] for r in rr if "recovery_error" in r]
@@ -381,6 +396,11 @@ if __name__ == "__main__":
         seeds = lambda i: [int(x) for x in sys.argv[i].split(",") if x] if len(sys.argv) > i else []  # noqa: E731
         todo = visco_cases(int(sys.argv[2]), seeds(4), seeds(5))
         print(json.dumps(main(["", "0", "0", sys.argv[3]], todo), indent=1, default=float))
+    elif len(sys.argv) > 1 and sys.argv[1] == "detector":
+        # detector N_EACH N_NULL N_HIDDEN OUT.json [PART PARTS]: one process of a run (merge the parts' rows)
+        part, parts = (int(sys.argv[6]), int(sys.argv[7])) if len(sys.argv) > 7 else (0, 1)
+        todo = detector_cases(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), part, parts)
+        print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "spectra":
         print(json.dumps(main_spectra(sys.argv[1:]), indent=1, default=float))
     else:

@@ -38,6 +38,16 @@ EXPECTED = {"adhesion-dmt": ("adhesion-dmt", "W"), "adhesion-jkr": ("adhesion-jk
             "tip-radius-error": ("tip-radius-error", "r_ratio"), "deflection-drift": ("deflection-drift", "drift"),
             "tip-shape": ("tip-shape", "alpha"), "piezo-hysteresis": ("piezo-hysteresis", "dz")}
 E_TIP, NU_TIP, NU_S = 169e9, 0.28, 0.3
+#: detector effects (seeds 2200 + i, alternating; their draws come from a second stream of the seed so the
+#: 2000-series above is unchanged): the lever's hydrodynamic drag in water after Alcaraz et al. (2002),
+#: ``6 pi eta a_eff^2 / (s + h_eff)`` at the piezo velocity of a fast ramp, and the optical lever's
+#: interference, ``A cos(4 pi s cos(theta) / lambda + phi)`` with an AFM laser's wavelength; both on a
+#: 0.4-1.5 um non-contact baseline, recorded with times, water declared in half of the cases
+DETECTOR_EFFECTS = ["hydrodynamic-drag", "optical-interference"]
+EXPECTED.update({"hydrodynamic-drag": ("hydrodynamic-drag", "b_drag"),
+                 "optical-interference": ("optical-interference", "period")})
+LASERS_M = (635e-9, 670e-9, 785e-9, 830e-9, 850e-9)
+ETA_WATER = 8.9e-4
 
 
 def _monotone_curve(z_rel, P, k: float) -> np.ndarray:
@@ -112,6 +122,9 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     z_c = float(rng.uniform(-5e-9, 5e-9))
     z_top = z_c + dmax + Fmax / k
     z_far = z_c - max(40e-9, 1.5 * Fmax / k)  # far enough that the retract's pull-off lands out of range
+    aux = np.random.default_rng([seed, 17])  # the detector effects' own stream
+    if effect in DETECTOR_EFFECTS:
+        z_far = z_c - float(aux.uniform(0.4e-6, 1.5e-6))
     z_app = np.linspace(z_far, z_top, n)
     z_ret = z_app[::-1]
     dz = 0.0
@@ -136,11 +149,27 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     if effect == "deflection-drift":
         drift = float(rng.choice([-1, 1]) * 10 ** rng.uniform(-9.3, -8.3))  # 0.5 - 5 nN over the recording
         params["drift"] = drift
-    clean = F + b0 + b1 * z + drift * tau
-    Fm = clean + noise * rng.standard_normal(len(F))
     seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
+    sep = F / k - (z - z_c)  # the tip's height above the undeformed surface (-delta in contact)
+    detector = np.zeros(len(F))
+    if effect == "hydrodynamic-drag":  # a fast ramp in water (Alcaraz et al. 2002)
+        v = float(10 ** aux.uniform(math.log10(30e-6), math.log10(300e-6)))
+        t = np.arange(2 * n) * (z_top - z_far) / (n - 1) / v
+        a_eff, h_eff = float(aux.uniform(20e-6, 50e-6)), float(aux.uniform(2e-6, 10e-6))
+        b = 6 * math.pi * ETA_WATER * a_eff**2 / (np.maximum(sep, 0.0) + h_eff)
+        detector = b * np.where(seg == 0, v, -v)
+        params.update(b_drag=6 * math.pi * ETA_WATER * a_eff**2 / h_eff, h_eff=h_eff, velocity=v)
+    elif effect == "optical-interference":
+        lam = float(aux.choice(LASERS_M))
+        period = lam / (2 * math.cos(math.radians(float(aux.uniform(0.0, 15.0)))))
+        A = noise * float(10 ** aux.uniform(-0.3, 0.7))
+        detector = A * np.cos(2 * math.pi * sep / period + float(aux.uniform(0, 2 * math.pi)))
+        params.update(period=period, amplitude=A)
+    clean = F + b0 + b1 * z + drift * tau + detector
+    Fm = clean + noise * rng.standard_normal(len(F))
     fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
-    with_time = bool(rng.integers(2))
+    with_time = bool(rng.integers(2)) or effect == "hydrodynamic-drag"
+    water = effect in DETECTOR_EFFECTS and bool(aux.integers(2))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     name = f"curve_{seed}"
@@ -152,10 +181,11 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     lever = f"k = {k!r}\n" + (f"sensitivity = {sens!r}\n" if fmt == "deflection_V" else "")
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\n{lever}\n[tip]\nradius = {R_nom!r}\n'
-        f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n")
+        f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n"
+        + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
              "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
-             "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
+             "water_declared": water, "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 
 

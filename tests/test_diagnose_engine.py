@@ -143,3 +143,24 @@ def test_causes_the_folds_do_not_resolve_are_confounded():
     assert not _unresolved(lead, far, cv, EVIDENCE_MARGIN)
     resolved = dict(rival, evidence_cv=100.0 - 2.5 * HELDOUT_SE_FACTOR * se)
     assert not _unresolved(lead, resolved, cv, EVIDENCE_MARGIN)
+
+
+def test_a_cause_parameter_may_not_shadow_a_baseline_parameter(tmp_path):
+    """The fits address parameters by name: a cause whose parameter is named like one of the baseline's
+    (the force curve's offset ``b0``) would silently overwrite it; the engine refuses it."""
+    from probedyn.core.registry import RegistryError
+    from probedyn.diagnose.causes import Cause, CauseParam
+
+    class Shadow(Cause):
+        key = "shadow"
+        kind = "force"
+        params = (CauseParam("b0", "N s/m", 0.0, 1.0, 0.0, "a drag coefficient named like the offset"),)
+
+        def effect(self, v, s):
+            pass
+
+    path, _ = make_force_case(tmp_path, 7, "adhesion-dmt")
+    prob = make_problem(path)
+    prob.causes.append(Shadow())
+    with pytest.raises(RegistryError, match="b0"):
+        diagnose(prob)

@@ -97,6 +97,7 @@ from scipy.optimize import OptimizeWarning, least_squares
 from scipy.stats import chi2 as chi2_dist
 
 from probedyn.core.errors import DataFormatError
+from probedyn.core.registry import RegistryError
 from probedyn.diagnose.causes import Cause, CauseParam
 
 __all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
@@ -730,6 +731,11 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     use_cv = len(folds) >= 3
     causes = [c for c in problem.causes if only is None or c.key in only]
     n_causes = max(len(causes), 1)
+    base_names = {p.name for p in problem.base_params}
+    for c in causes:  # the fits address parameters by name: a cause's must not shadow the baseline's
+        clash = base_names & {p.name for p in c.params}
+        if clash:
+            raise RegistryError(f"cause {c.key}: parameter {', '.join(sorted(clash))} is also a baseline parameter")
     # 1-2. baseline and its chi-square test
     base = F.baseline()
     _check_baseline_identifiable(base)

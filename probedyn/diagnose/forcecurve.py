@@ -1,6 +1,6 @@
 """Force-distance curves: approach and retract of a lever against a sample, with snap-in and pull-off.
 
-Model (quasi-static; inertia and hydrodynamics of the ramp neglected): the lever (stiffness k)
+Model (quasi-static; the lever's inertia neglected, its fluid drag a cause): the lever (stiffness k)
 deflects by ``F / k`` under the tip-sample force ``F = P(delta)``, ``delta`` the penetration
 (positive: overlap) and ``z`` the piezo position towards the sample with contact point ``z_c``:
 
@@ -19,7 +19,10 @@ of the contact registry's models), the declared tip radius; calibrated: the cont
 force offset and tilt of the baseline (``F_meas = F + b0 + b1 z``: a virtual deflection of the
 optical lever), and ``E*`` unless the sample's modulus is declared. Causes: adhesion after the
 contact registry (:mod:`probedyn.schemes.contact`: DMT with its van der Waals tail -- the long-range
-attraction that snaps the tip in -- JKR, Maugis-Dugdale with lambda fitted) and a tip-radius error.
+attraction that snaps the tip in -- JKR, Maugis-Dugdale with lambda fitted) and a tip-radius error; and
+signals the deflection records besides the force (:meth:`ForceCurveProblem._detector_terms`): the lever's
+hydrodynamic drag at the piezo velocity and the optical lever's interference, both functions of the
+tip-sample separation and bounded by what the non-contact baseline shows (:meth:`_far_baseline`).
 """
 
 from __future__ import annotations
@@ -144,6 +147,9 @@ class ForceState:
     z_shift: float = 0.0  # the retract's true piezo position minus the recorded one [m] (hysteresis)
     visco_strength: float = 0.0  # SLS relaxation strength E_0 / E_inf - 1 of the sample (0: elastic; E_star = E_inf)
     visco_tau: float = 1.0  # SLS relaxation time [s]
+    drag_b: float = 0.0  # hydrodynamic drag coefficient of the lever at contact [N s/m] (0: none)
+    drag_h: float = 1.0  # its effective height [m]: b(s) = drag_b h / (s + h) at tip-sample separation s
+    optical: tuple = ()  # interference of the optical lever: (a_cos [N], a_sin [N], period [m]) in the separation
     transforms: list = field(default_factory=list)
 
 
@@ -417,6 +423,19 @@ class ForceCurveProblem:
         t = d.time if d.time is not None else np.arange(self.n, dtype=float)
         self.tau = (t - 0.5 * (t.min() + t.max())) / max(float(np.ptp(t)), 1e-300)
         self.separation = False  # residuals in the force-separation domain (starting values only)
+        # the piezo velocity [m/s] of every sample (towards the sample positive), for the lever's drag:
+        # a local quadratic (Savitzky-Golay) derivative of z and t along each segment's record order
+        self.velocity = None
+        if d.time is not None:
+            from scipy.signal import savgol_filter
+
+            v = np.empty(self.n)
+            for s_ in (0, 1):
+                idx = np.nonzero(d.segment == s_)[0]
+                w = min(21, len(idx) - (1 - len(idx) % 2))
+                v[idx] = (savgol_filter(d.z[idx], w, 2, deriv=1, mode="interp")
+                          / savgol_filter(d.time[idx], w, 2, deriv=1, mode="interp"))
+            self.velocity = v
         # each sample's piezo interval (the spacing to its neighbours along its segment): where a
         # predicted jump falls inside it, the sample is a mixture of the two branches
         # (:func:`_jump_alternatives`), so the misfit is continuous in the parameters
@@ -467,6 +486,7 @@ class ForceCurveProblem:
             self.base_params.append(CauseParam("E_star", "Pa", 1e3, E_hi, e0, "reduced modulus E* (below the rigid-"
                                                "sample limit E_tip / (1 - nu_tip^2))", scale="log",
                                                starts=(min(10 * e0, 0.9 * E_hi),)))
+        self.far = self._far_baseline(zc0)
         # snap-in and pull-off make the misfit piecewise smooth: capped least-squares runs, few starts
         self.nfev_per_param = 30
         self.max_starts = 3
@@ -478,6 +498,38 @@ class ForceCurveProblem:
                 self.causes.append(c)
             elif getattr(cls, "requires", None) and not (set(cls.changes) & self.known):
                 self.not_offered[cls.key] = f"needs {cls.requires}"
+
+    def _far_baseline(self, zc0: float) -> dict[str, Any]:
+        """What the non-contact baseline alone says (the detector causes' bounds are derived from it): the
+        points of both segments more than 5 % of the ramp before the contact point's start ``zc0``, the
+        approach's snap-in and the retract's pull-off, one line
+        in z fitted to them, the RMS of its residuals, and the split of the two segments' mean residuals
+        (approach minus retract) with its standard error."""
+        d = self.data
+        # the retract may adhere beyond the contact point and the approach snap in before it: the far region
+        # also ends before the pull-off and the snap-in (each segment's deepest attraction below the
+        # approach's far line, when it exceeds 5 noise levels and three times the RMS the far line leaves above
+        # the noise -- a wave's trough is not an attraction; a long-range attraction is not a baseline)
+        app = np.nonzero(d.segment == 0)[0]
+        far3 = app[np.argsort(d.z[app])[: max(5, len(app) // 3)]]  # the far third the far line was fitted to
+        r3 = d.force[far3] - self.far_line[0] - self.far_line[1] * d.z[far3]
+        wave = math.sqrt(max(float(np.mean(r3 * r3)) - self.sigma**2, 0.0))  # what the far line leaves (a wave's A/sqrt2)
+        for s_ in (0, 1):  # and before the approach's snap-in (its deepest attraction)
+            sel = d.segment == s_
+            exc = d.force[sel] - self.far_line[0] - self.far_line[1] * d.z[sel]
+            if exc.min() < -5.0 * self.sigma - 3.0 * wave:
+                zc0 = min(zc0, float(d.z[sel][int(np.argmin(exc))]))
+        far = d.z < zc0 - 0.05 * self.span
+        out = {"mask": far, "length": float(zc0 - d.z.min()), "n": int(far.sum()), "rms": None, "split": 0.0,
+               "split_se": math.inf}
+        na, nr = int((far & (d.segment == 0)).sum()), int((far & (d.segment == 1)).sum())
+        if min(na, nr) < 5:
+            return out
+        r = d.force[far] - np.polyval(np.polyfit(d.z[far], d.force[far], 1), d.z[far])
+        seg = d.segment[far]
+        out.update(rms=float(np.sqrt(np.mean(r * r))), split=float(r[seg == 0].mean() - r[seg == 1].mean()),
+                   split_se=float(self.sigma * math.sqrt(1.0 / na + 1.0 / nr)))
+        return out
 
     def supports(self, what: str) -> bool:
         return True
@@ -504,12 +556,32 @@ class ForceCurveProblem:
         st = self.state(values, causes)
         F, F_alt, w = self._curve(st, self._z_rel(st), d.segment, d.k, self.dz, d.time)
         out = []
+        z_rel = self._z_rel(st)
         for G in (F, F_alt):
-            G = G + st.b0 + st.b1 * d.z + st.drift * self.tau
+            G = G + st.b0 + st.b1 * d.z + st.drift * self.tau + self._detector_terms(st, G, z_rel)
             for tf in st.transforms:
                 G = tf(self, G)
             out.append(G)
         return out[0], out[1], w
+
+    def _detector_terms(self, st: ForceState, F: np.ndarray, z_rel: np.ndarray) -> np.ndarray | float:
+        """Signals the deflection records besides the tip-sample force ``F``, as functions of the
+        tip-sample separation ``s = F / k - z_rel`` (the lever end's height above the undeformed surface;
+        ``-delta`` in contact): the **hydrodynamic drag** on the lever moving at the piezo velocity ``v``,
+        ``b(s) v`` with ``b(s) = b_drag h / (max(s, 0) + h)`` (Alcaraz et al. 2002; positive: repulsive on the
+        approach, attractive on the retract), and the **optical interference** of the light the sample
+        reflects into the detector with the lever's, periodic in ``s`` (:mod:`..causes.optical_interference`).
+        0 without these causes."""
+        if st.drag_b == 0.0 and not st.optical:
+            return 0.0
+        s = F / self.data.k - z_rel
+        out = np.zeros(self.n)
+        if st.drag_b != 0.0 and self.velocity is not None:
+            out += st.drag_b * st.drag_h / (np.maximum(s, 0.0) + st.drag_h) * self.velocity
+        for a_c, a_s, period in st.optical:
+            ph = 2.0 * math.pi * s / period
+            out += a_c * np.cos(ph) + a_s * np.sin(ph)
+        return out
 
     def _separation_residuals(self, values, causes) -> np.ndarray:
         """Residuals in the force-separation domain: the measured force minus the baseline, against
@@ -520,6 +592,7 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
+        Fx = Fx - self._detector_terms(st, Fx, self._z_rel(st))
         delta = self._z_rel(st) - Fx / d.k
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)

@@ -66,7 +66,7 @@ FAMILY_ALIASES = {"flap": "flapwise", "flexural": "flapwise", "vertical": "flapw
                   "twist": "torsion", "in-plane": "lateral", "longitudinal": "axial"}
 PROBE_ALIASES = {"E": "youngs_modulus", "rho": "density", "nu": "poisson_ratio"}
 QUANTITIES = ("thickness", "width", "length", "modulus", "density", "mass", "clamp", "stress", "medium",
-              "temperature", "tip_radius", "adhesion", "lattice", "scanner", "detector")
+              "temperature", "tip_radius", "adhesion", "lattice", "scanner", "detector", "drag")
 
 TABLES: dict[str, dict[str, tuple[str, ...]]] = {
     "measurement": {"*": ("kind", "data", "description", "source", "licence", "quantity", "averages", "families",
