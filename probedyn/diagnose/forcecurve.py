@@ -507,18 +507,18 @@ class ForceCurveProblem:
         (approach minus retract) with its standard error."""
         d = self.data
         # the retract may adhere beyond the contact point and the approach snap in before it: the far region
-        # also ends before the pull-off and the snap-in (each segment's deepest attraction below the
-        # approach's far line, when it exceeds 5 noise levels and three times the RMS the far line leaves above
+        # also ends before the pull-off and the snap-in (each segment's deepest attraction below the line of
+        # its own far third, when it exceeds 5 noise levels and three times the RMS that line leaves above
         # the noise -- a wave's trough is not an attraction; a long-range attraction is not a baseline)
-        app = np.nonzero(d.segment == 0)[0]
-        far3 = app[np.argsort(d.z[app])[: max(5, len(app) // 3)]]  # the far third the far line was fitted to
-        r3 = d.force[far3] - self.far_line[0] - self.far_line[1] * d.z[far3]
-        wave = math.sqrt(max(float(np.mean(r3 * r3)) - self.sigma**2, 0.0))  # what the far line leaves (a wave's A/sqrt2)
         for s_ in (0, 1):  # and before the approach's snap-in (its deepest attraction)
-            sel = d.segment == s_
-            exc = d.force[sel] - self.far_line[0] - self.far_line[1] * d.z[sel]
+            idx = np.nonzero(d.segment == s_)[0]
+            far3 = idx[np.argsort(d.z[idx])[: max(5, len(idx) // 3)]]  # the segment's own far third and line
+            line = np.polyfit(d.z[far3], d.force[far3], 1)  # (a drag offsets the retract's line from the approach's)
+            r3 = d.force[far3] - np.polyval(line, d.z[far3])
+            wave = math.sqrt(max(float(np.mean(r3 * r3)) - self.sigma**2, 0.0))  # what the line leaves (a wave: A/sqrt2)
+            exc = d.force[idx] - np.polyval(line, d.z[idx])
             if exc.min() < -5.0 * self.sigma - 3.0 * wave:
-                zc0 = min(zc0, float(d.z[sel][int(np.argmin(exc))]))
+                zc0 = min(zc0, float(d.z[idx][int(np.argmin(exc))]))
         far = d.z < zc0 - 0.05 * self.span
         out = {"mask": far, "length": float(zc0 - d.z.min()), "n": int(far.sum()), "rms": None, "split": 0.0,
                "split_se": math.inf}
