@@ -4,7 +4,9 @@ Optical interference in a force curve: part of the laser light reflected by the 
 the photodiode and interferes with the beam reflected by the lever, so the deflection signal
 carries a fringe that repeats every half wavelength of sample travel, F_meas = F + A sin(4 pi z /
 lambda + phi) (e.g. Jaschke and Butt, Rev. Sci. Instrum. 66 (1995) 1258). lambda = 670 nm (a
-red AFM laser diode); A = 0 is the baseline (the cause nests it).
+red AFM laser diode); A = 0 is the baseline (the cause nests it). (The catalog's own
+``optical-interference`` fits the period and uses the tip-sample separation; this user's variant knows its
+laser's wavelength and is keyed ``fringe-670nm``.)
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ WAVELENGTH = 670e-9  # m
 
 
 @CAUSES.register
-class OpticalInterference(Cause):
-    key = "optical-interference"
+class Fringe670(Cause):
+    key = "fringe-670nm"
     kind = "force"
     title = "Optical interference fringe in the deflection signal"
     source = "F_meas = F + A sin(4 pi z / lambda + phi), lambda = 670 nm (Jaschke and Butt 1995)"

@@ -164,12 +164,12 @@ def test_a_complete_model_registers_and_is_found_by_key():
 def interference():
     from probedyn.diagnose.causes import CAUSES
 
-    yield _one_file_model("cause_interference", "OpticalInterference", CAUSES)
-    CAUSES.unregister("optical-interference")
+    yield _one_file_model("cause_interference", "Fringe670", CAUSES)
+    CAUSES.unregister("fringe-670nm")
 
 
 def test_a_diagnose_cause_in_one_file_is_listed_and_found(interference, capsys, tmp_path):
-    """``tests/cause_interference.py`` registers an optical-interference fringe. Hidden in a
+    """``tests/cause_interference.py`` registers a 670 nm laser's interference fringe. Hidden in a
     Hertz force curve (contact registry, tests/diagnose_truth.py, declared sample modulus, noise
     0.1 nN) with A = 5 nN, the diagnosis lists the new cause, names it first, and the extended
     model explains the curve to the stated noise."""
@@ -182,7 +182,7 @@ def test_a_diagnose_cause_in_one_file_is_listed_and_found(interference, capsys, 
     assert main(["diagnose", "--list-causes", "--json"]) == 0
     listed = json.loads(capsys.readouterr().out)
     rows = listed if isinstance(listed, list) else next(v for v in listed.values() if isinstance(v, list))
-    assert "optical-interference" in {r.get("key", r.get("cause")) for r in rows}
+    assert "fringe-670nm" in {r.get("key", r.get("cause")) for r in rows}
 
     path, truth = make_force_case(tmp_path, 7, None, declare_E=True)
     csv = path.with_suffix(".csv")
@@ -194,7 +194,7 @@ def test_a_diagnose_cause_in_one_file_is_listed_and_found(interference, capsys, 
     assert main(["diagnose", str(path), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     f = res["findings"][0]
-    assert f["cause"] == "optical-interference", [x["cause"] for x in res["findings"]]
+    assert f["cause"] == "fringe-670nm", [x["cause"] for x in res["findings"]]
     # with the new cause the model explains the data to the stated noise: chi^2 within 3 standard
     # deviations (sqrt(2 dof)) of its degrees of freedom, while the baseline's is far above. (Over a
     # ~0.3 lambda/2 ramp the fringe's amplitude trades against its phase and the tilted baseline, so
