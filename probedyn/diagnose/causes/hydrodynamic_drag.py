@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 #: the drag law's smallest effective height [m]: it includes the tip height (Alcaraz et al. 2002: 1.6-7 um)
@@ -53,8 +55,6 @@ class HydrodynamicDrag(Cause):
         med = getattr(problem, "declared_medium", None)
         if med is not None and med[0] == 0.0:
             return None  # a declared vacuum: no fluid to drag the lever
-        import numpy as np
-
         far = problem.far
         if far["rms"] is None:
             return None

@@ -40,7 +40,7 @@ class OpticalInterference(Cause):
               "+ a_s sin(2 pi s / P), s the tip-sample separation, P = lambda / 2")
     description = ("A sinusoidal wave in the non-contact baseline, periodic in z with a period of a few hundred nm, "
                    "identical on approach and retract, frozen in contact.")
-    needs = "a non-contact baseline longer than about half the laser's half-wavelength (the wave's period)"
+    needs = "a non-contact baseline at least one period (250 nm) long, before the snap-in and the pull-off"
     changes = ("detector",)
     params = (CauseParam("a_c", "N", -1.0, 1.0, 0.0, "cosine amplitude"),
               CauseParam("a_s", "N", -1.0, 1.0, 0.0, "sine amplitude"),
