@@ -510,7 +510,7 @@ class ForceCurveProblem:
         # also ends before the pull-off and the snap-in (each segment's deepest attraction below the line of
         # its own far third, when it exceeds 5 noise levels and three times the RMS that line leaves above
         # the noise -- a wave's trough is not an attraction; a long-range attraction is not a baseline)
-        for s_ in (0, 1):  # and before the approach's snap-in (its deepest attraction)
+        for s_ in (0, 1):
             idx = np.nonzero(d.segment == s_)[0]
             far3 = idx[np.argsort(d.z[idx])[: max(5, len(idx) // 3)]]  # the segment's own far third and line
             line = np.polyfit(d.z[far3], d.force[far3], 1)  # (a drag offsets the retract's line from the approach's)
