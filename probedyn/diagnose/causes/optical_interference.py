@@ -71,15 +71,16 @@ class OpticalInterference(Cause):
 
     def start_sets_from(self, ref_values):
         """Starts at the three best periods of a least-squares periodogram of the record's far baseline
-        (both segments, the points more than 5 % of the ramp before the reference fit's contact point,
-        where ``s ~ z_c - z``), each with the periodogram's amplitudes; a line in z is fitted with each
-        period (the baseline's offset and tilt)."""
+        (both segments, the points the amplitude bound is taken from, ``problem.far``: before the contact
+        point, the snap-in and the pull-off, where ``s ~ z_c - z`` with the reference fit's contact point),
+        each with the periodogram's amplitudes; a line in z is fitted with each period (the baseline's offset
+        and tilt)."""
         pr = getattr(self, "_problem", None)
         if pr is None:
             return [{"a_c": 0.0, "a_s": 0.0, "period": p} for p in (320e-9, 420e-9, 560e-9)]
         d = pr.data
         zc = float(ref_values.get("z_c", np.median(d.z)))
-        far = d.z < zc - 0.05 * pr.span
+        far = pr.far["mask"]
         if far.sum() < 20:
             return []
         s = zc - d.z[far]
