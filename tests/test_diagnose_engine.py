@@ -53,6 +53,16 @@ def test_nested_never_worse_force_curve(tmp_path):
     assert f < 0.2 * b
 
 
+def test_nested_never_worse_friction_loop_catalog(tmp_path):
+    """Every cause of the friction-loop regime (tests/diagnose_truth_loops.py) nests its baseline."""
+    from diagnose_truth_loops import make_loop_case
+
+    path, _ = make_loop_case(tmp_path, 7000, "surface-slope")
+    prob = make_problem(path)
+    assert [c.key for c in prob.causes] == ["surface-slope"]
+    _nested_never_worse(prob)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("kind", ["modal", "force", "force-timed", "friction"])
 def test_nested_never_worse_whole_catalog(tmp_path, kind):

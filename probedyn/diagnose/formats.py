@@ -66,7 +66,8 @@ FAMILY_ALIASES = {"flap": "flapwise", "flexural": "flapwise", "vertical": "flapw
                   "twist": "torsion", "in-plane": "lateral", "longitudinal": "axial"}
 PROBE_ALIASES = {"E": "youngs_modulus", "rho": "density", "nu": "poisson_ratio"}
 QUANTITIES = ("thickness", "width", "length", "modulus", "density", "mass", "clamp", "stress", "medium",
-              "temperature", "tip_radius", "adhesion", "lattice", "scanner", "detector", "drag")
+              "temperature", "tip_radius", "adhesion", "lattice", "scanner", "detector", "drag",
+              "topography")
 
 TABLES: dict[str, dict[str, tuple[str, ...]]] = {
     "measurement": {"*": ("kind", "data", "description", "source", "licence", "quantity", "averages", "families",
@@ -211,6 +212,7 @@ class FrictionScan:
     force: np.ndarray
     time: np.ndarray
     direction: np.ndarray  # +1 trace (forward), -1 retrace, per sample
+    height: np.ndarray | None = None  # the topography the instrument recorded with each sample [m] (optional)
 
 
 @dataclass
@@ -224,6 +226,9 @@ class FrictionData(Measurement):
     sigma_force: float = 1e-11
     sampling: str = "interval-mean"
     noise_stated: bool = True
+    #: "stick-slip" (samples resolve the lattice: :mod:`..friction`) or "loop" (each sample averages many lattice
+    #: periods: :mod:`..friction_loop`), from the sample spacing and the declared lattice
+    regime: str = "stick-slip"
 
 
 @dataclass

@@ -77,7 +77,7 @@ REGISTRY_MEMORY = 200_000
 
 
 def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionData:
-    d = read_csv(csv, ["scan", "position_m", "lateral_force_N"], ["time_s"])
+    d = read_csv(csv, ["scan", "position_m", "lateral_force_N"], ["time_s", "height_m"])
     lev = meta.get("lever", {})
     k_x = _num(meta, "lever", "k_x", side, positive=True, lo=1e-4, hi=1e4, unit="N/m")
     m_x = _num(meta, "lever", "m_x", side, default=0.0, lo=0.0, hi=1e-3, unit="kg") or None
@@ -147,15 +147,56 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
         f = d["lateral_force_N"][idx]
         if np.max(np.abs(f)) > 1e-3:
             raise col_error(d, "lateral_force_N", idx[int(np.argmax(np.abs(f)))], "force beyond 1 mN: values are SI newtons")
-        scans.append(FrictionScan(sid, sp, ld, x, f, t, direction))
+        h = None
+        if "height_m" in d and not np.any(np.isnan(d["height_m"][idx])):
+            h = d["height_m"][idx]
+            if np.max(np.abs(h)) > 1e-3:
+                raise col_error(d, "height_m", idx[int(np.argmax(np.abs(h)))], "height beyond 1 mm: values are SI metres")
+        scans.append(FrictionScan(sid, sp, ld, x, f, t, direction, h))
     flat = [s.id for s in scans if not np.ptp(s.force) > 0]
     if flat:
         raise DataFormatError(f"{csv}: the data cannot inform the fit: the lateral force of scan {flat[0]} is constant"
                               + (" (all zero)" if not np.any(scans[[s.id for s in scans].index(flat[0])].force) else ""))
+    regime = _regime(scans, lattice, sampling, side)
     if not stated:
         sig = _scatter(scans)
     return FrictionData(**common, scans=scans, k_x=k_x, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice, sigma_force=sig,
-                        sampling=sampling, noise_stated=stated)
+                        sampling=sampling, noise_stated=stated, regime=regime)
+
+
+#: the most support travel between samples, in lattice periods, for a record the stick-slip baseline can be
+#: fitted to: four samples per period resolve a slip's sawtooth (the periodogram's Nyquist limit is two)
+MAX_SAMPLE_STEP = 0.25
+#: the least support travel per sample, in lattice periods, for a friction loop whose samples are the mean
+#: friction of their intervals (:mod:`probedyn.diagnose.friction_loop`): the interval mean of a stick-slip
+#: sawtooth over n periods differs from the steady mean by at most one period's excursion / n (5 %)
+LOOP_MIN_PERIODS = 20.0
+
+
+def _regime(scans, lattice: float, sampling: str, side: Path) -> str:
+    """Which model the record can be diagnosed against, from the sample spacing in lattice periods:
+    ``"stick-slip"`` where the samples resolve the lattice (at most ``MAX_SAMPLE_STEP`` period apart:
+    the Prandtl-Tomlinson baseline and its causes act on the slips, periods and registries);
+    ``"loop"`` where each interval-mean sample averages at least ``LOOP_MIN_PERIODS`` periods (a
+    micrometre image line of a polymer, a Nanosurf or JPK lateral-force channel: the record carries
+    the mean friction of each interval and the topography's crosstalk, :mod:`.friction_loop`).
+    In between, or point samples of an unresolved stick-slip (aliased: each catches the sawtooth at a
+    random phase), the record is refused in one line instead of diagnosed from nothing the model can
+    see."""
+    steps = [float(np.median(np.abs(np.diff(s.position)[np.diff(s.position) != 0]))) for s in scans]
+    worst = int(np.argmax(steps))
+    per = steps[worst] / lattice
+    if per <= MAX_SAMPLE_STEP:
+        return "stick-slip"
+    if per >= LOOP_MIN_PERIODS and sampling == "interval-mean" and min(steps) / lattice >= LOOP_MIN_PERIODS:
+        return "loop"
+    why = ("point samples of an unresolved stick-slip are aliased (declare sampling = \"interval-mean\" if the "
+           "instrument averages each interval)" if sampling == "point" and per >= LOOP_MIN_PERIODS else
+           f"resolving the stick-slip needs at most {MAX_SAMPLE_STEP:g} period between samples, a friction loop of "
+           f"interval means at least {LOOP_MIN_PERIODS:g}")
+    raise DataFormatError(
+        f"{side}: scan {scans[worst].id}: the samples are {steps[worst]:.3g} m apart, {per:.3g} lattice periods "
+        f"([sample] lattice = {lattice:.3g} m): {why}")
 
 
 def _scatter(scans) -> float:
@@ -771,6 +812,8 @@ class FrictionProblem:
         self.extension_vs_model_error = True
         self.causes = []
         for cls in catalog("friction"):
+            if cls.regimes and "stick-slip" not in cls.regimes:
+                continue
             c = cls().constrain(self)
             if c is not None:
                 self.causes.append(c)

@@ -21,6 +21,10 @@ def make_problem(meas: str | Path | Measurement):
         from probedyn.diagnose.spectrum import spectrum_problem
 
         return spectrum_problem(meas)
+    if meas.kind == "friction" and getattr(meas, "regime", "stick-slip") == "loop":
+        from probedyn.diagnose.friction_loop import FrictionLoopProblem
+
+        return FrictionLoopProblem(meas)
     if meas.kind == "friction":
         from probedyn.diagnose.friction import FrictionProblem
 

@@ -97,6 +97,9 @@ class Cause:
     needs: ClassVar[str] = ""  # which data make it identifiable
     params: ClassVar[tuple[CauseParam, ...]] = ()
     changes: ClassVar[tuple[str, ...]] = ()
+    #: friction: the regimes of the record the cause applies to (``"stick-slip"``: samples resolve the lattice;
+    #: ``"loop"``: each sample averages many periods, :mod:`probedyn.diagnose.friction_loop`); empty: stick-slip
+    regimes: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, params: tuple[CauseParam, ...] | None = None, note: str = "") -> None:
         # a problem may narrow the parameters (declared conditions); the class stays untouched

@@ -1,0 +1,339 @@
+"""Friction loops at the mesoscale: lateral-force lines whose samples each average many lattice periods.
+
+An image line of a lateral-force (friction) channel -- micrometres of travel, one sample per ~0.1 um,
+trace and retrace -- does not resolve the atomic stick-slip of :mod:`.friction`: every sample is the
+mean lateral force over its interval, i.e. over hundreds of lattice periods. What such a record
+carries is the mean (kinetic) friction of each direction, and whatever else the lateral channel
+records along the line.
+
+Baseline: probedyn's FFM line-scan model (:mod:`probedyn.schemes.ffm`, the registry friction model
+``pt`` with ``U0 = u0 N`` at the declared lattice, the lever of the sidecar) run to its steady
+stick-slip cycle at each scan's speed and load; its mean lateral force ``F_k(u0; v, N)`` is the
+friction of every sample, with the sign of the scan direction ``d`` (+1 trace, -1 retrace), plus the
+lateral channel's zero (an uncalibrated offset, always present in a lateral-force signal):
+``F = d F_k + offset``. The reversal transient (the tip sticks while the support runs back through
+``2 F_k / k_x``, sub-nanometre for the levers of such images) is far below one sample's interval and
+is not modelled. Fitted: ``u0`` and ``offset``. Cross-validation groups: the trace and the retrace
+of each scan.
+
+Causes for this regime declare ``regimes = ("loop",)`` (:mod:`.causes.surface_slope`: the load's
+component along a sloped surface, which needs the recorded topography, column ``height_m``).
+The model state is :class:`LoopState`; the sample's surface slope is ``dh/dx`` of the mean of the heights
+the instrument recorded in trace and retrace (:func:`segment_slopes`: the feedback's lag cancels).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from probedyn.core.errors import ProbedynError
+from probedyn.diagnose.causes import CauseParam, catalog
+from probedyn.diagnose.formats import FrictionData
+from probedyn.diagnose.friction import RTOL, _ffm, _scatter
+from probedyn.schemes.ffm import line_scan_path
+
+__all__ = ["FrictionLoopProblem", "LoopState", "steady_friction", "slope_force"]
+
+#: lattice periods of the steady-friction integration: the first STEADY_PERIODS[0] are the entry transient,
+#: the mean is taken over the rest (whole periods: the stick-slip cycle's mean)
+STEADY_PERIODS = (8, 24)
+#: the smallest ``1 - d mu c t`` the slope law is evaluated at (the tip locks where it reaches 0: a slope
+#: steeper than the friction cone)
+LOCK_MARGIN = 0.05
+
+
+@dataclass
+class LoopState:
+    u0: float  # corrugation per unit load of the PT substrate [J/N]
+    offset: float  # the lateral channel's zero [N]
+    slope_c: float = 0.0  # coupling of the surface slope (surface-slope cause; 0: none)
+    transforms: list = field(default_factory=list)  # f(problem, F) -> F, applied last
+
+
+def steady_friction(data: FrictionData, u0: float, a: float, v: float, N: float) -> float:
+    """Mean lateral force of probedyn's FFM (PT substrate ``U0 = u0 N``, period ``a``, the sidecar's
+    lever) sliding at speed ``v`` on its steady stick-slip cycle [N] (positive: against the motion)."""
+    n0, n1 = STEADY_PERIODS
+    ffm = _ffm(data, u0 * max(N, 0.0), a, 0.0)
+    res = line_scan_path(ffm, [0.0, n1 * a], speed=v, y0=(0.0, 0.0, 0.0), hmax=0.02 * a / v, rtol=RTOL,
+                         atol_rel=RTOL, atol_v=100.0 * v)
+    b, F = res.base, res.lateral_force
+    sel = b >= n0 * a
+    b, F = b[sel], F[sel]
+    return float(np.sum(0.5 * (F[1:] + F[:-1]) * np.diff(b)) / max(b[-1] - b[0], 1e-300))
+
+
+def slope_force(Fk, N, d, t, c: float = 1.0):
+    """Lateral force of a tip sliding on a surface of slope ``t = dh/dx`` under the vertical load ``N``
+    with friction ``F_k = mu N`` in direction ``d`` (Ogletree, Carpick & Salmeron 1996, eqs 2-3, the
+    horizontal force balance of a tip on an incline): ``F = (c N t + d F_k) / (1 - d mu c t)``; ``c``
+    scales the slope (1: the load's full component). ``c = 0`` is the flat-surface loop ``d F_k``."""
+    ct = c * np.asarray(t, float)
+    den = np.maximum(1.0 - d * (Fk / N) * ct, LOCK_MARGIN)
+    return (N * ct + d * Fk) / den
+
+
+#: a height component is kept in the surface where its power exceeds the height noise's this many times
+SLOPE_SNR = 4.0
+#: ... up to the first run of this many neighbouring frequencies below that (the 5-frequency average of a white
+#: noise exceeds 4 times its mean with probability 1e-4 per frequency: over hundreds, a lone one does)
+QUIET_BINS = 10
+
+
+def _height_noise(h: np.ndarray) -> float:
+    """White-noise level of a height record: the robust (MAD) spread of its second differences over sqrt(6)."""
+    r = np.diff(h, 2)
+    return float(1.4826 * np.median(np.abs(r - np.median(r))) / np.sqrt(6.0)) if len(r) else 0.0
+
+
+def low_pass_surface(grid: np.ndarray, h: np.ndarray, noise: float) -> np.ndarray:
+    """The surface's components above its noise: the heights (line removed) mirrored to an even sequence,
+    Fourier-transformed, and every component dropped from the first ``QUIET_BINS`` frequencies in a row whose
+    power (averaged over five neighbours) stays below ``SLOPE_SNR`` times the noise's. Keeping a band of frequencies
+    is a projection: the slope it gives correlates with the true slope exactly as much as it varies, so a
+    regression on it stays unbiased (the raw slope's noise would attenuate it, errors in variables)."""
+    m = len(h)
+    if m < 8 or noise <= 0:
+        return h
+    line = np.polyval(np.polyfit(grid, h, 1), grid)
+    e = np.concatenate([h - line, (h - line)[::-1]])
+    X = np.fft.rfft(e)
+    P = np.convolve(np.abs(X) ** 2, np.ones(5) / 5.0, mode="same")
+    below = P <= SLOPE_SNR * len(e) * noise**2
+    # the band ends where QUIET_BINS frequencies in a row stay below it (a lone noise bin beyond is not signal)
+    run = np.convolve(below.astype(int), np.ones(QUIET_BINS, int), mode="valid")
+    quiet = np.nonzero(run == QUIET_BINS)[0]
+    kc = int(quiet[0]) - 1 if len(quiet) else len(X) - 1
+    X[kc + 1:] = 0.0
+    return line + np.fft.irfft(X, len(e))[:m]
+
+
+def segment_slopes(scan) -> np.ndarray | None:
+    """The surface slope ``dh/dx`` at every sample (``None`` without a height column). The surface is
+    the mean of the heights the scan recorded in each direction at the same position: the feedback's
+    lag shifts the trace's topography forward and the retrace's backward (on the real Nanosurf lines
+    the two differ by 13 nm RMS), and their mean cancels that shift to first order; a scan recorded in
+    one direction only uses its own heights. The mean surface is low-passed above its noise
+    (:func:`low_pass_surface`; the noise from the heights' second differences) before it is
+    differentiated on a uniform grid."""
+    if scan.height is None:
+        return None
+    x, h, d = scan.position, scan.height, scan.direction
+    grid = np.linspace(float(x.min()), float(x.max()), len(np.unique(x)))
+    curves, noise = [], []
+    for sgn in (1.0, -1.0):
+        sel = d == sgn
+        if sel.sum() >= 3:
+            o = np.argsort(x[sel], kind="stable")
+            xs, hs = x[sel][o], h[sel][o]
+            u, inv = np.unique(xs, return_inverse=True)
+            hm = np.bincount(inv, hs) / np.bincount(inv)  # repeated positions (several segments): their mean
+            curves.append(np.interp(grid, u, hm))
+            noise.append(_height_noise(hm))
+    if not curves or len(grid) < 3:
+        return np.zeros(len(x))
+    surface = low_pass_surface(grid, np.mean(curves, axis=0), float(np.sqrt(np.mean(np.square(noise)) / len(curves))))
+    return np.interp(x, grid, np.gradient(surface, grid))
+
+
+class FrictionLoopProblem:
+    kind = "friction"
+    unit = "N"
+    reduced = False
+    regime = "loop"
+
+    def __init__(self, data: FrictionData) -> None:
+        self.data = data
+        self.path = data.path
+        self.known = set(data.known) | set(data.free)
+        self.declared_medium = data.medium
+        self.medium_name = data.medium_name
+        sc = data.scans
+        self.speeds = np.array([s.speed for s in sc])
+        self.loads = np.array([s.load for s in sc])
+        self.sigma_scatter = _scatter(sc)
+        self.sigma = data.sigma_force if data.sigma_force > 0 else max(self.sigma_scatter, 1e-15)
+        self.force = np.concatenate([s.force for s in sc])
+        self.n = len(self.force)
+        self.direction = np.concatenate([s.direction for s in sc]).astype(float)
+        self.load_of = np.concatenate([np.full(len(s.force), s.load) for s in sc])
+        slopes = [segment_slopes(s) for s in sc]
+        self.slopes = np.concatenate(slopes) if all(t is not None for t in slopes) else None
+        self.slices, gid, labels, pos = [], [], [], 0
+        for i, s in enumerate(sc):
+            self.slices.append(slice(pos, pos + len(s.force)))
+            pos += len(s.force)
+            cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+            seg_id = np.zeros(len(s.force), int)
+            for j, c in enumerate(cuts):
+                seg_id[c:] = j + 1
+            gid.append(1000 * i + seg_id)
+            for j in range(len(cuts) + 1):
+                labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
+        self.groups = np.concatenate(gid)
+        self.group_labels = labels
+        # the loop read as recorded: half the trace-retrace difference is the friction, their mean the zero
+        fwd = self.direction > 0
+        half = 0.5 * (self.force[fwd].mean() - self.force[~fwd].mean()) if fwd.any() and (~fwd).any() else 0.0
+        zero = 0.5 * (self.force[fwd].mean() + self.force[~fwd].mean()) if fwd.any() and (~fwd).any() else 0.0
+        self.half_loop = float(half)
+        a, k = data.lattice, data.k_x
+        N = float(np.mean(self.loads))
+        # corrugation: from eta = 1 (the PT threshold of stick-slip: no friction below it at low speed) up;
+        # start where the PT's peak force 2 pi U0 / a is the recorded half loop (F_k < F0) and twice that
+        u_eta1 = k * a * a / (4 * math.pi**2) / N
+        u_half = max(abs(half), 1e-15) * a / (2 * math.pi) / N
+        u_lo, u_hi = u_eta1 * 1.0001, max(u_eta1, u_half) * 1e3
+        u_st = tuple(x for x in (1.2 * u_half, 2.0 * u_half, 1.5 * u_eta1) if u_lo < x < u_hi)
+        span = max(float(np.ptp(self.force)), 10.0 * self.sigma)
+        self.base_params = [
+            CauseParam("u0", "J/N", u_lo, u_hi, u_st[0] if u_st else 2.0 * u_lo,
+                       "corrugation U0 per unit load (sets the FFM's mean friction)", scale="log", starts=u_st[1:]),
+            CauseParam("offset", "N", zero - span, zero + span, float(zero), "the lateral channel's zero"),
+        ]
+        self._fk: dict = {}
+        self.train_mask = None
+        self.fixed_nuisance = None
+        self.nfev_per_param = 40
+        self.max_starts = 4
+        self.diff_step = 1e-4
+        self.causes = []
+        self.not_offered = {}
+        for cls in catalog("friction"):
+            if "loop" not in cls.regimes:
+                continue
+            c = cls().constrain(self)
+            if c is not None:
+                self.causes.append(c)
+            elif getattr(cls, "requires", None):
+                self.not_offered[cls.key] = f"needs {cls.requires}"
+
+    def supports(self, what: str) -> bool:
+        return True
+
+    def nested_starts(self, ref_values: dict, ref_causes: tuple, new: tuple, mask=None) -> list[dict]:
+        """Data-derived starts: each new cause's ``data_starts(problem, ref_values)`` (the slope coupling
+        from the regression of the reference fit's residual on ``N t``)."""
+        newp = [p for c in new for p in c.params]
+        bounds = {p.name: (p.lo, p.hi) for p in list(self.base_params) + newp}
+        base = {**ref_values, **{p.name: p.null for p in newp}}
+        out = []
+        for c in new:
+            fn = getattr(c, "data_starts", None)
+            for st in (fn(self, dict(ref_values), tuple(ref_causes)) if fn is not None else []):
+                v = dict(base)
+                for name, x in st.items():
+                    if name in bounds and np.isfinite(x):
+                        v[name] = min(max(float(x), bounds[name][0]), bounds[name][1])
+                out.append(v)
+        return out
+
+    # -- model --------------------------------------------------------------------------------
+    def state(self, values, causes=()) -> LoopState:
+        st = LoopState(u0=values["u0"], offset=values["offset"])
+        for c in causes:
+            c.effect(values, st)
+        return st
+
+    def friction(self, u0: float) -> np.ndarray:
+        """The FFM's steady friction ``F_k`` at every sample (its scan's speed and load; memoised)."""
+        out = np.empty(self.n)
+        for i, s in enumerate(self.data.scans):
+            key = (float(u0), float(s.speed), float(s.load))
+            if key not in self._fk:
+                if len(self._fk) > 20000:
+                    self._fk.clear()
+                self._fk[key] = steady_friction(self.data, u0, self.data.lattice, s.speed, s.load)
+            out[self.slices[i]] = self._fk[key]
+        return out
+
+    def predict(self, values, causes=()) -> np.ndarray:
+        st = self.state(values, causes)
+        Fk = self.friction(st.u0)
+        if st.slope_c != 0.0 and self.slopes is not None:
+            F = slope_force(Fk, self.load_of, self.direction, self.slopes, st.slope_c)
+        else:
+            F = self.direction * Fk
+        F = F + st.offset
+        for tf in st.transforms:
+            F = tf(self, F)
+        return F
+
+    def residuals(self, values, causes=()) -> np.ndarray:
+        try:
+            m = self.predict(values, causes)
+        except (ProbedynError, FloatingPointError, ValueError):
+            return np.full(self.n, 1e6)
+        return (self.force - m) / self.sigma
+
+    def physical_rms(self, r) -> float:
+        return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
+
+    # -- structure ----------------------------------------------------------------------------
+    def structure(self, r: np.ndarray) -> dict[str, Any]:
+        """Per scan: the residual's mean, RMS and lag-1 autocorrelation, the half loop (friction) and,
+        with heights, the correlation of the loop's mean ``(trace + retrace) / 2`` residual with the slope."""
+        r = np.asarray(r)
+        out: dict[str, Any] = {"scans": []}
+        for i, s in enumerate(self.data.scans):
+            rr = r[self.slices[i]]
+            rc = rr - rr.mean()
+            den = float(np.sum(rc**2)) or 1.0
+            row = {"scan": s.id, "speed": s.speed, "load": s.load, "mean_residual_sigma": float(rr.mean()),
+                   "rms_sigma": float(np.sqrt(np.mean(rr**2))), "lag1_autocorr": float(np.sum(rc[:-1] * rc[1:]) / den)}
+            fwd = s.direction > 0
+            if fwd.any() and (~fwd).any():
+                row["friction_half_loop_N"] = float(0.5 * (s.force[fwd].mean() - s.force[~fwd].mean()))
+            if self.slopes is not None:
+                t = self.slopes[self.slices[i]]
+                if np.ptp(t) > 0 and np.ptp(rr) > 0:
+                    row["residual_slope_correlation"] = float(np.corrcoef(rr, t)[0, 1])
+            out["scans"].append(row)
+        return out
+
+    def predict_observables(self, values, causes) -> list[dict[str, Any]]:
+        """Measurements the fitted model predicts: the loop's slope response ``dF/dt`` (the mean of trace
+        and retrace per unit slope: ``c N``, the calibration check) and the mean friction (half loop) at
+        twice and at half the highest load -- the half loop's growth with the load is ``g mu``, its
+        intercept ``g mu A`` (the adhesion the slope coupling does not see, :mod:`.causes.surface_slope`)."""
+        st = self.state(values, causes)
+        s = self.data.scans[int(np.argmax(self.loads))]
+        out = []
+        for label, fl in (("at twice the highest load", 2.0), ("at half the highest load", 0.5)):
+            N = s.load * fl
+            try:
+                Fk = steady_friction(self.data, st.u0, self.data.lattice, s.speed, N)
+            except ProbedynError:
+                continue
+            dt = 1e-3
+            resp = 0.5 * (slope_force(Fk, N, 1.0, dt, st.slope_c) + slope_force(Fk, N, -1.0, dt, st.slope_c)
+                          - slope_force(Fk, N, 1.0, 0.0, st.slope_c) - slope_force(Fk, N, -1.0, 0.0, st.slope_c)) / dt
+            out.append({"measure": f"loop mean per unit surface slope {label}", "value": float(resp),
+                        "sigma": self.sigma / max(float(np.std(self.slopes)) if self.slopes is not None else 0.0, 1e-3)
+                        / math.sqrt(self.n), "unit": "N"})
+            out.append({"measure": f"mean friction (half loop) {label}", "value": float(Fk),
+                        "sigma": self.sigma / math.sqrt(self.n), "unit": "N"})
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        d = self.data
+        step = float(np.median([np.median(np.abs(np.diff(s.position))) for s in d.scans]))
+        return {"kind": "friction", "regime": "loop", "scans": len(d.scans), "samples": self.n,
+                "speeds_m_s": sorted(set(self.speeds.tolist())), "loads_N": sorted(set(self.loads.tolist())),
+                "k_x_N_per_m": d.k_x, "sigma_force_N": self.sigma, "noise_stated": d.noise_stated,
+                "sigma_scatter_N": self.sigma_scatter, "sampling": d.sampling, "sample_step_m": step,
+                "lattice_periods_per_sample": step / d.lattice, "height_column": self.slopes is not None,
+                "friction_half_loop_N": self.half_loop, "medium": d.medium_name or "not declared",
+                "causes_not_offered": dict(self.not_offered)}
+
+    def model_description(self) -> dict[str, Any]:
+        cp = _ffm(self.data, 1e-21, self.data.lattice, 0.0).cantilever
+        return {"baseline": "friction loop of interval means: the FFM line-scan model (schemes/ffm.py, eqs 2.13-2.15, "
+                            "registry friction 'pt', U0 = u0 N at the declared lattice) on its steady stick-slip cycle at "
+                            "each scan's speed and load gives the mean friction F_k; sample = d F_k + offset",
+                "lever": {"k_x": cp["k_x"], "m_x": cp["m_x"], "c_x": cp["c_x"]}, "lattice_m": self.data.lattice,
+                "sampling": self.data.sampling}

@@ -1,0 +1,104 @@
+"""Independent truth for mesoscale friction loops (:mod:`probedyn.diagnose.friction_loop`).
+
+A tip slides with Coulomb friction ``mu`` on a polymer-like surface (islands of a second phase as
+Gaussian-edged plateaus of 5-60 nm height; a flat, tilted surface for the noise-only cases), under the
+vertical load ``L`` the feedback holds plus an adhesion ``A`` along the surface normal. The lateral force
+is the tip's **force balance on the incline solved as a 2 x 2 linear system** at 8 points per sample
+interval and averaged (interval means), its own code path: no use of probedyn's slope law or FFM. The
+lateral channel reads ``g`` times the force plus a zero offset and white noise; the height channel
+records the surface shifted by the feedback's lag (forward in the trace, backward in the retrace) plus
+noise. Optional friction contrast: the islands' friction coefficient differs by a factor 0.6-1.5.
+
+Hidden effect ``surface-slope``: the islands (the expected coupling is ``c = g``, the calibration
+factor; to first order, :mod:`probedyn.diagnose.causes.surface_slope`). Noise-only: a flat surface
+tilted by up to 1 %, the same plane under every line (a constant slope is an offset), heights recorded
+with their noise.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _surface(rng, x, flat: bool, tilt: float):
+    """Heights [m] and the island indicator (0..1) at positions x (the sample's plane tilted by ``tilt``:
+    the same for every line)."""
+    if flat:
+        return tilt * (x - x.mean()), np.zeros_like(x)
+    L = float(np.ptp(x))
+    ind = np.zeros_like(x)
+    for _ in range(rng.integers(3, 9)):
+        c, w, e = rng.uniform(0, L), rng.uniform(0.3e-6, 2.5e-6), rng.uniform(0.15e-6, 0.6e-6)
+        ind = np.maximum(ind, 0.5 * (np.tanh((x - x[0] - c + w / 2) / e) - np.tanh((x - x[0] - c - w / 2) / e)))
+    return tilt * (x - x.mean()) + rng.uniform(5e-9, 60e-9) * ind, ind
+
+
+def _balance(L, A, mu, d, theta):
+    """Horizontal force of the lever on the tip: solve the tip's equilibrium on an incline of angle theta
+    for (F_x, R), R the repulsion along the normal n = (-sin, cos), friction mu R against the motion d."""
+    s, c = np.sin(theta), np.cos(theta)
+    n = len(theta)
+    M = np.zeros((n, 2, 2))
+    b = np.zeros((n, 2))
+    # x: F_x + A s - R s - mu R d c = 0 ;  z: -L - A c + R c - mu R d s = 0
+    M[:, 0, 0] = 1.0
+    M[:, 0, 1] = -s - mu * d * c
+    b[:, 0] = -A * s
+    M[:, 1, 1] = c - mu * d * s
+    b[:, 1] = L + A * c
+    return np.linalg.solve(M, b[..., None])[:, 0, 0]
+
+
+def make_loop_case(folder: Path, seed: int, effect: str | None) -> tuple[Path, dict]:
+    rng = np.random.default_rng([seed, 23])
+    n_scans = int(rng.integers(1, 4))
+    n = int(rng.choice([128, 256, 512]))
+    length = rng.uniform(5e-6, 25e-6)
+    speed = 10 ** rng.uniform(np.log10(2e-6), np.log10(2e-5))
+    k_x = 10 ** rng.uniform(np.log10(5.0), np.log10(50.0))
+    L = rng.uniform(5e-9, 50e-9)
+    mu0 = rng.uniform(0.1, 0.6)
+    A = rng.uniform(0.0, 0.5) * L
+    g = rng.uniform(0.7, 1.4) if rng.random() < 0.5 else 1.0
+    contrast = rng.uniform(0.6, 1.5) if rng.random() < 0.5 else 1.0
+    sigma = rng.uniform(0.01, 0.05) * mu0 * (L + A)
+    h_noise = rng.uniform(0.05e-9, 0.5e-9)
+    lag = int(rng.integers(0, 3))
+    zero = rng.uniform(-50e-9, 50e-9)
+    x = np.linspace(0.0, length, n)
+    dx = x[1] - x[0]
+    sub = (np.arange(8) + 0.5) / 8 - 0.5
+    rows = []
+    flat = effect is None
+    tilt = rng.uniform(-0.01, 0.01)
+    for sid in range(1, n_scans + 1):
+        xs = (x[:, None] + sub[None, :] * dx).ravel()
+        h_true, ind = _surface(rng, np.concatenate([x, xs]), flat, tilt)
+        h_pts, h_sub, ind_sub = h_true[:n], h_true[n:], ind[n:]
+        theta = np.arctan(np.gradient(h_sub, xs))
+        mu = mu0 * (1.0 + (contrast - 1.0) * ind_sub)
+        for d in (1.0, -1.0):
+            F = _balance(L, A, mu, d, theta).reshape(n, 8).mean(axis=1)
+            sig = g * F + zero + sigma * rng.standard_normal(n)
+            hrec = np.roll(h_pts, int(d) * lag)
+            if lag:
+                hrec[:lag] = h_pts[:lag] if d > 0 else hrec[:lag]
+                hrec[-lag:] = h_pts[-lag:] if d < 0 else hrec[-lag:]
+            hrec = hrec + h_noise * rng.standard_normal(n)
+            order = range(n) if d > 0 else range(n - 1, -1, -1)
+            rows += [(sid, x[j], sig[j], hrec[j]) for j in order]
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    name = f"loop_{seed}"
+    with open(folder / f"{name}.csv", "w") as fh:
+        fh.write("scan,position_m,lateral_force_N,height_m\n")
+        fh.writelines(f"{s},{xx:.9e},{f:.9e},{h:.9e}\n" for s, xx, f, h in rows)
+    scans = "".join(f"[[scans]]\nid = {s}\nspeed = {speed:.6e}\nload = {L:.6e}\n" for s in range(1, n_scans + 1))
+    (folder / f"{name}.toml").write_text(
+        f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "interval-mean"\n'
+        f"[lever]\nk_x = {k_x:.6g}\n[medium]\nname = \"air\"\n{scans}")
+    truth = {"effect": effect, "params": {"c_slope": g} if effect else {}, "g": g, "mu": mu0, "A": A, "L": L,
+             "contrast": contrast, "sigma": sigma, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
+    return folder / f"{name}.toml", truth
