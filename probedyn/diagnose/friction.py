@@ -693,6 +693,40 @@ def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
     return num / den if den >= 3 else a_est
 
 
+def scan_groups(scans) -> tuple[list[slice], np.ndarray, list[str]]:
+    """Each scan's slice of the concatenated samples, the cross-validation group of every sample (one
+    per monotone segment: the trace and the retrace of each scan) and the groups' labels."""
+    slices, gid, labels, pos = [], [], [], 0
+    for i, s in enumerate(scans):
+        slices.append(slice(pos, pos + len(s.force)))
+        pos += len(s.force)
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        seg_id = np.zeros(len(s.force), int)
+        for j, c in enumerate(cuts):
+            seg_id[c:] = j + 1
+        gid.append(1000 * i + seg_id)
+        for j in range(len(cuts) + 1):
+            labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
+    return slices, np.concatenate(gid), labels
+
+
+def clipped_starts(base_params, ref_values: dict, new: tuple, starts_of) -> list[dict]:
+    """The data-derived starts ``starts_of(cause)`` of the new causes as full value dicts: the reference
+    fit's values, the new parameters at their nulls, each start's values clipped into their bounds."""
+    newp = [p for c in new for p in c.params]
+    bounds = {p.name: (p.lo, p.hi) for p in list(base_params) + newp}
+    base = {**ref_values, **{p.name: p.null for p in newp}}
+    out = []
+    for c in new:
+        for st in starts_of(c):
+            v = dict(base)
+            for name, x in st.items():
+                if name in bounds and np.isfinite(x):
+                    v[name] = min(max(float(x), bounds[name][0]), bounds[name][1])
+            out.append(v)
+    return out
+
+
 class FrictionProblem:
     kind = "friction"
     unit = "N"
@@ -720,18 +754,7 @@ class FrictionProblem:
         self.force = np.concatenate([s.force for s in sc])
         self.n = len(self.force)
         self.model_var = np.zeros(self.n)  # the model's own variance per sample (set by predict)
-        gid, labels, pos = [], [], 0
-        self.slices = []
-        for i, s in enumerate(sc):
-            self.slices.append(slice(pos, pos + len(s.force)))
-            pos += len(s.force)
-            cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
-            seg_id = np.zeros(len(s.force), int)
-            for j, c in enumerate(cuts):
-                seg_id[c:] = j + 1
-            gid.append(1000 * i + seg_id)
-            for j in range(len(cuts) + 1):
-                labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
+        self.slices, gid, labels = scan_groups(sc)
         self.a_est = _period_estimate(data)
         # the samples within START_PERIODS lattice periods of a scan's start depend on the unrecorded
         # history before it (where the tip sat when the scan began): they are not used
@@ -751,7 +774,7 @@ class FrictionProblem:
             self.first_slip.append(i_s)
             use.append(u)
         self.use = np.concatenate(use)
-        self.groups = np.concatenate(gid)[self.use]
+        self.groups = gid[self.use]
         self.group_labels = labels
         N = float(np.mean(self.loads))
         self.a_slip = _slip_period(data, self.a_est, self.sigma)
@@ -829,19 +852,8 @@ class FrictionProblem:
         start a factor of 1.9 is not found (the baseline's corrugation has absorbed it)."""
         if self.loop is None:
             return []
-        newp = [p for c in new for p in c.params]
-        bounds = {p.name: (p.lo, p.hi) for p in list(self.base_params) + newp}
-        base = {**ref_values, **{p.name: p.null for p in newp}}
-        out = []
-        for c in new:
-            fn = getattr(c, "data_starts", None)
-            for st in (fn(self, dict(ref_values)) if fn is not None else []):
-                v = dict(base)
-                for name, x in st.items():
-                    if name in bounds and np.isfinite(x):
-                        v[name] = min(max(float(x), bounds[name][0]), bounds[name][1])
-                out.append(v)
-        return out
+        return clipped_starts(self.base_params, ref_values, new,
+                              lambda c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [])
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:

@@ -33,7 +33,7 @@ import numpy as np
 from probedyn.core.errors import ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData
-from probedyn.diagnose.friction import RTOL, _ffm, _scatter
+from probedyn.diagnose.friction import RTOL, _ffm, _scatter, clipped_starts, scan_groups
 from probedyn.schemes.ffm import line_scan_path
 
 __all__ = ["FrictionLoopProblem", "LoopState", "steady_friction", "slope_force"]
@@ -163,18 +163,7 @@ class FrictionLoopProblem:
         self.load_of = np.concatenate([np.full(len(s.force), s.load) for s in sc])
         slopes = [segment_slopes(s) for s in sc]
         self.slopes = np.concatenate(slopes) if all(t is not None for t in slopes) else None
-        self.slices, gid, labels, pos = [], [], [], 0
-        for i, s in enumerate(sc):
-            self.slices.append(slice(pos, pos + len(s.force)))
-            pos += len(s.force)
-            cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
-            seg_id = np.zeros(len(s.force), int)
-            for j, c in enumerate(cuts):
-                seg_id[c:] = j + 1
-            gid.append(1000 * i + seg_id)
-            for j in range(len(cuts) + 1):
-                labels.append(f"scan {s.id} {'trace' if (s.direction[0] > 0) == (j % 2 == 0) else 'retrace'}")
-        self.groups = np.concatenate(gid)
+        self.slices, self.groups, labels = scan_groups(sc)
         self.group_labels = labels
         # the loop read as recorded: half the trace-retrace difference is the friction, their mean the zero
         fwd = self.direction > 0
@@ -218,19 +207,9 @@ class FrictionLoopProblem:
     def nested_starts(self, ref_values: dict, ref_causes: tuple, new: tuple, mask=None) -> list[dict]:
         """Data-derived starts: each new cause's ``data_starts(problem, ref_values)`` (the slope coupling
         from the regression of the reference fit's residual on ``N t``)."""
-        newp = [p for c in new for p in c.params]
-        bounds = {p.name: (p.lo, p.hi) for p in list(self.base_params) + newp}
-        base = {**ref_values, **{p.name: p.null for p in newp}}
-        out = []
-        for c in new:
-            fn = getattr(c, "data_starts", None)
-            for st in (fn(self, dict(ref_values), tuple(ref_causes)) if fn is not None else []):
-                v = dict(base)
-                for name, x in st.items():
-                    if name in bounds and np.isfinite(x):
-                        v[name] = min(max(float(x), bounds[name][0]), bounds[name][1])
-                out.append(v)
-        return out
+        return clipped_starts(self.base_params, ref_values, new,
+                              lambda c: c.data_starts(self, dict(ref_values), tuple(ref_causes))
+                              if hasattr(c, "data_starts") else [])
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> LoopState:
