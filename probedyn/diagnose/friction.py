@@ -693,6 +693,18 @@ def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
     return num / den if den >= 3 else a_est
 
 
+def bind_scans(problem, data: FrictionData) -> None:
+    """What every friction problem keeps of its measurement: the data, its path, the quantities declared
+    known or free, the declared medium, and each scan's speed and load."""
+    problem.data = data
+    problem.path = data.path
+    problem.known = set(data.known) | set(data.free)
+    problem.declared_medium = data.medium
+    problem.medium_name = data.medium_name
+    problem.speeds = np.array([s.speed for s in data.scans])
+    problem.loads = np.array([s.load for s in data.scans])
+
+
 def scan_groups(scans) -> tuple[list[slice], np.ndarray, list[str]]:
     """Each scan's slice of the concatenated samples, the cross-validation group of every sample (one
     per monotone segment: the trace and the retrace of each scan) and the groups' labels."""
@@ -733,14 +745,8 @@ class FrictionProblem:
     reduced = False
 
     def __init__(self, data: FrictionData) -> None:
-        self.data = data
-        self.path = data.path
-        self.known = set(data.known) | set(data.free)
-        self.declared_medium = data.medium
-        self.medium_name = data.medium_name
+        bind_scans(self, data)
         sc = data.scans
-        self.speeds = np.array([s.speed for s in sc])
-        self.loads = np.array([s.load for s in sc])
         self.sigma = data.sigma_force if data.sigma_force > 0 else 1e-12
         # a thermal trace carries, besides the detector's white noise, the tip's thermal motion (and
         # stochastic slips): the sample-to-sample scatter of the data (second differences, robust to the

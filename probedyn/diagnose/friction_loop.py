@@ -33,7 +33,7 @@ import numpy as np
 from probedyn.core.errors import ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData
-from probedyn.diagnose.friction import RTOL, _ffm, _scatter, clipped_starts, scan_groups
+from probedyn.diagnose.friction import RTOL, _ffm, _scatter, bind_scans, clipped_starts, scan_groups
 from probedyn.schemes.ffm import line_scan_path
 
 __all__ = ["FrictionLoopProblem", "LoopState", "steady_friction", "slope_force"]
@@ -147,14 +147,8 @@ class FrictionLoopProblem:
     regime = "loop"
 
     def __init__(self, data: FrictionData) -> None:
-        self.data = data
-        self.path = data.path
-        self.known = set(data.known) | set(data.free)
-        self.declared_medium = data.medium
-        self.medium_name = data.medium_name
+        bind_scans(self, data)
         sc = data.scans
-        self.speeds = np.array([s.speed for s in sc])
-        self.loads = np.array([s.load for s in sc])
         self.sigma_scatter = _scatter(sc)
         self.sigma = data.sigma_force if data.sigma_force > 0 else max(self.sigma_scatter, 1e-15)
         self.force = np.concatenate([s.force for s in sc])
