@@ -77,7 +77,22 @@ def _as_recorded(Fm, noise: float, k: float, rng):
         return fmt, sens, Fm / k, f"deflection = {noise / k!r}"
     return fmt, sens, Fm, f"force = {noise!r}"
 
-def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300) -> tuple[Path, dict]:
+def correlated(e: np.ndarray, rho: float) -> np.ndarray:
+    """AR(1) noise of unit marginal variance and lag-one correlation ``rho`` from the white draws ``e`` (one
+    chain in recording order: ``x_0 = e_0``, ``x_i = rho x_(i-1) + sqrt(1 - rho^2) e_i``); ``rho = 0``
+    returns ``e`` itself (the white cases' stream is unchanged)."""
+    if rho == 0.0:
+        return e
+    x = np.empty(len(e))
+    x[0] = e[0]
+    c = math.sqrt(1.0 - rho * rho)
+    for i in range(1, len(e)):
+        x[i] = rho * x[i - 1] + c * e[i]
+    return x
+
+
+def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300,
+                    noise_rho: float = 0.0) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
 
@@ -166,7 +181,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         detector = A * np.cos(2 * math.pi * sep / period + float(aux.uniform(0, 2 * math.pi)))
         params.update(period=period, amplitude=A)
     clean = F + b0 + b1 * z + drift * tau + detector
-    Fm = clean + noise * rng.standard_normal(len(F))
+    Fm = clean + noise * correlated(rng.standard_normal(len(F)), noise_rho)  # the sidecar states the marginal sigma
     fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     with_time = bool(rng.integers(2)) or effect == "hydrodynamic-drag"
     water = effect in DETECTOR_EFFECTS and bool(aux.integers(2))
@@ -184,7 +199,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n"
         + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
-             "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
+             "noise_rho": noise_rho, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
              "water_declared": water, "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 

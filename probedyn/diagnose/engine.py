@@ -9,6 +9,12 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    are fitted by bounded least squares (trust-region reflective) from their starts. If the data
    cannot inform them (the Jacobian is rank-deficient) the diagnosis stops with a message that
    names the degenerate combination.
+   **Correlated noise** (:mod:`.noise`): a problem that declares its residuals' recording
+   ``sequences`` and a stated noise has the noise's lag-one correlation estimated from the baseline
+   residuals (the stated marginal sigma against the residuals' high-frequency scatter, checked by
+   their lag-one correlation); where both exceed their white-noise gates the noise is taken as AR(1)
+   and every fit from there on, the baseline's included, uses the whitened (innovation) residuals:
+   generalised least squares, so that steps 2-7 hold for correlated noise too.
 2. **Is anything wrong?** ``chi2_base ~ chi2(n - k)`` under the baseline. Only if its p-value is
    below ``alpha`` (1 %) is anything claimed: with correctly stated noise the false-discovery
    rate of the whole procedure is then at most ``alpha`` per measurement, whatever the catalog.
@@ -99,6 +105,7 @@ from scipy.stats import chi2 as chi2_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.core.registry import RegistryError
 from probedyn.diagnose.causes import Cause, CauseParam
+from probedyn.diagnose.noise import AR1Whitener, noise_correlation
 
 __all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
 
@@ -177,6 +184,7 @@ class Fitter:
         self.problem = problem
         self.nfev = 0
         self._pool = None
+        self.white = None  # an AR1Whitener once the noise is found correlated (:mod:`.noise`)
 
     def _workers(self) -> int:
         w = int(getattr(self.problem, "workers", 1) or 1)
@@ -209,10 +217,13 @@ class Fitter:
             out.append(fit)
         return out
 
-    def residuals(self, values: dict[str, float], causes) -> np.ndarray:
+    def residuals(self, values: dict[str, float], causes, mask=None) -> np.ndarray:
+        """The problem's whitened residuals; with correlated noise (``self.white``) whitened over the
+        sequences, the rows in ``mask`` (a fit's training data) over their own samples only."""
         self.nfev += 1
         r = np.asarray(self.problem.residuals(values, tuple(causes)), float)
-        return np.where(np.isfinite(r), r, 1e6)
+        r = np.where(np.isfinite(r), r, 1e6)
+        return r if self.white is None else self.white(r, mask)
 
     def fit(self, causes, starts: list[dict[str, float]], mask=None, fixed: dict[str, float] | None = None,
             max_nfev: int | None = None) -> Fit:
@@ -267,7 +278,7 @@ class Fitter:
             if has_nu:
                 prob.fixed_nuisance = nu0 if nu0 is not None else prob.nuisance(vals0, causes)
             if not free:
-                r = self.residuals(vals0, causes)
+                r = self.residuals(vals0, causes, mask)
                 m = np.ones(len(r), bool) if mask is None else mask
                 f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)), int(m.sum()),
                         np.zeros((int(m.sum()), 0)), 1, m)
@@ -280,7 +291,7 @@ class Fitter:
             def fun(u, _free=free, _fixed=fixed, _m=mask):
                 v = {p.name: _from_u(p, x) for p, x in zip(_free, u)}
                 v.update(_fixed)
-                r = self.residuals(v, causes)
+                r = self.residuals(v, causes, _m)
                 return r if _m is None else r[_m]
 
             res = None
@@ -320,7 +331,7 @@ class Fitter:
         if has_nu:
             prob.fixed_nuisance = best.nuisance
         try:
-            best.r = self.residuals(best.values, causes)
+            best.r = self.residuals(best.values, causes, mask)
         finally:
             if has_nu:
                 prob.fixed_nuisance = None
@@ -347,7 +358,7 @@ class Fitter:
                 for x in (a, b):
                     v = dict(fit.values)
                     v[p.name] = _from_u(p, x)
-                    rs.append(self.residuals(v, fit.causes))
+                    rs.append(self.residuals(v, fit.causes, fit.mask))
                 cols.append((rs[1] - rs[0]) / (b - a))
             return np.array(cols).T if cols else np.zeros((len(fit.r), 0))
         finally:
@@ -389,7 +400,7 @@ class Fitter:
             if hasattr(self.problem, "nuisance"):
                 self.problem.fixed_nuisance = ref.nuisance
             try:
-                r = self.residuals(start0, causes)
+                r = self.residuals(start0, causes, mask)
             finally:
                 if hasattr(self.problem, "nuisance"):
                     self.problem.fixed_nuisance = None
@@ -714,17 +725,22 @@ def _check_baseline_identifiable(base: Fit) -> None:
 
 
 def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None,
-             margin: float = EVIDENCE_MARGIN) -> dict[str, Any]:
-    """Run the diagnosis on a problem object; return the JSON-able result (see module docstring)."""
+             margin: float = EVIDENCE_MARGIN, noise_model: str = "auto") -> dict[str, Any]:
+    """Run the diagnosis on a problem object; return the JSON-able result (see module docstring).
+    ``noise_model``: ``"auto"`` (white unless the stated noise shows an AR(1) correlation, :mod:`.noise`)
+    or ``"white"`` (the samples taken as independent whatever the record shows)."""
+    if noise_model not in ("auto", "white"):
+        raise ValueError(f"noise_model must be 'auto' or 'white', got {noise_model!r}")
     F = Fitter(problem)
     try:
-        return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin)
+        return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin,
+                         noise_model=noise_model)
     finally:
         F.close_pool()
 
 
-def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float
-              ) -> dict[str, Any]:
+def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float,
+              noise_model: str = "auto") -> dict[str, Any]:
     t0 = time.perf_counter()
     n = len(problem.groups)
     folds = folds_of(problem.groups)
@@ -739,6 +755,15 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     # 1-2. baseline and its chi-square test
     base = F.baseline()
     _check_baseline_identifiable(base)
+    # 1b. correlated noise (:mod:`.noise`): where the stated noise's high-frequency part and the
+    # residuals' lag-one correlation both say AR(1), every fit from here on is whitened
+    noise = noise_correlation(problem, base.r)
+    if noise and noise_model == "white":
+        noise = dict(noise, model="white", rho=0.0, reason="white noise requested (noise_model)")
+    if noise and noise["model"] == "AR(1)":
+        F.white = AR1Whitener(noise["rho"], problem.sequences, len(base.r))
+        b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
+        base = b1 if b1.chi2 <= b2.chi2 else b2
     # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
     F.open_pool()
@@ -873,6 +898,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                            if not (isinstance(x, (int, float)) and x < 0)]), "folds": len(folds),
             "alpha": alpha, "evidence_margin_nats": margin, "max_causes": max_causes,
             "claim_rule": "baseline chi-square p < alpha AND likelihood-ratio test at alpha / N_causes AND evidence > 0",
+            "noise": noise or {"model": "white", "reason": "independent samples (no recording sequences)"},
             "model": problem.model_description(),
         },
         "baseline": {

@@ -412,6 +412,10 @@ class ForceCurveProblem:
             g[idx] = 4 * s_ + (np.arange(len(idx)) % 4)
         self.groups = g
         self.group_labels = [f"{'approach' if i < 4 else 'retract'} points {i % 4 + 1}::4" for i in range(8)]
+        # approach and retract in recording order, against the stated noise (:mod:`probedyn.diagnose.noise`)
+        seqs = [np.nonzero(d.segment == s_)[0] for s_ in (0, 1)]
+        self.sequences = [ix[np.argsort(d.time[ix], kind="stable")] if d.time is not None else ix for ix in seqs]
+        self.noise_stated = bool(d.noise_stated)
         self.cv_warm = True  # interleaved groups: folds start from the null and the full-data optimum
         # ... of every parameter, not only the cause's own: the snap-in and pull-off make the misfit
         # piecewise (a W warm-started with the fold baseline's contact point, biased by the adhesion,

@@ -781,6 +781,11 @@ class FrictionProblem:
             use.append(u)
         self.use = np.concatenate(use)
         self.groups = gid[self.use]
+        # the residuals' recording sequences (one per scan, in residual rows) and whether the noise they
+        # are measured against is the stated one (correlated noise, :mod:`probedyn.diagnose.noise`)
+        row = np.cumsum(self.use) - 1
+        self.sequences = [row[sl][self.use[sl]] for sl in self.slices]
+        self.noise_stated = bool(data.noise_stated and not self.noise_excess)
         self.group_labels = labels
         N = float(np.mean(self.loads))
         self.a_slip = _slip_period(data, self.a_est, self.sigma)

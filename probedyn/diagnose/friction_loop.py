@@ -159,6 +159,9 @@ class FrictionLoopProblem:
         self.slopes = np.concatenate(slopes) if all(t is not None for t in slopes) else None
         self.slices, self.groups, labels = scan_groups(sc)
         self.group_labels = labels
+        # each line's trace and retrace as recorded, against the stated noise (:mod:`probedyn.diagnose.noise`)
+        self.sequences = [np.arange(sl.start, sl.stop) for sl in self.slices]
+        self.noise_stated = bool(data.noise_stated)
         # the loop read as recorded: half the trace-retrace difference is the friction, their mean the zero
         fwd = self.direction > 0
         half = 0.5 * (self.force[fwd].mean() - self.force[~fwd].mean()) if fwd.any() and (~fwd).any() else 0.0

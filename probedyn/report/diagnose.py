@@ -57,6 +57,11 @@ def summary(res: dict[str, Any]) -> str:
     b = res["baseline"]
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
+    nz = res["method"].get("noise") or {}
+    if nz.get("model") == "AR(1)":
+        lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (the stated noise is {1 / nz['high_frequency_scale']:.2f}x "
+                     f"its sample-to-sample part; residual lag-one correlation {nz['rho_lag1']:.2f}): residuals are "
+                     "whitened (innovations) in every fit")
     if res.get("peaks"):
         rej = [p for p in res["peaks"]["peaks"] if not p["accepted"]]
         acc = [p for p in res["peaks"]["peaks"] if p["accepted"]]
