@@ -53,9 +53,26 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
             row["fitted"] = g
             row["c_slope"] = f[0]["parameters"]["c_slope"]["value"]
             row["recovery_error"] = abs(g - truth["g"]) / truth["g"]
+            # uncertainty calibration: g's error in units of its jackknife sigma over the lines, and of the
+            # Jacobian's sigma of c carried to g (g ~ c for a small apparent friction coefficient)
+            pc = f[0]["parameters"]["c_slope"]
+            sg = (f[0].get("derived_sigma_jackknife") or {}).get("lateral_calibration_factor")
+            s_jac = pc.get("sigma_jacobian", pc.get("sigma"))
+            if sg:
+                row["z_jackknife"] = (g - truth["g"]) / sg
+            if s_jac:
+                row["z_jacobian"] = (g - truth["g"]) / (s_jac * g / max(row["c_slope"], 1e-12))
     elif effect:
         row["correct_first"] = False
     return row
+
+
+def _coverage(z: list[float]) -> dict | None:
+    if not z:
+        return None
+    a = np.abs(np.asarray(z, float))
+    return {"n": int(len(a)), "within_1_sigma": float(np.mean(a < 1)), "within_2_sigma": float(np.mean(a < 2)),
+            "median_abs_z": float(np.median(a))}
 
 
 def summary(rows: list[dict]) -> dict:
@@ -69,6 +86,9 @@ def summary(rows: list[dict]) -> dict:
             "false_discovery_rate": (sum(bool(r["findings"]) for r in nul) / len(nul)) if nul else None,
             "median_recovery_error": float(np.median(errs)) if errs else None,
             "max_recovery_error": float(np.max(errs)) if errs else None,
+            # fraction of the correct findings whose g lies within 1 and 2 of its sigma (Gaussian: 0.68, 0.95)
+            "coverage_jackknife": _coverage([r["z_jackknife"] for r in eff if "z_jackknife" in r]),
+            "coverage_jacobian": _coverage([r["z_jacobian"] for r in eff if "z_jacobian" in r]),
             "misses": [{"seed": r["seed"], "class": ("no finding (baseline p = %.3g)" % r["baseline_p"]) if not r["findings"]
                         else f"wrong cause first: {r['findings'][0]}", "verdict": r["verdict"]}
                        for r in eff if not r["correct_first"]],

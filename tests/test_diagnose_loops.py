@@ -108,3 +108,42 @@ def test_a_flat_surface_claims_no_slope_coupling(tmp_path, seed):
     path, truth = make_loop_case(tmp_path, seed, None)
     res = diagnose(make_problem(path))
     assert res["findings"] == [], res["findings"]
+
+
+def test_jackknife_replicate_is_the_record_without_that_line(tmp_path):
+    """The finding's uncertainty over the image lines (delete-one jackknife, Efron & Stein 1981): each replicate
+    equals the slope coupling fitted to the record written again without that line (a new problem from a new
+    file: its own noise estimate, slopes and starts), and the reported sigma is the jackknife's
+    sqrt((m - 1)/m sum (c_i - mean)^2) wherever it exceeds the Jacobian's."""
+    from probedyn.diagnose.engine import Fitter
+
+    path, _ = make_loop_case(tmp_path, 7000, "surface-slope")
+    res = diagnose(make_problem(path))
+    f = res["findings"][0]
+    reps = [r["c_slope"] for r in f["replicates"]]
+    prob = make_problem(path)
+    ids = [s.id for s in prob.data.scans]
+    assert len(reps) == len(ids) >= 3
+    m = len(reps)
+    sd = math.sqrt((m - 1) / m * float(np.sum((np.asarray(reps) - np.mean(reps)) ** 2)))
+    p = f["parameters"]["c_slope"]
+    assert p["sigma_jackknife"] == pytest.approx(sd, rel=1e-12)
+    if "sigma_jacobian" in p:  # the jackknife replaced a smaller Jacobian sigma
+        assert p["sigma"] == pytest.approx(sd, rel=1e-12) and sd > p["sigma_jacobian"]
+    else:
+        assert p["sigma"] >= sd
+    csv = path.with_suffix(".csv")
+    lines = csv.read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")] + [ln for ln in lines if ln.startswith("scan")]
+    col = head[-1].split(",").index("scan")
+    for i in (0, m - 1):
+        sub = tmp_path / f"without_{ids[i]}"
+        sub.mkdir()
+        rows = [ln for ln in lines if ln and not ln.startswith("#") and not ln.startswith("scan")
+                and int(float(ln.split(",")[col])) != ids[i]]
+        (sub / csv.name).write_text("\n".join(head + rows) + "\n")
+        (sub / path.name).write_text(path.read_text())
+        q = make_problem(sub / path.name)
+        F = Fitter(q)
+        fit = F.nested(F.baseline(), tuple(c for c in q.causes if c.key == "surface-slope"))
+        assert fit.values["c_slope"] == pytest.approx(reps[i], rel=2e-3)

@@ -1104,6 +1104,16 @@ def _finding(problem, F: Fitter, before: Fit, cand: dict, conf: dict | None) -> 
             flags.append(f"{nm} at its {it['bound']} bound")
         if not it.get("identifiable", True):
             flags.append(f"{nm} not identifiable")
+    derived = c.derived(fit.values, problem)
+    jk = _jackknife(problem, F, fit, names, c)
+    if jk:
+        for nm, sd in jk["sigma"].items():
+            it = params[nm]
+            it["sigma_jackknife"] = sd
+            if it.get("sigma") is not None and sd > it["sigma"]:
+                v = fit.values[nm]
+                it.update(sigma_jacobian=it["sigma"], sigma=sd, interval=[v - sd, v + sd],
+                          method=f"jackknife over {jk['units']} (larger than the Jacobian's)")
     corr = []
     if fit.J is not None and fit.k > 1:
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -1116,7 +1126,9 @@ def _finding(problem, F: Fitter, before: Fit, cand: dict, conf: dict | None) -> 
     return {
         "cause": c.key, "title": c.title, "evidence": cand["evidence"], "evidence_cv": cand.get("evidence_cv"),
         "evidence_se": cand.get("evidence_se"), "delta_chi2": cand["dchi2"],
-        "parameters": params, "derived": c.derived(fit.values, problem),
+        "parameters": params, "derived": derived,
+        "derived_sigma_jackknife": jk["derived_sigma"] if jk else None,
+        "replicates": jk["replicates"] if jk else None,
         "status": "confounded" if conf else "identified", "confounded_with": conf["causes"][1:] if conf else [],
         "flags": flags, "correlated_parameters": corr, "note": getattr(c, "note", ""),
         "gain": {
@@ -1129,6 +1141,37 @@ def _finding(problem, F: Fitter, before: Fit, cand: dict, conf: dict | None) -> 
             "evaluated_on": "reduced model" if getattr(problem, "reduced", False) else "full model",
         },
     }
+
+
+def _jackknife(problem, F: Fitter, fit: Fit, names: list[str], cause) -> dict[str, Any] | None:
+    """Delete-one-replicate jackknife of a finding's parameters and derived values, for a problem that
+    declares ``replicate_units`` (residual rows of independent repeats of the measurement, e.g. the image
+    lines of a friction-loop record, each its trace and retrace): the model refitted without each unit in
+    turn (from the full fit), ``sigma = sqrt((m - 1)/m sum (theta_i - mean)^2)`` (Efron & Stein 1981). The
+    Jacobian's sigma assumes residuals independent at the stated noise; where the repeats scatter more
+    (a misfit the model does not carry, correlated along each line) the jackknife says so and is
+    reported instead. None for fewer than three units."""
+    units = getattr(problem, "replicate_units", None)
+    if not units or len(units) < 3:
+        return None
+    vals, der = [], []
+    for u in units:
+        mask = np.ones(len(fit.r), bool)
+        mask[u] = False
+        f = F.fit(fit.causes, [dict(fit.values)], mask)
+        vals.append({nm: f.values[nm] for nm in names})
+        der.append(cause.derived(f.values, problem))
+    m = len(units)
+
+    def sd(xs) -> float:
+        xs = np.asarray(xs, float)
+        return float(math.sqrt((m - 1) / m * np.sum((xs - xs.mean()) ** 2)))
+
+    keys = [k for k in der[0] if all(isinstance(d.get(k), (int, float)) for d in der)] if der else []
+    return {"units": getattr(problem, "replicate_label", f"{m} replicates"),
+            "sigma": {nm: sd([v[nm] for v in vals]) for nm in names},
+            "derived_sigma": {k: sd([d[k] for d in der]) for k in keys},
+            "replicates": [{**v, **{k: d[k] for k in keys}} for v, d in zip(vals, der)]}
 
 
 def _confounding(problem, best: dict, rivals: list[dict], margin: float) -> dict[str, Any]:

@@ -162,6 +162,9 @@ class FrictionLoopProblem:
         # each line's trace and retrace as recorded, against the stated noise (:mod:`probedyn.diagnose.noise`)
         self.sequences = [np.arange(sl.start, sl.stop) for sl in self.slices]
         self.noise_stated = bool(data.noise_stated)
+        # the image lines are repeats of one measurement: a finding's uncertainty is also their jackknife
+        self.replicate_units = [np.arange(sl.start, sl.stop) for sl in self.slices]
+        self.replicate_label = f"{len(sc)} image lines"
         # the loop read as recorded: half the trace-retrace difference is the friction, their mean the zero
         fwd = self.direction > 0
         half = 0.5 * (self.force[fwd].mean() - self.force[~fwd].mean()) if fwd.any() and (~fwd).any() else 0.0

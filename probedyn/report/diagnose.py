@@ -86,6 +86,14 @@ def summary(res: dict[str, Any]) -> str:
               if g.get("heldout_rms_before") is not None and g.get("heldout_rms_after") is not None else "")
         lines.append(f"{f['status']}: {f['cause']} ({ps}); evidence {f['evidence']:.1f} nats; residual RMS "
                      f"{g['residual_rms_before']:.2f} -> {g['residual_rms_after']:.2f} sigma{ho}")
+        for nm, it in f["parameters"].items():
+            if it.get("sigma_jacobian") is not None:
+                lines.append(f"  {nm}: sigma from the {it['method']}; the Jacobian's alone {it['sigma_jacobian']:.2g}")
+        jd = f.get("derived_sigma_jackknife") or {}
+        if f.get("derived"):
+            lines.append("  derived: " + ", ".join(
+                f"{k} = {v:.4g}" + (f" ± {jd[k]:.2g}" if k in jd else "") for k, v in f["derived"].items()
+                if isinstance(v, (int, float))))
         for fl in f["flags"]:
             lines.append(f"  flag: {fl}")
     for x in res.get("not_claimed") or []:
