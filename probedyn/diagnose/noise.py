@@ -7,8 +7,9 @@ sampling): with the same marginal sigma, the chi-square of the baseline still av
 smooth extension fits the correlated part and the likelihood-ratio gains grow by up to
 ``(1 + rho) / (1 - rho)`` (for AR(1) noise of lag-one correlation ``rho``); interleaved
 cross-validation folds do not protect, since a held-out sample's neighbours carry its noise. Measured
-on the force-curve null generator (``benchmarks/diagnose_noise_correlation.py``): white noise 0/100
-false discoveries, AR(1) noise of the stated marginal sigma and rho = 0.8 several times alpha.
+on the force-curve null generator (``benchmarks/diagnose_noise_correlation.py``, docs/diagnose.md §9.6):
+AR(1) noise at the stated marginal sigma, rho = 0.95, gave 3/30 false discoveries taken as white, 0/30
+whitened; on the 200 white cases of the declared force-curve benchmark the gate below never fired.
 
 **Which correlation.** A smooth misfit of the baseline (the very effect the diagnosis looks for)
 also makes the residuals correlated, so the residuals' own lag-one correlation cannot tell the
@@ -26,9 +27,9 @@ downward) separates the two: white noise has ``rho_lag ~ 0``. Both estimates mus
 simulated for n = 150 ... 2000); the noise is then taken as AR(1) with ``rho = rho_scatter`` (unbiased;
 the lag-one estimate reads low by the fitted baseline's share), at most ``rho_lag`` plus its gate (a stated
 noise too large inflates ``rho_scatter`` only). The whitened baseline's chi-square then centres on its
-degrees of freedom (the median p-value of 50 nulls at rho = 0.8 is 0.5, none below 0.1: with rho estimated
-from the same residuals, the test is conservative, not exact). Records whose noise was estimated from their own second differences (no stated noise)
-have ``q = 1`` by construction: nothing changes for them (their sigma is the high-frequency one; a
+degrees of freedom (the median p-value of 50 nulls at rho = 0.8 is 0.5, none below 0.1: with rho
+estimated from the same residuals, the test is conservative, not exact). Records whose noise was
+estimated from their own second differences (no stated noise) have ``q = 1`` by construction: nothing changes for them (their sigma is the high-frequency one; a
 correlated noise then reads as a significant baseline misfit, a limit stated in docs/diagnose.md §8).
 
 **Whitening** (generalised least squares, Cochrane & Orcutt 1949): within each of the problem's
