@@ -163,7 +163,7 @@ class FrictionLoopProblem:
         self.sequences = [np.arange(sl.start, sl.stop) for sl in self.slices]
         self.noise_stated = bool(data.noise_stated)
         # the image lines are repeats of one measurement: a finding's uncertainty is also their jackknife
-        self.replicate_units = [np.arange(sl.start, sl.stop) for sl in self.slices]
+        self.replicate_units = self.sequences
         self.replicate_label = f"{len(sc)} image lines"
         # the loop read as recorded: half the trace-retrace difference is the friction, their mean the zero
         fwd = self.direction > 0
