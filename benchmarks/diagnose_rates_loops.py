@@ -45,7 +45,8 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
     res = diagnose(make_problem(path))
     f = res["findings"]
     row = {"seed": seed, "effect": effect, "truth": truth, "verdict": res["verdict"],
-           "findings": [x["cause"] for x in f], "baseline_p": res["baseline"]["p_value"], "cpu_s": _cpu() - c0}
+           "findings": [x["cause"] for x in f], "baseline_p": res["baseline"]["p_value"], "cpu_s": _cpu() - c0,
+           "noise": {k: v for k, v in res["method"]["noise"].items() if k in ("model", "rho", "baseline_estimate")}}
     if effect and f:
         row["correct_first"] = f[0]["cause"] == effect
         if row["correct_first"]:
@@ -65,6 +66,11 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
     elif effect:
         row["correct_first"] = False
     return row
+
+
+def _gate(row: dict) -> bool:
+    """Whether the baseline's residuals alone would have been whitened (before the best candidate's)."""
+    return bool(((row.get("noise") or {}).get("baseline_estimate") or {}).get("rho", 0.0) > 0.0)
 
 
 def _coverage(z: list[float]) -> dict | None:
@@ -94,6 +100,10 @@ def summary(rows: list[dict]) -> dict:
                        for r in eff if not r["correct_first"]],
             "false_discovery_cases": [{"seed": r["seed"], "findings": r["findings"]} for r in nul if r["findings"]],
             "verdicts": {v: sum(r["verdict"] == v for r in rows) for v in sorted({r["verdict"] for r in rows})},
+            "whitened": {"hidden": sum((r.get("noise") or {}).get("model") == "AR(1)" for r in rows if r["effect"]),
+                         "null": sum((r.get("noise") or {}).get("model") == "AR(1)" for r in rows if not r["effect"]),
+                         "baseline_gate_hidden": sum(_gate(r) for r in rows if r["effect"]),
+                         "baseline_gate_null": sum(_gate(r) for r in rows if not r["effect"])},
             "median_cpu_s": float(np.median([r["cpu_s"] for r in rows])) if rows else None}
 
 

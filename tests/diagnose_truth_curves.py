@@ -92,7 +92,7 @@ def correlated(e: np.ndarray, rho: float) -> np.ndarray:
 
 
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300,
-                    noise_rho: float = 0.0) -> tuple[Path, dict]:
+                    noise_rho: float = 0.0, state_noise: bool = True) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
 
@@ -196,10 +196,10 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     lever = f"k = {k!r}\n" + (f"sensitivity = {sens!r}\n" if fmt == "deflection_V" else "")
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\n{lever}\n[tip]\nradius = {R_nom!r}\n'
-        f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n[noise]\n{noise_line}\n"
+        f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n" + (f"[noise]\n{noise_line}\n" if state_noise else "")
         + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
-             "noise_rho": noise_rho, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
+             "noise_rho": noise_rho, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
              "water_declared": water, "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 

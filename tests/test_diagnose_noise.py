@@ -1,5 +1,6 @@
-"""Correlated noise (:mod:`probedyn.diagnose.noise`): the AR(1) estimate, its gates, the exact whitening, and a
-force-curve null whose correlated noise the white diagnosis takes for a cause."""
+"""Correlated noise (:mod:`probedyn.diagnose.noise`): the AR(1) estimate with and without a stated noise, its
+gates, the exact whitening, a force-curve null whose correlated noise the white diagnosis takes for a cause, and
+a friction loop whose sampling-scale misfit looks correlated until its cause is fitted."""
 
 from __future__ import annotations
 
@@ -46,8 +47,35 @@ def test_white_overstated_or_misfit_records_are_not_whitened():
         assert noise_correlation(prob, e / 1.25)["model"] == "white"
         nz = noise_correlation(prob, e + misfit)
         assert nz["model"] == "white" and nz["rho_lag1"] > 0.5 and abs(nz["rho_scatter"]) < 0.2
-    assert noise_correlation(_problem(stated=False), correlated(rng.standard_normal(600), 0.8))["model"] == "white"
     assert noise_correlation(SimpleNamespace(noise_stated=True), rng.standard_normal(600)) is None
+
+
+def _scatter_sigma(e):
+    """The noise a record without a stated one is given: the MAD of its second differences over sqrt 6 (here
+    of its first quarter, as a force curve's far approach)."""
+    d2 = np.diff(e[: len(e) // 4], 2)
+    return 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6)
+
+
+def test_without_a_stated_noise_the_correlation_and_innovation_come_from_the_differences():
+    """No stated noise: rho = 3 - Var(Delta^2 r) / Var(Delta r) (scale-free) within 4 standard errors (1.5 /
+    sqrt n, simulated as for the stated estimate); the innovation's sigma makes the whitened residuals' mean
+    square 1 within 4 of its standard errors sqrt(2 / n), although the scatter sigma understates the marginal
+    sigma by sqrt((1 - rho)(3 - rho) / 3) (0.38 at 0.8); white records (40, any scale) are never whitened."""
+    rng = np.random.default_rng(8)
+    prob = _problem(stated=False)
+    for rho in (0.5, 0.8, 0.9):
+        e = np.concatenate([correlated(rng.standard_normal(300), rho) for _ in range(2)])
+        r = e / _scatter_sigma(e)
+        nz = noise_correlation(prob, r)
+        assert nz["model"] == "AR(1)" and nz["estimator"].startswith("first against second")
+        assert abs(nz["rho"] - rho) < 4 * SCATTER_SE_SQRT_N / math.sqrt(600)
+        w = AR1Whitener(nz["rho"], prob.sequences, 600, nz["innovation_sd"])
+        assert abs(float(np.mean(w(r) ** 2)) - 1.0) < 4 * math.sqrt(2 / 600)
+        assert nz["marginal_sd"] == pytest.approx(nz["innovation_sd"] / math.sqrt(1 - nz["rho"] ** 2), rel=1e-12)
+    for _ in range(40):
+        e = rng.standard_normal(600) * float(10 ** rng.uniform(-3, 3))
+        assert noise_correlation(prob, e / _scatter_sigma(e))["model"] == "white"
 
 
 def test_whitening_is_the_exact_ar1_likelihood_with_and_without_a_mask():
@@ -57,20 +85,23 @@ def test_whitening_is_the_exact_ar1_likelihood_with_and_without_a_mask():
     rng = np.random.default_rng(7)
     rho, m = 0.7, 24
     seqs = [np.arange(0, m), np.arange(m, 2 * m)]
-    w = AR1Whitener(rho, seqs, 2 * m + 1)
     r = rng.standard_normal(2 * m + 1)
     idx = np.arange(m)
-    S = rho ** np.abs(idx[:, None] - idx[None, :])
-    for mask in (None, np.arange(2 * m + 1) % 4 != 1, rng.random(2 * m + 1) < 0.6):
-        mk = np.ones(2 * m + 1, bool) if mask is None else mask
-        rw = w(r, mask)
-        exact = 0.0
-        for s in seqs:
-            keep = mk[s]
-            sub = S[np.ix_(keep, keep)]
-            exact += float(r[s][keep] @ np.linalg.solve(sub, r[s][keep]))
-        assert float(np.sum(rw[:2 * m][mk[:2 * m]] ** 2)) == pytest.approx(exact, rel=1e-10)
-        assert rw[-1] == r[-1]
+    # marginal sigma 1 (a stated noise) and 2.5 (given through the innovation's sigma, no stated noise)
+    for sd, w in ((1.0, AR1Whitener(rho, seqs, 2 * m + 1)),
+                  (2.5, AR1Whitener(rho, seqs, 2 * m + 1, 2.5 * math.sqrt(1 - rho**2)))):
+        S = sd**2 * rho ** np.abs(idx[:, None] - idx[None, :])
+        for mask in (None, np.arange(2 * m + 1) % 4 != 1, rng.random(2 * m + 1) < 0.6):
+            mk = np.ones(2 * m + 1, bool) if mask is None else mask
+            rw = w(r, mask)
+            exact = 0.0
+            for s in seqs:
+                keep = mk[s]
+                sub = S[np.ix_(keep, keep)]
+                exact += float(r[s][keep] @ np.linalg.solve(sub, r[s][keep]))
+            assert float(np.sum(rw[:2 * m][mk[:2 * m]] ** 2)) == pytest.approx(exact, rel=1e-10)
+            assert rw[-1] == r[-1]
+    w = AR1Whitener(rho, seqs, 2 * m + 1)
     # a held-out row is scored by its innovation given the recorded sample before it
     mask = np.arange(2 * m + 1) % 4 != 1
     rw = w(r, mask)
@@ -95,3 +126,42 @@ def test_correlated_null_curve_whitened(tmp_path):
     for name in ("z_c", "b0", "b1"):
         ratio = auto["baseline"]["parameters"][name]["sigma"] / white["baseline"]["parameters"][name]["sigma"]
         assert 1.5 < ratio <= 1.05 * bound, (name, ratio, bound)
+
+
+def test_correlated_null_curve_without_a_stated_noise(tmp_path):
+    """The same null (seed 6003, AR(1) at 0.8) with no noise in its sidecar, as most exports: the sigma read from
+    the far approach's scatter is 0.38 of the marginal one, so the white analysis' baseline fails its test (p <
+    1 %); the default estimates rho from the differences within 0.1 and claims nothing."""
+    from probedyn.diagnose.engine import Fitter, run
+    from probedyn.diagnose.problems import make_problem
+
+    path, _ = make_curve_case(tmp_path, 6003, None, noise_rho=0.8, state_noise=False)
+    assert "[noise]" not in path.read_text()
+    assert Fitter(make_problem(path)).baseline().p_value < 0.01  # the white analysis' baseline test
+    auto = run(path)
+    nz = auto["method"]["noise"]
+    assert nz["model"] == "AR(1)" and abs(nz["rho"] - 0.8) < 0.1, nz
+    assert auto["findings"] == [] and auto["verdict"] == "no-significant-discrepancy"
+
+
+def test_a_sampling_scale_misfit_is_judged_after_its_cause():
+    """Without a stated noise, a misfit with structure at the sampling scale (a sloped surface's friction, loop
+    seed 7076: white height noise) also raises the first differences against the second: the baseline's
+    residuals pass both gates. Judged again on the best nested candidate's residuals (surface-slope fitted),
+    the noise is white, nothing is whitened and the cause is named as before."""
+    import tempfile
+    from pathlib import Path
+
+    from diagnose_truth_loops import make_loop_case
+
+    from probedyn.diagnose.engine import diagnose
+    from probedyn.diagnose.problems import make_problem
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path, _ = make_loop_case(Path(tmp), 7076, "surface-slope")
+        res = diagnose(make_problem(path))
+    nz = res["method"]["noise"]
+    be = nz["baseline_estimate"]
+    assert be["rho_scatter"] > nz["gate_scatter"] and be["rho_lag1"] > nz["gate_lag1"]
+    assert nz["model"] == "white" and "surface-slope" in nz["judged_on"]
+    assert res["findings"][0]["cause"] == "surface-slope"

@@ -10,11 +10,12 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    cannot inform them (the Jacobian is rank-deficient) the diagnosis stops with a message that
    names the degenerate combination.
    **Correlated noise** (:mod:`.noise`): a problem that declares its residuals' recording
-   ``sequences`` and a stated noise has the noise's lag-one correlation estimated from the baseline
-   residuals (the stated marginal sigma against the residuals' high-frequency scatter, checked by
-   their lag-one correlation); where both exceed their white-noise gates the noise is taken as AR(1)
-   and every fit from there on, the baseline's included, uses the whitened (innovation) residuals:
-   generalised least squares, so that steps 2-7 hold for correlated noise too.
+   ``sequences`` has the noise's lag-one correlation estimated from the baseline residuals (a stated
+   marginal sigma against the residuals' high-frequency scatter; without a stated noise the first
+   against the second differences, judged on the best nested candidate's residuals after step 3,
+   checked by their lag-one correlation); where both exceed their white-noise gates the noise is taken
+   as AR(1) and every fit from there on, the baseline's included, uses the whitened (innovation)
+   residuals: generalised least squares, so that steps 2-7 hold for correlated noise too.
 2. **Is anything wrong?** ``chi2_base ~ chi2(n - k)`` under the baseline. Only if its p-value is
    below ``alpha`` (1 %) is anything claimed: with correctly stated noise the false-discovery
    rate of the whole procedure is then at most ``alpha`` per measurement, whatever the catalog.
@@ -724,10 +725,36 @@ def _check_baseline_identifiable(base: Fit) -> None:
                               "([baseline] free) or add data that separates them")
 
 
+def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -> tuple["Fit", list["Fit"]]:
+    """Step 3: every cause fitted nested in the baseline (and the baseline re-fitted where a candidate's own
+    baseline parameters fit better); returns the (possibly re-fitted) baseline and the fits in cause order."""
+    fits = F.map_nested([(base, (c,), None) for c in causes])
+    # the baseline is nested in every candidate: where the baseline at a candidate's own baseline
+    # parameters fits better than the baseline optimum by more than a one-parameter LR threshold
+    # (the baseline fit stopped in a shallower basin or at its evaluation cap: a rugged chi^2), the
+    # baseline is re-fitted from there and the candidates are fitted again from it (at most 3 rounds)
+    thr1 = float(chi2_dist.ppf(1 - alpha / n_causes, 1))
+    for _round in range(3):
+        bf = min(fits, key=lambda f: f.chi2) if fits and base.k else None
+        if bf is None or not bf.chi2 < base.chi2 - thr1:
+            break
+        bv = {p.name: bf.values[p.name] for p in base.plist}
+        if not float(np.sum(F.residuals(bv, ()) ** 2)) < base.chi2 - thr1:
+            break
+        b2 = F.fit((), [bv])
+        if not b2.chi2 < base.chi2 - thr1:
+            break
+        base = b2
+        fits = F.map_nested([(base, (c,), None) for c in causes])
+    # a contained limit law (a cause's ``limits``) re-fitted from its container's optimum where worse
+    fits = _limit_refits(F, causes, fits)
+    return base, fits
+
+
 def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[str] | None = None,
              margin: float = EVIDENCE_MARGIN, noise_model: str = "auto") -> dict[str, Any]:
     """Run the diagnosis on a problem object; return the JSON-able result (see module docstring).
-    ``noise_model``: ``"auto"`` (white unless the stated noise shows an AR(1) correlation, :mod:`.noise`)
+    ``noise_model``: ``"auto"`` (white unless the residuals show an AR(1) correlation, :mod:`.noise`)
     or ``"white"`` (the samples taken as independent whatever the record shows)."""
     if noise_model not in ("auto", "white"):
         raise ValueError(f"noise_model must be 'auto' or 'white', got {noise_model!r}")
@@ -756,37 +783,39 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     base = F.baseline()
     _check_baseline_identifiable(base)
     # 1b. correlated noise (:mod:`.noise`): where the stated noise's high-frequency part and the
-    # residuals' lag-one correlation both say AR(1), every fit from here on is whitened
+    # residuals' lag-one correlation both say AR(1), every fit from here on is whitened. Without a stated
+    # noise the correlation comes from the residuals' own first and second differences, which a misfit
+    # with structure at the sampling scale inflates as well (a sloped surface's friction): it is judged
+    # on the residuals of the best nested candidate (the baseline plus one cause, fitted white), and only
+    # if the correlation is there are the baseline and the candidates re-fitted whitened
     noise = noise_correlation(problem, base.r)
     if noise and noise_model == "white":
+        noise = {k: v for k, v in noise.items() if k not in ("innovation_sd", "marginal_sd")}
         noise = dict(noise, model="white", rho=0.0, reason="white noise requested (noise_model)")
-    if noise and noise["model"] == "AR(1)":
-        F.white = AR1Whitener(noise["rho"], problem.sequences, len(base.r))
+    deferred = bool(noise and noise_model == "auto" and not getattr(problem, "noise_stated", False))
+    if noise and noise["model"] == "AR(1)" and not deferred:
+        F.white = AR1Whitener(noise["rho"], problem.sequences, len(base.r), noise.get("innovation_sd"))
         b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
         base = b1 if b1.chi2 <= b2.chi2 else b2
-    # 3. nested candidates (all causes; the likelihood-ratio test for each)
     cands = []
     F.open_pool()
-    fits = F.map_nested([(base, (c,), None) for c in causes])
-    # the baseline is nested in every candidate: where the baseline at a candidate's own baseline
-    # parameters fits better than the baseline optimum by more than a one-parameter LR threshold
-    # (the baseline fit stopped in a shallower basin or at its evaluation cap: a rugged chi^2), the
-    # baseline is re-fitted from there and the candidates are fitted again from it (at most 3 rounds)
-    thr1 = float(chi2_dist.ppf(1 - alpha / n_causes, 1))
-    for _round in range(3):
-        bf = min(fits, key=lambda f: f.chi2) if fits and base.k else None
-        if bf is None or not bf.chi2 < base.chi2 - thr1:
+    while True:
+        base, fits = _candidates(F, causes, base, alpha, n_causes)
+        if not deferred:
             break
-        bv = {p.name: bf.values[p.name] for p in base.plist}
-        if not float(np.sum(F.residuals(bv, ()) ** 2)) < base.chi2 - thr1:
+        deferred = False
+        best = min(fits, key=lambda f: f.chi2) if fits else base
+        again = noise_correlation(problem, best.r)
+        noise = dict(again, baseline_estimate={k: noise[k] for k in ("rho", "rho_scatter", "rho_lag1")},
+                     judged_on=("the best nested candidate's residuals ("
+                                + ", ".join(c.key for c in best.causes) + ")") if best.causes else "the baseline")
+        if again["model"] != "AR(1)":
             break
-        b2 = F.fit((), [bv])
-        if not b2.chi2 < base.chi2 - thr1:
-            break
-        base = b2
-        fits = F.map_nested([(base, (c,), None) for c in causes])
-    # a contained limit law (a cause's ``limits``) re-fitted from its container's optimum where worse
-    fits = _limit_refits(F, causes, fits)
+        F.white = AR1Whitener(again["rho"], problem.sequences, len(base.r), again.get("innovation_sd"))
+        F.close_pool()  # the workers were forked with the white residuals
+        F.open_pool()
+        b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
+        base = b1 if b1.chi2 <= b2.chi2 else b2
     p_base = base.p_value
     significant = p_base < alpha
     cv = CrossValidation(F, folds, n) if use_cv else None

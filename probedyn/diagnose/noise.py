@@ -28,9 +28,23 @@ simulated for n = 150 ... 2000); the noise is then taken as AR(1) with ``rho = r
 the lag-one estimate reads low by the fitted baseline's share), at most ``rho_lag`` plus its gate (a stated
 noise too large inflates ``rho_scatter`` only). The whitened baseline's chi-square then centres on its
 degrees of freedom (the median p-value of 50 nulls at rho = 0.8 is 0.5, none below 0.1: with rho
-estimated from the same residuals, the test is conservative, not exact). Records whose noise was
-estimated from their own second differences (no stated noise) have ``q = 1`` by construction: nothing changes for them (their sigma is the high-frequency one; a
-correlated noise then reads as a significant baseline misfit, a limit stated in docs/diagnose.md §8).
+estimated from the same residuals, the test is conservative, not exact).
+
+**Without a stated noise** (most instrument exports) the record's noise is its own high-frequency scatter
+(the MAD of its second differences over sqrt 6), so ``q ~ 1`` whatever the correlation, and a correlated
+noise read that way is understated by ``sqrt((1 - rho)(3 - rho) / 3)`` (0.38 at rho = 0.8): every smooth
+cause became significant. The first differences then anchor the scale instead of the stated sigma,
+
+    Var(Delta e) = 2 s^2 (1 - rho),    so    Var(Delta^2 e) / Var(Delta e) = 3 - rho
+
+(trimmed as above; its white-noise standard error is the same ``1.5 / sqrt n``, simulated), gated as
+above; ``rho_scatter > 1`` (first differences larger than any AR(1) noise gives) is a misfit, not noise. The
+innovation's standard deviation follows from ``q`` without the ill-determined marginal sigma:
+``s^2 (1 - rho^2) = q^2 3 (1 + rho) / (3 - rho)`` (``innovation_sd``). Unlike the stated case, a misfit
+with structure at the sampling scale (a sloped surface's friction, whose slope changes from sample to
+sample) raises the first differences more than the second and reads as correlation; the engine
+therefore judges an unstated noise on the residuals of the best nested candidate, not the baseline's
+(:func:`probedyn.diagnose.engine.diagnose`, step 1b).
 
 **Whitening** (generalised least squares, Cochrane & Orcutt 1949): within each of the problem's
 ``sequences`` (samples in recording order), ``r'_i = (r_i - rho^d r_j) / sqrt(1 - rho^(2d))`` with
@@ -66,20 +80,32 @@ RHO_MAX = 0.95
 CLIP_SIGMA = 5.0
 
 
+def _trimmed_mean_square(d: np.ndarray) -> float:
+    """Mean square of ``d`` without the samples beyond ``TRIM_SIGMA`` robust sigmas (a misplaced jump or kink
+    is not noise)."""
+    dev = np.abs(d - np.median(d))
+    keep = dev <= TRIM_SIGMA * 1.4826 * float(np.median(dev))
+    return float(np.mean(d[keep] ** 2))
+
+
 def noise_correlation(problem, r: np.ndarray) -> dict[str, Any] | None:
-    """The AR(1) correlation of the noise from the baseline residuals ``r`` (units of the stated noise)
-    of a problem that declares ``sequences`` and a stated noise; None where it does not apply."""
+    """The AR(1) correlation of the noise from the baseline residuals ``r`` (units of the problem's noise,
+    stated or estimated from the record's scatter) of a problem that declares ``sequences``; None where it
+    does not apply. Without a stated noise the correlation comes from the first against the second
+    differences and the result carries ``innovation_sd``, the one-step innovation's standard deviation
+    in the residuals' units (module docstring)."""
     seqs = [np.asarray(s, int) for s in (getattr(problem, "sequences", None) or []) if len(s) > 3]
     if not seqs:
         return None
-    if not getattr(problem, "noise_stated", False):
-        return {"model": "white", "reason": "noise not stated (estimated from the record's own scatter)"}
+    stated = bool(getattr(problem, "noise_stated", False))
     r = np.asarray(r, float)
-    d2 = np.concatenate([np.diff(r[s], 2) for s in seqs])
-    dev = np.abs(d2 - np.median(d2))
-    keep = dev <= TRIM_SIGMA * 1.4826 * float(np.median(dev))  # a misplaced jump or kink is not noise
-    q = float(math.sqrt(np.mean(d2[keep] ** 2) / 6.0))
-    rho_s = 2.0 - math.sqrt(1.0 + 3.0 * q * q)
+    ms2 = _trimmed_mean_square(np.concatenate([np.diff(r[s], 2) for s in seqs]))
+    q = float(math.sqrt(ms2 / 6.0))
+    if stated:
+        rho_s = 2.0 - math.sqrt(1.0 + 3.0 * q * q)
+    else:  # Var(Delta^2 e) / Var(Delta e) = 3 - rho, whatever the noise's scale
+        ms1 = _trimmed_mean_square(np.concatenate([np.diff(r[s]) for s in seqs]))
+        rho_s = 3.0 - ms2 / ms1 if ms1 > 0 else 0.0
     num = den = 0.0
     for s in seqs:
         x = r[s] - np.median(r[s])
@@ -92,21 +118,39 @@ def noise_correlation(problem, r: np.ndarray) -> dict[str, Any] | None:
     n = int(sum(len(s) for s in seqs))
     gate_s, gate_l = GATE_SE * SCATTER_SE_SQRT_N / math.sqrt(n), GATE_SE / math.sqrt(n)
     applied = bool(rho_s > gate_s and rho_l > gate_l)
+    # without a stated noise, Var(Delta^2) < 2 Var(Delta) (rho_scatter > 1) is no AR(1) noise: a misfit
+    # carries the first differences
+    beyond = bool(not stated and rho_s > 1.0 + gate_s)
+    applied = applied and not beyond
     # the scatter estimate is unbiased (simulated: 0.800 +- 0.013 at rho = 0.8, n = 600; the lag-one estimate
     # reads 0.78, biased by the fitted baseline); the lag-one estimate only bounds it from above (a stated noise
     # that is too large inflates rho_scatter, not rho_lag1)
     rho = float(min(rho_s, rho_l + gate_l, RHO_MAX)) if applied else 0.0
-    return {"model": "AR(1)" if applied else "white", "rho": rho, "rho_scatter": rho_s, "rho_lag1": rho_l,
-            "high_frequency_scale": q, "gate_scatter": gate_s, "gate_lag1": gate_l, "n": n}
+    out = {"model": "AR(1)" if applied else "white", "rho": rho, "rho_scatter": rho_s, "rho_lag1": rho_l,
+           "high_frequency_scale": q, "gate_scatter": gate_s, "gate_lag1": gate_l, "n": n,
+           "estimator": "stated noise against the second differences" if stated
+           else "first against second differences (no stated noise)"}
+    if beyond:
+        out["reason"] = "first differences beyond AR(1) noise (rho_scatter > 1): a misfit, not the noise"
+    if applied and not stated:
+        # s^2 (1 - rho)(3 - rho) / 3 = q^2 gives the marginal sigma s (ill-determined as rho -> 1) and the
+        # innovation's s^2 (1 - rho^2) = q^2 3 (1 + rho) / (3 - rho) (well determined: the 1 - rho cancels)
+        out["innovation_sd"] = q * math.sqrt(3.0 * (1.0 + rho) / (3.0 - rho))
+        out["marginal_sd"] = q * math.sqrt(3.0 / ((1.0 - rho) * (3.0 - rho)))
+    return out
 
 
 class AR1Whitener:
-    """``r -> r'`` for AR(1) noise of correlation ``rho`` within each sequence (module docstring)."""
+    """``r -> r'`` for AR(1) noise of correlation ``rho`` within each sequence (module docstring).
+    ``innovation_sd``: the one-step innovation's standard deviation in the units of ``r`` (default
+    ``sqrt(1 - rho^2)``: ``r`` in units of the noise's marginal sigma, as with a stated noise)."""
 
-    def __init__(self, rho: float, sequences, n: int) -> None:
+    def __init__(self, rho: float, sequences, n: int, innovation_sd: float | None = None) -> None:
         self.rho = float(rho)
         self.sequences = [np.asarray(s, int) for s in sequences]
         self.n = n
+        self.innovation_sd = None if innovation_sd is None else float(innovation_sd)
+        self._rows = np.concatenate(self.sequences) if self.sequences else np.zeros(0, int)
         self._plans: dict[bytes | None, tuple] = {}
 
     def _plan(self, mask: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -131,7 +175,10 @@ class AR1Whitener:
                 dist.append(np.diff(tp).astype(float))
         rows_a, prev_a, d = np.concatenate(rows), np.concatenate(prev), np.concatenate(dist)
         a = self.rho ** d
-        scale = 1.0 / np.sqrt(1.0 - a * a)
+        if self.innovation_sd is None:
+            scale = 1.0 / np.sqrt(1.0 - a * a)
+        else:  # s^2 (1 - rho^2d) = innovation_sd^2 (1 - rho^2d) / (1 - rho^2), the ratio a finite sum
+            scale = 1.0 / (self.innovation_sd * np.sqrt((1.0 - a * a) / (1.0 - self.rho**2)))
         hit = (rows_a, prev_a, a, scale)
         self._plans[key] = hit
         return hit
@@ -139,5 +186,7 @@ class AR1Whitener:
     def __call__(self, r: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
         rows, prev, a, scale = self._plan(mask)
         out = np.array(r, float, copy=True)
+        if self.innovation_sd is not None:  # a sequence's first sample (and a fold's): its marginal sigma
+            out[self._rows] = r[self._rows] * (math.sqrt(1.0 - self.rho**2) / self.innovation_sd)
         out[rows] = (r[rows] - a * r[prev]) * scale
         return out

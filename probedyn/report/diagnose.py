@@ -58,7 +58,12 @@ def summary(res: dict[str, Any]) -> str:
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
     nz = res["method"].get("noise") or {}
-    if nz.get("model") == "AR(1)":
+    if nz.get("model") == "AR(1)" and "innovation_sd" in nz:
+        on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
+        lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (no stated noise: first against second differences"
+                     f"{on}; marginal sigma {nz['marginal_sd']:.2f}x the scatter-read one; residual lag-one correlation "
+                     f"{nz['rho_lag1']:.2f}): residuals are whitened (innovations) in every fit")
+    elif nz.get("model") == "AR(1)":
         lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (the stated noise is {1 / nz['high_frequency_scale']:.2f}x "
                      f"its sample-to-sample part; residual lag-one correlation {nz['rho_lag1']:.2f}): residuals are "
                      "whitened (innovations) in every fit")
