@@ -39,3 +39,10 @@ def test_user_error_is_one_line_without_traceback():
     err = proc.stderr.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("probedyn: error:"), proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_diagnose_noise_model_is_checked_before_reading(capsys):
+    """``probedyn diagnose --noise`` takes auto or white; anything else is a one-line usage error (exit 2)."""
+    assert main(["diagnose", "no-such-file.toml", "--noise", "pink"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("probedyn: error:") and "--noise" in err[0]

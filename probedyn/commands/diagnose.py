@@ -30,11 +30,16 @@ def _human_list(rows: list[dict[str, Any]]) -> str:
 def diagnose_cmd(
     measurement: Optional[Path] = typer.Argument(None, help="Measurement: TOML sidecar or its CSV."),
     list_causes: bool = typer.Option(False, "--list-causes", help="List the catalog of causes and exit."),
+    noise: str = typer.Option("auto", "--noise", help="Noise model: auto (AR(1) whitening where the residuals "
+                              "show a correlation) or white (samples taken as independent)."),
     as_json: bool = JSON_OPT,
     out: Optional[Path] = OUT_OPT,
 ) -> None:
     """Calibrate the baseline, analyse residuals, rank catalog causes out of sample, extend, report the gain."""
     from probedyn.core.errors import ParameterError
+
+    if noise not in ("auto", "white"):
+        raise ParameterError(f"--noise must be auto or white, got {noise!r}")
 
     if list_causes:
         from probedyn.diagnose.causes import catalog_table
@@ -47,7 +52,7 @@ def diagnose_cmd(
     from probedyn.diagnose.problems import make_problem
 
     problem = make_problem(measurement)
-    res = diagnose(problem)
+    res = diagnose(problem, noise_model=noise)
     if out is not None:
         from probedyn.core.io import write_json, write_text
         from probedyn.report.diagnose import markdown, plot_evidence, plot_residuals
