@@ -725,6 +725,14 @@ def _check_baseline_identifiable(base: Fit) -> None:
                               "([baseline] free) or add data that separates them")
 
 
+def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
+    """Every fit from now on on AR(1) innovations (:mod:`.noise`); the baseline re-fitted so (the better of a
+    fresh fit and one from the white optimum)."""
+    F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), noise.get("innovation_sd"))
+    b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
+    return b1 if b1.chi2 <= b2.chi2 else b2
+
+
 def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -> tuple["Fit", list["Fit"]]:
     """Step 3: every cause fitted nested in the baseline (and the baseline re-fitted where a candidate's own
     baseline parameters fit better); returns the (possibly re-fitted) baseline and the fits in cause order."""
@@ -794,9 +802,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         noise = dict(noise, model="white", rho=0.0, reason="white noise requested (noise_model)")
     deferred = bool(noise and noise_model == "auto" and not getattr(problem, "noise_stated", False))
     if noise and noise["model"] == "AR(1)" and not deferred:
-        F.white = AR1Whitener(noise["rho"], problem.sequences, len(base.r), noise.get("innovation_sd"))
-        b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
-        base = b1 if b1.chi2 <= b2.chi2 else b2
+        base = _whiten(F, noise, base)
     cands = []
     F.open_pool()
     while True:
@@ -811,11 +817,9 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                                 + ", ".join(c.key for c in best.causes) + ")") if best.causes else "the baseline")
         if again["model"] != "AR(1)":
             break
-        F.white = AR1Whitener(again["rho"], problem.sequences, len(base.r), again.get("innovation_sd"))
         F.close_pool()  # the workers were forked with the white residuals
+        base = _whiten(F, again, base)
         F.open_pool()
-        b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
-        base = b1 if b1.chi2 <= b2.chi2 else b2
     p_base = base.p_value
     significant = p_base < alpha
     cv = CrossValidation(F, folds, n) if use_cv else None
