@@ -10,8 +10,9 @@ approach and the retract, as recorded); the sidecar states the marginal sigma, a
 noise's standard deviation would, or (``--unstated``) states no noise, as most instrument exports: the
 diagnosis then estimates it from the record's own scatter. Each case is diagnosed twice in the same process: with the samples taken
 as independent (``noise_model="white"``, the diagnosis before session 19) and with the default
-(``"auto"``: AR(1) whitening where the stated noise's high-frequency part and the residuals' lag-one
-correlation both show it, :mod:`probedyn.diagnose.noise`). Reported: false discoveries on the nulls,
+(``"auto"``: AR(1) whitening where the stated noise's high-frequency part, or without a stated noise the
+first against the second differences of the best nested candidate's residuals, and the residuals' lag-one
+correlation show it, :mod:`probedyn.diagnose.noise`). Reported: false discoveries on the nulls,
 correct cause first on the hidden cases (over all cases: no detectability rule is applied here), the
 correlation the diagnosis estimated, CPU time.
 """
