@@ -92,7 +92,8 @@ def correlated(e: np.ndarray, rho: float) -> np.ndarray:
 
 
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300,
-                    noise_rho: float = 0.0, state_noise: bool = True) -> tuple[Path, dict]:
+                    noise_rho: float = 0.0, state_noise: bool = True,
+                    declare_rho: float | None = None) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
 
@@ -197,6 +198,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "force"\ndata = "{name}.csv"\n\n[lever]\n{lever}\n[tip]\nradius = {R_nom!r}\n'
         f"E = {E_TIP!r}\nnu = {NU_TIP!r}\n{sample}\n" + (f"[noise]\n{noise_line}\n" if state_noise else "")
+        + (("" if state_noise else "[noise]\n") + f"correlation = {declare_rho!r}\n" if declare_rho is not None else "")
         + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
              "noise_rho": noise_rho, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,

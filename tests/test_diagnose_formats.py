@@ -56,6 +56,7 @@ def test_csv_errors_name_line_and_column(tmp_path, csv, where, what):
     (SIDE.replace("[probe]\n", "[probe]\ntip_mass = 1e-12\ntip_position = 1.5\n"), "tip_position"),
     (SIDE + "[baseline]\nfree = [\"thicknes\"]\n", "did you mean 'thickness'"),
     (SIDE.replace('name = "cantilever"', 'name = "cantileverr"'), "did you mean 'cantilever'"),
+    (SIDE.replace("frequency_rel = 1e-3", "correlation = 0.5"), "unknown key"),  # no recording sequences
 ])
 def test_sidecar_errors_are_one_line(tmp_path, side, what):
     with pytest.raises(DataFormatError) as e:

@@ -165,3 +165,57 @@ def test_a_sampling_scale_misfit_is_judged_after_its_cause():
     assert be["rho_scatter"] > nz["gate_scatter"] and be["rho_lag1"] > nz["gate_lag1"]
     assert nz["model"] == "white" and "surface-slope" in nz["judged_on"]
     assert res["findings"][0]["cause"] == "surface-slope"
+
+
+def test_a_declared_correlation_replaces_the_estimate():
+    """``[noise] correlation`` measured by the user: white residuals declared AR(1) at 0.6 are whitened at 0.6
+    (no gate), AR(1) residuals declared white (0) are not whitened, the record's own estimates reported beside
+    the declaration; without a stated noise the innovation's scale still comes from the differences with the
+    declared rho: the whitened mean square is 1 within 4 of its standard errors sqrt(2 / n)."""
+    rng = np.random.default_rng(11)
+    prob = _problem()
+    e = rng.standard_normal(600)
+    prob.noise_correlation_declared = 0.6
+    nz = noise_correlation(prob, e)
+    assert nz["model"] == "AR(1)" and nz["rho"] == 0.6 and nz["estimator"].startswith("declared")
+    assert abs(nz["rho_scatter"]) < 4 * SCATTER_SE_SQRT_N / math.sqrt(600)  # what the record itself says
+    a = np.concatenate([correlated(rng.standard_normal(300), 0.8) for _ in range(2)])
+    prob.noise_correlation_declared = 0.0
+    nz = noise_correlation(prob, a)
+    assert nz["model"] == "white" and nz["rho"] == 0.0 and "declared white" in nz["reason"]
+    assert abs(nz["rho_scatter"] - 0.8) < 4 * SCATTER_SE_SQRT_N / math.sqrt(600)
+    unst = _problem(stated=False)
+    unst.noise_correlation_declared = 0.8
+    r = a / _scatter_sigma(a)
+    nz = noise_correlation(unst, r)
+    assert nz["model"] == "AR(1)" and nz["rho"] == 0.8
+    w = AR1Whitener(nz["rho"], unst.sequences, 600, nz["innovation_sd"])
+    assert abs(float(np.mean(w(r) ** 2)) - 1.0) < 4 * math.sqrt(2 / 600)
+
+
+@pytest.mark.parametrize("value, what", [("1.2", "outside the plausible range"), ("-0.1", "outside the plausible range"),
+                                         ('"high"', "must be a finite number")])
+def test_a_declared_correlation_is_checked(tmp_path, value, what):
+    from probedyn.core.errors import DataFormatError
+    from probedyn.diagnose.formats import read_measurement
+
+    path, _ = make_curve_case(tmp_path, 6003, None, declare_rho=0.5)
+    assert read_measurement(path).noise_correlation == 0.5
+    path.write_text(path.read_text().replace("correlation = 0.5", f"correlation = {value}"))
+    with pytest.raises(DataFormatError, match=what) as e:
+        read_measurement(path)
+    assert "\n" not in str(e.value)
+
+
+def test_a_null_curve_with_a_declared_correlation(tmp_path):
+    """The correlated null (seed 6003, AR(1) at 0.8, stated marginal sigma) with its correlation declared: whitened
+    at exactly the declared rho, nothing claimed, and the report's noise line says so."""
+    from probedyn.diagnose.engine import run
+    from probedyn.report.diagnose import summary
+
+    path, _ = make_curve_case(tmp_path, 6003, None, noise_rho=0.8, declare_rho=0.8)
+    res = run(path)
+    nz = res["method"]["noise"]
+    assert nz["model"] == "AR(1)" and nz["rho"] == 0.8 and nz["estimator"].startswith("declared")
+    assert res["findings"] == [] and res["verdict"] == "no-significant-discrepancy"
+    assert "AR(1) rho = 0.80 as declared" in summary(res)

@@ -416,6 +416,7 @@ class ForceCurveProblem:
         seqs = [np.nonzero(d.segment == s_)[0] for s_ in (0, 1)]
         self.sequences = [ix[np.argsort(d.time[ix], kind="stable")] if d.time is not None else ix for ix in seqs]
         self.noise_stated = bool(d.noise_stated)
+        self.noise_correlation_declared = d.noise_correlation
         self.cv_warm = True  # interleaved groups: folds start from the null and the full-data optimum
         # ... of every parameter, not only the cause's own: the snap-in and pull-off make the misfit
         # piecewise (a W warm-started with the fold baseline's contact point, biased by the adhesion,

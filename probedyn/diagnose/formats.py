@@ -31,7 +31,10 @@ Tables:
   ``tip_mass``, default 1).
 * ``[medium]``: ``name`` (vacuum, air, nitrogen, water, ethanol) or ``density`` and
   ``viscosity``; ``temperature`` [K]. A declared medium is part of the baseline.
-* ``[noise]``: ``frequency_rel``, ``Q_rel`` (modal), ``force`` [N] (friction, force curves).
+* ``[noise]``: ``frequency_rel``, ``Q_rel`` (modal), ``force`` [N] (friction, force curves);
+  ``correlation`` (friction, force curves): the noise's lag-one correlation between consecutive
+  samples, 0 ... 0.95, where measured (e.g. from a record off the surface): AR(1) noise taken as
+  declared instead of estimated (:mod:`probedyn.diagnose.noise`).
 * ``[baseline]``: ``free`` = quantities calibrated by the baseline fit (thickness, width,
   length, modulus, density; friction: nothing else).
 * friction: ``[lever]`` ``k_x`` [N/m], ``m_x`` [kg], ``c_x`` [N s/m] or ``Q_x``; ``[sample]``
@@ -54,6 +57,7 @@ from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.core.io import MAX_DATA_BYTES, read_text, resolve_input
 from probedyn.core.params import load_toml
 from probedyn.diagnose.hydrodynamics import MEDIA
+from probedyn.diagnose.noise import RHO_MAX
 
 __all__ = ["read_measurement", "read_csv", "Measurement", "ModalData", "SpectrumData", "FrictionData",
            "FrictionScan", "ForceData", "FAMILIES", "KINDS"]
@@ -74,7 +78,7 @@ TABLES: dict[str, dict[str, tuple[str, ...]]] = {
                           "sampling", "segments")},
     "medium": {"*": ("name", "density", "viscosity", "temperature")},
     "noise": {"modal": ("frequency_rel", "Q_rel"), "spectrum": ("frequency_rel", "Q_rel"),
-              "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force",), "force": ("force", "deflection")},
+              "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force", "correlation"), "force": ("force", "deflection", "correlation")},
     "baseline": {"*": ("free",)},
     "lever": {"friction": ("k_x", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
     "sample": {"friction": ("lattice",), "force": ("E", "nu")},
@@ -172,6 +176,9 @@ class Measurement:
     temperature: float | None = None
     known: frozenset = frozenset()
     free: tuple[str, ...] = ()
+    #: the noise's lag-one correlation between consecutive samples as declared ([noise] correlation); None:
+    #: not declared (estimated from the record where it has recording sequences)
+    noise_correlation: float | None = None
 
 
 @dataclass
@@ -370,6 +377,8 @@ def _common(meta: dict, side: Path, kind: str) -> dict[str, Any]:
     if len(set(free)) != len(free):
         raise DataFormatError(f"{side}: [baseline] free lists a quantity twice")
     out["free"] = tuple(free)
+    if "correlation" in meta.get("noise", {}):
+        out["noise_correlation"] = _num(meta, "noise", "correlation", side, lo=0.0, hi=RHO_MAX)
     return out
 
 

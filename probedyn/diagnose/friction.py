@@ -786,6 +786,7 @@ class FrictionProblem:
         row = np.cumsum(self.use) - 1
         self.sequences = [row[sl][self.use[sl]] for sl in self.slices]
         self.noise_stated = bool(data.noise_stated and not self.noise_excess)
+        self.noise_correlation_declared = data.noise_correlation
         self.group_labels = labels
         N = float(np.mean(self.loads))
         self.a_slip = _slip_period(data, self.a_est, self.sigma)

@@ -162,6 +162,7 @@ class FrictionLoopProblem:
         # each line's trace and retrace as recorded, against the stated noise (:mod:`probedyn.diagnose.noise`)
         self.sequences = [np.arange(sl.start, sl.stop) for sl in self.slices]
         self.noise_stated = bool(data.noise_stated)
+        self.noise_correlation_declared = data.noise_correlation
         # the image lines are repeats of one measurement: a finding's uncertainty is also their jackknife
         self.replicate_units = self.sequences
         self.replicate_label = f"{len(sc)} image lines"

@@ -46,6 +46,13 @@ sample) raises the first differences more than the second and reads as correlati
 therefore judges an unstated noise on the residuals of the best nested candidate, not the baseline's
 (:func:`probedyn.diagnose.engine.diagnose`, step 1b).
 
+**A declared correlation** (``[noise] correlation`` in the sidecar, measured by the user, e.g. on a
+record off the surface or with the tip retracted) replaces the estimate and its gates: ``rho`` as
+declared (0: white whatever the record shows). With a stated noise the whitening follows from it; without
+one, the innovation's scale still comes from the residuals' second differences with the declared ``rho``
+(the formula above), judged on the best nested candidate's residuals like an estimated one. The estimates
+are reported beside it, so that a declaration the record contradicts can be seen.
+
 **Whitening** (generalised least squares, Cochrane & Orcutt 1949): within each of the problem's
 ``sequences`` (samples in recording order), ``r'_i = (r_i - rho^d r_j) / sqrt(1 - rho^(2d))`` with
 ``j`` the previous sample of the same sequence in the fitted set and ``d`` their distance in samples
@@ -93,7 +100,8 @@ def noise_correlation(problem, r: np.ndarray) -> dict[str, Any] | None:
     stated or estimated from the record's scatter) of a problem that declares ``sequences``; None where it
     does not apply. Without a stated noise the correlation comes from the first against the second
     differences and the result carries ``innovation_sd``, the one-step innovation's standard deviation
-    in the residuals' units (module docstring)."""
+    in the residuals' units (module docstring). A problem's ``noise_correlation_declared`` (not None: the
+    sidecar's ``[noise] correlation``) replaces the estimate and its gates."""
     seqs = [np.asarray(s, int) for s in (getattr(problem, "sequences", None) or []) if len(s) > 3]
     if not seqs:
         return None
@@ -126,12 +134,19 @@ def noise_correlation(problem, r: np.ndarray) -> dict[str, Any] | None:
     # reads 0.78, biased by the fitted baseline); the lag-one estimate only bounds it from above (a stated noise
     # that is too large inflates rho_scatter, not rho_lag1)
     rho = float(min(rho_s, rho_l + gate_l, RHO_MAX)) if applied else 0.0
+    estimator = ("stated noise against the second differences" if stated
+                 else "first against second differences (no stated noise)")
+    declared = getattr(problem, "noise_correlation_declared", None)
+    if declared is not None:  # measured by the user: taken as declared, the estimates kept for comparison
+        applied, beyond, rho = declared > 0, False, float(declared)
+        estimator = "declared ([noise] correlation)"
     out = {"model": "AR(1)" if applied else "white", "rho": rho, "rho_scatter": rho_s, "rho_lag1": rho_l,
            "high_frequency_scale": q, "gate_scatter": gate_s, "gate_lag1": gate_l, "n": n,
-           "estimator": "stated noise against the second differences" if stated
-           else "first against second differences (no stated noise)"}
+           "estimator": estimator}
     if beyond:
         out["reason"] = "first differences beyond AR(1) noise (rho_scatter > 1): a misfit, not the noise"
+    elif declared is not None and not applied:
+        out["reason"] = "declared white ([noise] correlation = 0)"
     if applied and not stated:
         # s^2 (1 - rho)(3 - rho) / 3 = q^2 gives the marginal sigma s (ill-determined as rho -> 1) and the
         # innovation's s^2 (1 - rho^2) = q^2 3 (1 + rho) / (3 - rho) (well determined: the 1 - rho cancels)

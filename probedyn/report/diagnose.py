@@ -58,7 +58,12 @@ def summary(res: dict[str, Any]) -> str:
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
     nz = res["method"].get("noise") or {}
-    if nz.get("model") == "AR(1)" and "innovation_sd" in nz:
+    if str(nz.get("estimator", "")).startswith("declared"):
+        lines.append(f"noise: {'AR(1) rho = ' + format(nz['rho'], '.2f') if nz['model'] == 'AR(1)' else 'white'} as "
+                     f"declared ([noise] correlation; the record itself reads {nz['rho_scatter']:.2f} from its differences, "
+                     f"residual lag-one correlation {nz['rho_lag1']:.2f})"
+                     + (": residuals are whitened (innovations) in every fit" if nz["model"] == "AR(1)" else ""))
+    elif nz.get("model") == "AR(1)" and "innovation_sd" in nz:
         on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
         lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (no stated noise: first against second differences"
                      f"{on}; marginal sigma {nz['marginal_sd']:.2f}x the scatter-read one; residual lag-one correlation "
