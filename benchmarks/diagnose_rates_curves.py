@@ -99,9 +99,14 @@ def detector_cases(n_each: int, n_null: int, n_hidden: int, part: int = 0, parts
     return out[part::parts]
 
 
-def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None) -> dict:
+def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho: float = 0.0) -> dict:
     """The effect's signal: the chi-square of the diagnosis' baseline fitted to the noise-free record
-    (stated noise), and the detection threshold ``chi2_dof(1 - alpha) - dof`` of the baseline test."""
+    (stated noise), and the detection threshold ``chi2_dof(1 - alpha) - dof`` of the baseline test.
+    With AR(1) noise of correlation ``rho`` (the sidecar at ``path`` states its marginal sigma) every
+    chi-square is the generalised one, ``r^T Sigma^-1 r`` on the true noise covariance (the fits on AR(1)
+    innovations, :class:`probedyn.diagnose.noise.AR1Whitener`): a smooth signal's is about
+    ``(1 - rho) / (1 + rho)`` of its white value, since correlated noise has that much more power at low
+    frequencies."""
     from dataclasses import replace
 
     from scipy.stats import chi2 as chi2_dist
@@ -109,10 +114,13 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None) -> d
     from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter
     from probedyn.diagnose.formats import read_measurement
     from probedyn.diagnose.forcecurve import ForceCurveProblem
+    from probedyn.diagnose.noise import AR1Whitener
 
     meas = read_measurement(path)
     prob = ForceCurveProblem(replace(meas, force=np.asarray(clean, float)))
     F = Fitter(prob)
+    if rho:
+        F.white = AR1Whitener(rho, prob.sequences, len(clean))
     base = F.baseline()
     thr = float(chi2_dist.ppf(1 - ALPHA, base.dof)) - base.dof
     out = {"signal_chi2": base.chi2, "threshold": thr, "detectable": bool(base.chi2 >= thr)}
@@ -141,15 +149,27 @@ def identifiability(chi: dict, expected: str, containers: list[str]) -> dict:
     return {"rival_gap_chi2": gap, "identifiable": bool(gap >= 2 * EVIDENCE_MARGIN)}
 
 
-def run_case(folder: Path, seed: int, effect: str | None) -> dict:
-    path, truth = make_visco_case(folder, seed) if effect == VISCO_EFFECT else make_curve_case(folder, seed, effect)
+def run_case(folder: Path, seed: int, effect: str | None, rho: float = 0.0, stated: bool = True) -> dict:
+    """One case. ``rho``: the noise is AR(1) of that lag-one correlation (one chain over the approach and the
+    retract, :func:`diagnose_truth_curves.correlated`; the marginal sigma as drawn); ``stated = False``: the
+    sidecar states no noise (most exports). Detectability and identifiability are then evaluated on the true
+    noise (its sigma and correlation), from a twin of the record whose sidecar states the sigma."""
+    if effect == VISCO_EFFECT:
+        path, truth = make_visco_case(folder, seed)
+    else:
+        path, truth = make_curve_case(folder, seed, effect, noise_rho=rho, state_noise=stated)
     clean = truth.pop("force_clean")
-    det = signal_chi2(path, clean, EXPECTED[effect][0]) if effect else None
+    twin = path
+    if effect and not stated:  # the same draws (the sidecar's text is the only difference)
+        twin, _ = make_curve_case(folder / "stated", seed, effect, noise_rho=rho, state_noise=True)
+    det = signal_chi2(twin, clean, EXPECTED[effect][0], rho) if effect else None
     t0, c0 = time.perf_counter(), time.process_time()
     res = run(path)
     row = {"seed": seed, "effect": effect, "truth": truth, "detectability": det, "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "wall_s": time.perf_counter() - t0,
            "cpu_s": time.process_time() - c0, "baseline_p": res["baseline"]["p_value"],
+           "noise": {k: v for k, v in res["method"]["noise"].items()
+                     if k in ("model", "rho", "rho_scatter", "rho_lag1", "innovation_sd", "reason")},
            "candidates": [{"cause": c["cause"], "evidence": c["evidence"], "delta_chi2": c["delta_chi2"]}
                           for c in res["candidates"]]}
     if res["findings"]:
@@ -246,22 +266,31 @@ def summarize(rows: list[dict]) -> dict:
         "parsimony_applied": [r["seed"] for r in rows if r.get("parsimony")],
         "false_discoveries": [{"seed": r["seed"], "verdict": r["verdict"], "findings": r["findings"]}
                               for r in nul if r["findings"]],
+        "noise_correlation_estimated": {
+            "whitened": sum(r["noise"].get("model") == "AR(1)" for r in rows if "noise" in r),
+            "of": sum("noise" in r for r in rows),
+            "rho_median": float(np.median([r["noise"].get("rho", 0.0) for r in rows if "noise" in r]))
+            if any("noise" in r for r in rows) else None},
         "median_cpu_s": float(np.median([r["cpu_s"] for r in rows])) if rows else None,
         "median_wall_s": float(np.median([r["wall_s"] for r in rows])) if rows else None,
     }
 
 
-def main(argv: list[str], todo: list | None = None) -> dict:
+def main(argv: list[str], todo: list | None = None, rho: float = 0.0, stated: bool = True) -> dict:
     n_h = int(argv[1]) if len(argv) > 1 else 50
     n_n = int(argv[2]) if len(argv) > 2 else 50
     out = Path(argv[3]) if len(argv) > 3 else ROOT / "benchmarks" / "results" / "diagnose_rates_curves.json"
     data = json.loads(out.read_text()) if out.exists() else {"rows": []}
+    if rho or not stated:
+        noise = {"rho": rho, "noise_stated": stated}
+        if data.setdefault("noise", noise) != noise:
+            raise SystemExit(f"{out} holds a run with noise {data['noise']}, not {noise}")
     done = {r["seed"] for r in data["rows"]}
     with tempfile.TemporaryDirectory() as tmp:
         for seed, effect in (cases(n_h, n_n) if todo is None else todo):
             if seed in done:
                 continue
-            row = run_case(Path(tmp), seed, effect)
+            row = run_case(Path(tmp), seed, effect, rho, stated)
             data["rows"].append(row)
             data["summary"] = summarize(data["rows"])
             data["machine"] = "2 cores shared with other jobs (wall times inflated; CPU time is per process)"
@@ -401,6 +430,14 @@ if __name__ == "__main__":
         part, parts = (int(sys.argv[6]), int(sys.argv[7])) if len(sys.argv) > 7 else (0, 1)
         todo = detector_cases(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), part, parts)
         print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
+    elif len(sys.argv) > 1 and sys.argv[1] == "correlated":
+        # correlated N_HIDDEN N_NULL RHO OUT.json [--unstated] [PART PARTS]: the rate study with AR(1) noise
+        # (session 22); PART of PARTS takes every PARTS-th case of the interleaved list (merge the parts' rows)
+        a = [x for x in sys.argv[2:] if x != "--unstated"]
+        part, parts = (int(a[4]), int(a[5])) if len(a) > 5 else (0, 1)
+        todo = cases(int(a[0]), int(a[1]))[part::parts]
+        print(json.dumps(main(["", a[0], a[1], a[3]], todo, float(a[2]), "--unstated" not in sys.argv), indent=1,
+                         default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "spectra":
         print(json.dumps(main_spectra(sys.argv[1:]), indent=1, default=float))
     else:

@@ -213,6 +213,31 @@ def test_a_contained_limit_is_never_pruned_before_the_parsimony_rule():
     assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
 
 
+def test_a_container_never_fits_worse_than_a_limit_it_contains(tmp_path):
+    """Class 2 across causes, the converse of the limit re-fit: Maugis-Dugdale contains JKR (lambda -> inf)
+    and DMT (lambda -> 0), so its best fit can be no worse than theirs. On force-curve seed 2001 (a JKR truth)
+    with AR(1) noise of rho = 0.8, fitted on the true noise's innovations, Maugis-Dugdale's multi-start stops
+    at an interior lambda ~ 2.8, chi^2 ~ 10 behind JKR (session 22); re-fitted from JKR's optimum with lambda
+    at its bounds it must end within the fitter's tolerance of JKR or better, lambda towards the JKR side."""
+    from probedyn.diagnose.engine import _candidates
+    from probedyn.diagnose.forcecurve import ForceCurveProblem
+    from probedyn.diagnose.noise import AR1Whitener
+
+    path, truth = make_curve_case(tmp_path, 2001, "adhesion-jkr", noise_rho=0.8)
+    prob = ForceCurveProblem(read_measurement(path))
+    F = Fitter(prob)
+    F.white = AR1Whitener(0.8, prob.sequences, 2 * 300)
+    base = F.baseline()
+    laws = [c for c in prob.causes if "adhesion" in c.changes]
+    plain = {c.key: F.nested(base, (c,)).chi2 for c in laws}
+    assert plain["adhesion-md"] > plain["adhesion-jkr"] + 1.0  # the case exercises the re-fit
+    base, fits = _candidates(F, laws, base, 0.01, len(laws))
+    chi = {f.causes[0].key: f.chi2 for f in fits}
+    md = next(f for f in fits if f.causes[0].key == "adhesion-md")
+    assert chi["adhesion-md"] <= min(chi["adhesion-jkr"], chi["adhesion-dmt"]) + 1e-6 * chi["adhesion-jkr"]
+    assert md.values["lam"] > 2.0 and abs(md.values["W"] / truth["params"]["W"] - 1) < 0.1
+
+
 def test_spectrum_spur_rejected_modes_identified(tmp_path):
     """Thermal PSD of the probe's FEM modes (a finer mesh than the diagnosis', equipartition with the
     FEM's modal stiffness at the tip, chi^2 periodogram scatter) with a one-bin spur below f1: the
