@@ -432,10 +432,11 @@ if __name__ == "__main__":
         print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "correlated":
         # correlated N_HIDDEN N_NULL RHO OUT.json [--unstated] [PART PARTS]: the rate study with AR(1) noise
-        # (session 22); PART of PARTS takes every PARTS-th case of the interleaved list (merge the parts' rows)
+        # (session 22); PART of PARTS takes every PARTS-th (hidden, null) pair of the interleaved list (merge
+        # the parts' rows)
         a = [x for x in sys.argv[2:] if x != "--unstated"]
         part, parts = (int(a[4]), int(a[5])) if len(a) > 5 else (0, 1)
-        todo = cases(int(a[0]), int(a[1]))[part::parts]
+        todo = [c for i, c in enumerate(cases(int(a[0]), int(a[1]))) if (i // 2) % parts == part]
         print(json.dumps(main(["", a[0], a[1], a[3]], todo, float(a[2]), "--unstated" not in sys.argv), indent=1,
                          default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "spectra":
