@@ -7,7 +7,9 @@ OUT.json are skipped; the file is rewritten after every case).
 Truth: ``tests/diagnose_truth_loops.py`` (the tip's force balance on the incline solved per point,
 Coulomb friction, islands of a second phase, lateral calibration factor 0.7-1.4 in half the cases,
 friction contrast in half, feedback lag 0-2 samples, adhesion up to half the load). Hidden effect:
-``surface-slope`` (seeds 7000 + 2 i); noise-only: a flat surface tilted by up to 1 % (seeds 7001 + 2 i).
+``surface-slope`` (seeds 7000 + 2 i), with the islands' friction contrast a second effect where the case
+draws one (session 22: ``friction-contrast`` is a cause; a first finding among the case's effects is right,
+``slope_first`` counts the earlier criterion); noise-only: a flat surface tilted by up to 1 % (seeds 7001 + 2 i).
 Reported as the other rate studies: correct cause first, false discoveries (any finding on a null),
 the median ``|g_fit - g| / g`` (the calibration factor derived from the coupling,
 :func:`probedyn.diagnose.causes.surface_slope.calibration_factor`, against the truth's), every miss with its class, CPU time per case.
@@ -47,24 +49,37 @@ def run_case(folder: Path, seed: int, effect: str | None) -> dict:
     row = {"seed": seed, "effect": effect, "truth": truth, "verdict": res["verdict"],
            "findings": [x["cause"] for x in f], "baseline_p": res["baseline"]["p_value"], "cpu_s": _cpu() - c0,
            "noise": {k: v for k, v in res["method"]["noise"].items() if k in ("model", "rho", "baseline_estimate")}}
+    # the truth's effects: the slope coupling on every hidden case, and (session 22) the islands' friction
+    # contrast where the case draws one (half of them): a first finding among them is right
+    contrast = effect is not None and truth["contrast"] != 1.0
+    row["truth_effects"] = ([effect] + (["friction-contrast"] if contrast else [])) if effect else []
     if effect and f:
-        row["correct_first"] = f[0]["cause"] == effect
-        if row["correct_first"]:
-            g = f[0]["derived"]["lateral_calibration_factor"]
+        row["correct_first"] = f[0]["cause"] in row["truth_effects"]
+        row["slope_first"] = f[0]["cause"] == effect  # the sessions-18-21 criterion
+        fs = next((x for x in f if x["cause"] == effect), None)
+        if row["correct_first"] and fs is not None:
+            g = fs["derived"]["lateral_calibration_factor"]
             row["fitted"] = g
-            row["c_slope"] = f[0]["parameters"]["c_slope"]["value"]
+            row["c_slope"] = fs["parameters"]["c_slope"]["value"]
             row["recovery_error"] = abs(g - truth["g"]) / truth["g"]
             # uncertainty calibration: g's error in units of its jackknife sigma over the lines, and of the
             # Jacobian's sigma of c carried to g (g ~ c for a small apparent friction coefficient)
-            pc = f[0]["parameters"]["c_slope"]
-            sg = (f[0].get("derived_sigma_jackknife") or {}).get("lateral_calibration_factor")
+            pc = fs["parameters"]["c_slope"]
+            sg = (fs.get("derived_sigma_jackknife") or {}).get("lateral_calibration_factor")
             s_jac = pc.get("sigma_jacobian", pc.get("sigma"))
             if sg:
                 row["z_jackknife"] = (g - truth["g"]) / sg
             if s_jac:
                 row["z_jacobian"] = (g - truth["g"]) / (s_jac * g / max(row["c_slope"], 1e-12))
+        fc = next((x for x in f if x["cause"] == "friction-contrast"), None)
+        if fc is not None and contrast:
+            ratio = fc["derived"]["friction_ratio_high_to_low"]
+            row["contrast_fitted"] = ratio
+            row["contrast_error"] = abs(ratio - truth["contrast"]) / truth["contrast"]
     elif effect:
-        row["correct_first"] = False
+        row["correct_first"] = row["slope_first"] = False
+    if effect:
+        row["contrast_claimed"] = "friction-contrast" in row["findings"]
     return row
 
 
@@ -88,6 +103,16 @@ def summary(rows: list[dict]) -> dict:
     return {"n_hidden": len(eff), "n_null": len(nul),
             "correct_first": sum(r["correct_first"] for r in eff),
             "correct_first_rate": (sum(r["correct_first"] for r in eff) / len(eff)) if eff else None,
+            "slope_first": sum(r.get("slope_first", r["correct_first"]) for r in eff),
+            # the friction contrast (session 22): claimed on the cases that draw one, and on those that do not
+            "contrast": {"cases": sum("friction-contrast" in r.get("truth_effects", ()) for r in eff),
+                         "claimed": sum(r.get("contrast_claimed", False) for r in eff
+                                        if "friction-contrast" in r.get("truth_effects", ())),
+                         "claimed_without": sum(r.get("contrast_claimed", False) for r in eff
+                                                if "friction-contrast" not in r.get("truth_effects", ())),
+                         "without": sum("friction-contrast" not in r.get("truth_effects", ()) for r in eff),
+                         "median_ratio_error": float(np.median([r["contrast_error"] for r in eff if "contrast_error" in r]))
+                         if any("contrast_error" in r for r in eff) else None},
             "false_discoveries": sum(bool(r["findings"]) for r in nul),
             "false_discovery_rate": (sum(bool(r["findings"]) for r in nul) / len(nul)) if nul else None,
             "median_recovery_error": float(np.median(errs)) if errs else None,

@@ -59,7 +59,7 @@ def test_nested_never_worse_friction_loop_catalog(tmp_path):
 
     path, _ = make_loop_case(tmp_path, 7000, "surface-slope")
     prob = make_problem(path)
-    assert [c.key for c in prob.causes] == ["surface-slope"]
+    assert [c.key for c in prob.causes] == ["friction-contrast", "surface-slope"]
     _nested_never_worse(prob)
 
 

@@ -106,8 +106,37 @@ def test_a_hidden_slope_coupling_is_named_and_its_calibration_factor_recovered(t
 @pytest.mark.parametrize("seed", [7001, 7003])
 def test_a_flat_surface_claims_no_slope_coupling(tmp_path, seed):
     path, truth = make_loop_case(tmp_path, seed, None)
-    res = diagnose(make_problem(path))
+    prob = make_problem(path)
+    # a flat surface has no relief above its noise: no phase coordinate, the contrast is not offered
+    assert prob.relief is None and "friction-contrast" in prob.describe()["causes_not_offered"]
+    res = diagnose(prob)
     assert res["findings"] == [], res["findings"]
+
+
+@pytest.mark.parametrize("seed", [7022, 7064])
+def test_a_friction_contrast_between_phases_is_named_and_its_ratio_recovered(tmp_path, seed):
+    """Islands whose friction coefficient is 1.15 (7022) or 1.28 (7064) times the matrix's: the contrast is
+    claimed beside the slope coupling, and the ratio of the highest parts' friction to the lowest's
+    recovers the truth's within 10 % (the model is exact on the plateaus; the edges are low-passed and the
+    heights lag the lateral force by up to two samples), the calibration factor within 10 % as above."""
+    path, truth = make_loop_case(tmp_path, seed, "surface-slope")
+    res = diagnose(make_problem(path))
+    found = {f["cause"]: f for f in res["findings"]}
+    assert set(found) == {"friction-contrast", "surface-slope"}, res["findings"]
+    ratio = found["friction-contrast"]["derived"]["friction_ratio_high_to_low"]
+    assert ratio == pytest.approx(truth["contrast"], rel=0.10)
+    assert found["surface-slope"]["derived"]["lateral_calibration_factor"] == pytest.approx(truth["g"], rel=0.10)
+
+
+def test_no_friction_contrast_where_the_phases_share_one_friction(tmp_path):
+    """Islands of one friction coefficient (seed 7002: relief 5-60 nm, contrast 1): the contrast cause is
+    offered (the relief marks phases) but not claimed; the slope coupling is."""
+    path, truth = make_loop_case(tmp_path, 7002, "surface-slope")
+    assert truth["contrast"] == 1.0
+    prob = make_problem(path)
+    assert "friction-contrast" in [c.key for c in prob.causes]
+    res = diagnose(prob)
+    assert [f["cause"] for f in res["findings"]] == ["surface-slope"]
 
 
 def test_jackknife_replicate_is_the_record_without_that_line(tmp_path):

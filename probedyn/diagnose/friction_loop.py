@@ -17,7 +17,8 @@ is not modelled. Fitted: ``u0`` and ``offset``. Cross-validation groups: the tra
 of each scan.
 
 Causes for this regime declare ``regimes = ("loop",)`` (:mod:`.causes.surface_slope`: the load's
-component along a sloped surface, which needs the recorded topography, column ``height_m``).
+component along a sloped surface, and :mod:`.causes.friction_contrast`: friction that differs between the
+phases of a blend, which the relief marks; both need the recorded topography, column ``height_m``).
 The model state is :class:`LoopState`; the sample's surface slope is ``dh/dx`` of the mean of the heights
 the instrument recorded in trace and retrace (:func:`segment_slopes`: the feedback's lag cancels).
 """
@@ -51,6 +52,7 @@ class LoopState:
     u0: float  # corrugation per unit load of the PT substrate [J/N]
     offset: float  # the lateral channel's zero [N]
     slope_c: float = 0.0  # coupling of the surface slope (surface-slope cause; 0: none)
+    contrast: float = 0.0  # relative friction change from the lowest to the highest relief (friction-contrast)
     transforms: list = field(default_factory=list)  # f(problem, F) -> F, applied last
 
 
@@ -79,6 +81,9 @@ def slope_force(Fk, N, d, t, c: float = 1.0):
 
 #: a height component is kept in the surface where its power exceeds the height noise's this many times
 SLOPE_SNR = 4.0
+#: the relief (2nd to 98th percentile) must exceed the mean surface's noise this many times for the friction
+#: contrast to have a phase coordinate (a flat surface has none: the cause is not offered)
+RELIEF_SNR = 8.0
 #: ... up to the first run of this many neighbouring frequencies below that (the 5-frequency average of a white
 #: noise exceeds 4 times its mean with probability 1e-4 per frequency: over hundreds, a lone one does)
 QUIET_BINS = 10
@@ -113,7 +118,16 @@ def low_pass_surface(grid: np.ndarray, h: np.ndarray, noise: float) -> np.ndarra
 
 
 def segment_slopes(scan) -> np.ndarray | None:
-    """The surface slope ``dh/dx`` at every sample (``None`` without a height column). The surface is
+    """The surface slope ``dh/dx`` at every sample (``None`` without a height column); see
+    :func:`segment_surface`."""
+    out = segment_surface(scan)
+    return None if out is None else out[0]
+
+
+def segment_surface(scan) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """The surface slope ``dh/dx`` and the relief (the surface with its line removed: the sample's tilt and
+    the scanner's are not topography) at every sample, and the noise of the mean surface [m] (``None``
+    without a height column). The surface is
     the mean of the heights the scan recorded in each direction at the same position: the feedback's
     lag shifts the trace's topography forward and the retrace's backward (on the real Nanosurf lines
     the two differ by 13 nm RMS), and their mean cancels that shift to first order; a scan recorded in
@@ -135,9 +149,11 @@ def segment_slopes(scan) -> np.ndarray | None:
             curves.append(np.interp(grid, u, hm))
             noise.append(_height_noise(hm))
     if not curves or len(grid) < 3:
-        return np.zeros(len(x))
-    surface = low_pass_surface(grid, np.mean(curves, axis=0), float(np.sqrt(np.mean(np.square(noise)) / len(curves))))
-    return np.interp(x, grid, np.gradient(surface, grid))
+        return np.zeros(len(x)), np.zeros(len(x)), 0.0
+    sd = float(np.sqrt(np.mean(np.square(noise)) / len(curves)))
+    surface = low_pass_surface(grid, np.mean(curves, axis=0), sd)
+    relief = surface - np.polyval(np.polyfit(grid, surface, 1), grid)
+    return np.interp(x, grid, np.gradient(surface, grid)), np.interp(x, grid, relief), sd
 
 
 class FrictionLoopProblem:
@@ -155,8 +171,17 @@ class FrictionLoopProblem:
         self.n = len(self.force)
         self.direction = np.concatenate([s.direction for s in sc]).astype(float)
         self.load_of = np.concatenate([np.full(len(s.force), s.load) for s in sc])
-        slopes = [segment_slopes(s) for s in sc]
-        self.slopes = np.concatenate(slopes) if all(t is not None for t in slopes) else None
+        surf = [segment_surface(s) for s in sc]
+        self.slopes = np.concatenate([t[0] for t in surf]) if all(t is not None for t in surf) else None
+        self.relief, self.relief_range = None, 0.0
+        if self.slopes is not None:
+            # the phase coordinate of the friction-contrast cause: the relief from its 2nd to its 98th
+            # percentile over all lines as 0 .. 1, where that range stands above the surface's noise
+            rel = np.concatenate([t[1] for t in surf])
+            lo, hi = np.percentile(rel, [2.0, 98.0])
+            hnoise = max(t[2] for t in surf)
+            if hi - lo > RELIEF_SNR * hnoise and hi > lo:
+                self.relief, self.relief_range = (rel - lo) / (hi - lo), float(hi - lo)
         self.slices, self.groups, labels = scan_groups(sc)
         self.group_labels = labels
         # each line's trace and retrace as recorded, against the stated noise (:mod:`probedyn.diagnose.noise`)
@@ -234,6 +259,8 @@ class FrictionLoopProblem:
     def predict(self, values, causes=()) -> np.ndarray:
         st = self.state(values, causes)
         Fk = self.friction(st.u0)
+        if st.contrast != 0.0 and self.relief is not None:
+            Fk = Fk * (1.0 + st.contrast * self.relief)
         if st.slope_c != 0.0 and self.slopes is not None:
             F = slope_force(Fk, self.load_of, self.direction, self.slopes, st.slope_c)
         else:
@@ -307,6 +334,7 @@ class FrictionLoopProblem:
                 "k_x_N_per_m": d.k_x, "sigma_force_N": self.sigma, "noise_stated": d.noise_stated,
                 "sigma_scatter_N": self.sigma_scatter, "sampling": d.sampling, "sample_step_m": step,
                 "lattice_periods_per_sample": step / d.lattice, "height_column": self.slopes is not None,
+                "relief_range_m": self.relief_range,
                 "friction_half_loop_N": self.half_loop, "medium": d.medium_name or "not declared",
                 "causes_not_offered": dict(self.not_offered)}
 
