@@ -131,17 +131,22 @@ def test_correlated_null_curve_whitened(tmp_path):
 def test_correlated_null_curve_without_a_stated_noise(tmp_path):
     """The same null (seed 6003, AR(1) at 0.8) with no noise in its sidecar, as most exports: the sigma read from
     the far approach's scatter is 0.38 of the marginal one, so the white analysis' baseline fails its test (p <
-    1 %); the default estimates rho from the differences within 0.1 and claims nothing."""
+    1 %); the default estimates rho from the differences within 0.1 and claims nothing. The problem's sigma is
+    then the estimated marginal one (session 22; a force curve's jump mixture is not scale-free): within the
+    spread that rho's +-0.1 gives ``sqrt(3 / ((1 - rho)(3 - rho)))``, -20 % / +35 % at 0.8."""
     from probedyn.diagnose.engine import Fitter, run
     from probedyn.diagnose.problems import make_problem
 
-    path, _ = make_curve_case(tmp_path, 6003, None, noise_rho=0.8, state_noise=False)
+    path, truth = make_curve_case(tmp_path, 6003, None, noise_rho=0.8, state_noise=False)
     assert "[noise]" not in path.read_text()
-    assert Fitter(make_problem(path)).baseline().p_value < 0.01  # the white analysis' baseline test
+    prob = make_problem(path)
+    assert Fitter(prob).baseline().p_value < 0.01  # the white analysis' baseline test
+    assert prob.sigma < 0.5 * truth["noise"]  # the scatter-read sigma: 0.38 of the marginal one
     auto = run(path)
     nz = auto["method"]["noise"]
     assert nz["model"] == "AR(1)" and abs(nz["rho"] - 0.8) < 0.1, nz
     assert auto["findings"] == [] and auto["verdict"] == "no-significant-discrepancy"
+    assert 0.8 < auto["data"]["sigma_force_N"] / truth["noise"] < 1.35
 
 
 def test_a_sampling_scale_misfit_is_judged_after_its_cause():

@@ -729,8 +729,22 @@ def _check_baseline_identifiable(base: Fit) -> None:
 
 def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
     """Every fit from now on on AR(1) innovations (:mod:`.noise`); the baseline re-fitted so (the better of a
-    fresh fit and one from the white optimum)."""
-    F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), noise.get("innovation_sd"))
+    fresh fit and one from the white optimum).
+
+    Without a stated noise the problem's sigma was read from the record's point-to-point scatter, which
+    understates an AR(1) noise's marginal sigma (by ``sqrt((1 - rho)(3 - rho) / 3)``, 0.38 at rho = 0.8). The
+    problem's sigma becomes the estimated marginal one (``marginal_sd`` times it) before the re-fit, so that
+    every residual is in units of the noise as estimated: for a residual linear in the data this only
+    rescales (the whitened residuals are identical), but a force curve's sample next to a predicted jump is a
+    two-branch mixture whose deviance is not scale-free (:meth:`ForceCurveProblem.residuals`), and with the
+    scatter-read sigma it weighed the other branch as if the noise were 2.6x smaller (session 22: a JKR
+    truth, seed 2001 at rho = 0.8, named DMT with the sigma unstated and JKR with it stated)."""
+    isd = noise.get("innovation_sd")
+    prob = F.problem
+    if isd is not None and noise.get("marginal_sd") and isinstance(getattr(prob, "sigma", None), float):
+        prob.sigma = prob.sigma * float(noise["marginal_sd"])
+        isd = None
+    F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), isd)
     b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
     return b1 if b1.chi2 <= b2.chi2 else b2
 
