@@ -420,6 +420,14 @@ if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "summary":
         print(json.dumps(resummarize(Path(sys.argv[2]) if len(sys.argv) > 2 else
                                      ROOT / "benchmarks" / "results" / "diagnose_rates_curves.json"), indent=1, default=float))
+    elif len(sys.argv) > 1 and sys.argv[1] == "merge":
+        # merge OUT.json PART.json ...: the rows of a run's parts in one file, summarised
+        parts = [json.loads(Path(f).read_text()) for f in sys.argv[3:]]
+        merged = {k: v for k, v in parts[0].items() if k not in ("rows", "summary")}
+        merged["rows"] = sorted({r["seed"]: r for d in parts for r in d["rows"]}.values(), key=lambda r: r["seed"])
+        merged["summary"] = summarize(merged["rows"])
+        Path(sys.argv[2]).write_text(json.dumps(merged, indent=1, default=float))
+        print(json.dumps(merged["summary"], indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "visco":
         # visco N_VISCO OUT.json [NULL_SEEDS (comma-separated)] [HIDDEN_SEEDS (comma-separated)]
         seeds = lambda i: [int(x) for x in sys.argv[i].split(",") if x] if len(sys.argv) > i else []  # noqa: E731

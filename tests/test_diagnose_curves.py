@@ -238,6 +238,36 @@ def test_a_container_never_fits_worse_than_a_limit_it_contains(tmp_path):
     assert md.values["lam"] > 2.0 and abs(md.values["W"] / truth["params"]["W"] - 1) < 0.1
 
 
+def test_contact_laws_are_alternatives_not_extensions(tmp_path):
+    """The adhesion laws select the contact law: a model with two of them is the later law alone (the force
+    curve predicted with DMT then Maugis-Dugdale equals Maugis-Dugdale's), so one can never extend a model the
+    other is in. They declare one ``alternative`` and the engine's greedy extension skips a cause whose
+    alternative is already chosen (session 22: on an AR(1) DMT truth, seed 2032, parsimony named DMT and
+    Maugis-Dugdale was then claimed as a second cause on top of it)."""
+    path, _ = make_curve_case(tmp_path, 2032, "adhesion-dmt")
+    prob = make_problem(path)
+    laws = {c.key: c for c in prob.causes if "adhesion" in c.changes}
+    assert {c.alternative for c in laws.values()} == {"contact law"}
+    assert all(c.alternative is None for c in prob.causes if c.key not in laws)
+    base = Fitter(prob).baseline()
+    v = dict(base.values, W=0.05, lam=0.5)
+    md = prob.predict(v, (laws["adhesion-md"],))
+    assert np.array_equal(prob.predict(v, (laws["adhesion-dmt"], laws["adhesion-md"])), md)
+    assert np.max(np.abs(prob.predict(v, (laws["adhesion-dmt"],)) - md)) > 1e-3 * np.ptp(md)  # DMT differs
+
+
+@pytest.mark.slow
+def test_no_second_contact_law_on_top_of_the_first(tmp_path):
+    """Seed 2032 (DMT with its tail) under AR(1) noise of rho = 0.8, no noise stated: DMT first, and no other
+    contact law as a second finding (before the rule: Maugis-Dugdale claimed on top of DMT, session 22)."""
+    from probedyn.diagnose.engine import run
+
+    path, _ = make_curve_case(tmp_path, 2032, "adhesion-dmt", noise_rho=0.8, state_noise=False)
+    res = run(path)
+    laws = [f["cause"] for f in res["findings"] if f["cause"].startswith("adhesion-")]
+    assert laws == ["adhesion-dmt"], res["findings"]
+
+
 def test_spectrum_spur_rejected_modes_identified(tmp_path):
     """Thermal PSD of the probe's FEM modes (a finer mesh than the diagnosis', equipartition with the
     FEM's modal stiffness at the tip, chi^2 periodogram scatter) with a one-bin spur below f1: the

@@ -745,6 +745,9 @@ def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
         prob.sigma = prob.sigma * float(noise["marginal_sd"])
         isd = None
     F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), isd)
+    # a problem judging its own residuals against the noise (a force curve's data starts: "the reference
+    # already fits within the noise") judges them on the noise the fits use
+    prob.whitener = F.white
     b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
     return b1 if b1.chi2 <= b2.chi2 else b2
 
@@ -783,11 +786,21 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
     if noise_model not in ("auto", "white"):
         raise ValueError(f"noise_model must be 'auto' or 'white', got {noise_model!r}")
     F = Fitter(problem)
+    # the noise model a diagnosis sets on its problem (an unstated AR(1) noise's sigma, the whitener) is
+    # undone when it returns: the problem object stays as the measurement made it
+    saved = {k: getattr(problem, k) for k in ("sigma", "whitener") if hasattr(problem, k)}
+    problem.whitener = None
     try:
         return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin,
                          noise_model=noise_model)
     finally:
         F.close_pool()
+        for k in ("sigma", "whitener"):
+            if k in saved:
+                if getattr(problem, k) is not saved[k]:
+                    setattr(problem, k, saved[k])
+            elif hasattr(problem, k):
+                delattr(problem, k)
 
 
 def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float,
@@ -897,6 +910,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                 c = d["cause"]
                 if c in chosen or (confounded and c.key in confounded[0]["causes"]):
                     continue
+                if c.alternative and any(x.alternative == c.alternative for x in chosen):
+                    continue  # an alternative to a chosen cause (another contact law) replaces it, never extends it
                 fit = F.nested(current, (c,))
                 k = len(c.params)
                 dchi2 = max(current.chi2 - fit.chi2, 0.0)

@@ -640,7 +640,9 @@ class ForceCurveProblem:
             return []
         d = self.data
         m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
-        r_ref = self.residuals(ref_values, tuple(ref_causes))[m]
+        r_ref = self.residuals(ref_values, tuple(ref_causes))
+        white = getattr(self, "whitener", None)  # the AR(1) noise the fits use (engine._whiten), if any
+        r_ref = (white(r_ref, None if mask is None else m) if white is not None else r_ref)[m]
         n_m = int(m.sum())
         if float(np.sum(r_ref**2)) < n_m + 3.0 * math.sqrt(2.0 * n_m):
             return []  # the reference already fits within the noise: no minimum to escape from

@@ -100,6 +100,10 @@ class Cause:
     #: friction: the regimes of the record the cause applies to (``"stick-slip"``: samples resolve the lattice;
     #: ``"loop"``: each sample averages many periods, :mod:`probedyn.diagnose.friction_loop`); empty: stick-slip
     regimes: ClassVar[tuple[str, ...]] = ()
+    #: the model component the cause *selects* rather than edits (the contact law: DMT, JKR or Maugis-Dugdale
+    #: replaces the Hertz sphere): two causes of one component are alternatives, so neither extends a model
+    #: the other is in (the engine's greedy extension skips it; their combination is the later law alone)
+    alternative: ClassVar[str | None] = None
 
     def __init__(self, params: tuple[CauseParam, ...] | None = None, note: str = "") -> None:
         # a problem may narrow the parameters (declared conditions); the class stays untouched

@@ -18,6 +18,7 @@ _W = CauseParam("W", "J/m^2", 0.0, 2.0, 0.0, "work of adhesion", starts=(0.003, 
 class _Adhesion(Cause):
     kind = "force"
     changes = ("adhesion",)
+    alternative = "contact law"  # one law at a time: DMT, JKR and Maugis-Dugdale are alternatives
     contact = ""
 
     def effect(self, v, s):
