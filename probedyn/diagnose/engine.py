@@ -773,7 +773,8 @@ def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -
             break
         base = b2
         fits = F.map_nested([(base, (c,), None) for c in causes])
-    # a contained limit law (a cause's ``limits``) re-fitted from its container's optimum where worse
+    # a contained limit law (a cause's ``limits``) re-fitted from its container's optimum where worse, and
+    # the container from its limit's where it is the worse one
     fits = _limit_refits(F, causes, fits)
     return base, fits
 
@@ -1073,11 +1074,7 @@ def _container_refits(F: Fitter, causes: list, fits: list) -> list:
             continue
         shared = {k_: v for k_, v in fits[j].values.items() if any(p.name == k_ for p in fits[i].plist)}
         own = [p for p in c.params if p.name not in shared]
-        starts = []
-        for p in own:
-            for bound in (p.lo, p.hi):
-                starts.append(dict(fits[i].values, **shared, **{q.name: fits[i].values[q.name] for q in own if q is not p},
-                                   **{p.name: bound}))
+        starts = [{**fits[i].values, **shared, p.name: bound} for p in own for bound in (p.lo, p.hi)]
         try:
             g = F.fit(fits[i].causes, starts or [dict(fits[i].values, **shared)])
         except DataFormatError:
