@@ -237,6 +237,13 @@ class FrictionLoopProblem:
                               lambda c: c.data_starts(self, dict(ref_values), tuple(ref_causes))
                               if hasattr(c, "data_starts") else [])
 
+    def residual_start(self, name: str, x: np.ndarray, ref_values: dict, ref_causes: tuple = ()) -> list[dict]:
+        """A data start for a cause whose first-order effect is ``value * x``: the least-squares regression of
+        the reference fit's residual on ``x`` (none where ``x`` vanishes)."""
+        r = self.force - self.predict(ref_values, ref_causes)
+        den = float(np.sum(x * x))
+        return [{name: float(np.sum(r * x) / den)}] if den > 0 else []
+
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> LoopState:
         st = LoopState(u0=values["u0"], offset=values["offset"])

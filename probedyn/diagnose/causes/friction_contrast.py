@@ -52,10 +52,8 @@ class FrictionContrast(Cause):
     def data_starts(self, problem, ref_values, ref_causes=()):
         """The contrast the reference fit's residual shows: its least-squares regression on
         ``d F_k zeta`` (the first-order change of the half loop)."""
-        r = problem.force - problem.predict(ref_values, ref_causes)
         x = problem.direction * problem.friction(ref_values["u0"]) * problem.relief
-        den = float(np.sum(x * x))
-        return [{"contrast": float(np.sum(r * x) / den)}] if den > 0 else []
+        return problem.residual_start("contrast", x, ref_values, ref_causes)
 
     def effect(self, v, s):
         s.contrast = v["contrast"]

@@ -52,10 +52,7 @@ class SurfaceSlope(Cause):
     def data_starts(self, problem, ref_values, ref_causes=()):
         """The coupling the reference fit's residual shows: its least-squares regression on ``N t``
         (the first-order slope term)."""
-        r = problem.force - problem.predict(ref_values, ref_causes)
-        x = problem.load_of * problem.slopes
-        den = float(np.sum(x * x))
-        return [{"c_slope": float(np.sum(r * x) / den)}] if den > 0 else []
+        return problem.residual_start("c_slope", problem.load_of * problem.slopes, ref_values, ref_causes)
 
     def effect(self, v, s):
         s.slope_c = v["c_slope"]
