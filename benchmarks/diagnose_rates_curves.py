@@ -99,14 +99,36 @@ def detector_cases(n_each: int, n_null: int, n_hidden: int, part: int = 0, parts
     return out[part::parts]
 
 
-def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho: float = 0.0) -> dict:
+class CovarianceWhitener:
+    """``r -> L^-1 r`` over the record's sequences (one chain in recording order, as the truth draws it) for a
+    noise of known covariance ``C = L L^T`` in units of its marginal sigma (the benchmark's power-law noise,
+    :func:`diagnose_truth_curves.power_law_covariance`): the generalised chi-square ``r^T C^-1 r`` of the
+    detectability criterion. Dense, for the truth's few hundred samples only (not the diagnosis')."""
+
+    def __init__(self, cov: np.ndarray, sequences) -> None:
+        self.rows = np.concatenate([np.asarray(s, int) for s in sequences])
+        self.L = np.linalg.cholesky(cov[np.ix_(self.rows, self.rows)])
+
+    def __call__(self, r: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
+        from scipy.linalg import solve_triangular
+
+        if mask is not None and not mask.all():
+            raise ValueError("the covariance whitener scores whole records only")
+        out = np.array(r, float, copy=True)
+        out[self.rows] = solve_triangular(self.L, r[self.rows], lower=True)
+        return out
+
+
+def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho: float = 0.0,
+                alpha: float | None = None) -> dict:
     """The effect's signal: the chi-square of the diagnosis' baseline fitted to the noise-free record
     (stated noise), and the detection threshold ``chi2_dof(1 - alpha) - dof`` of the baseline test.
     With AR(1) noise of correlation ``rho`` (the sidecar at ``path`` states its marginal sigma) every
     chi-square is the generalised one, ``r^T Sigma^-1 r`` on the true noise covariance (the fits on AR(1)
     innovations, :class:`probedyn.diagnose.noise.AR1Whitener`): a smooth signal's is about
     ``(1 - rho) / (1 + rho)`` of its white value, since correlated noise has that much more power at low
-    frequencies."""
+    frequencies. With power-law noise (``alpha``, :func:`diagnose_truth_curves.power_law`) the same on its
+    exact covariance (:class:`CovarianceWhitener`)."""
     from dataclasses import replace
 
     from scipy.stats import chi2 as chi2_dist
@@ -119,7 +141,11 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho:
     meas = read_measurement(path)
     prob = ForceCurveProblem(replace(meas, force=np.asarray(clean, float)))
     F = Fitter(prob)
-    if rho:
+    if alpha is not None:
+        from diagnose_truth_curves import power_law_covariance
+
+        F.white = CovarianceWhitener(power_law_covariance(len(clean), alpha), prob.sequences)
+    elif rho:
         F.white = AR1Whitener(rho, prob.sequences, len(clean))
     base = F.baseline()
     thr = float(chi2_dist.ppf(1 - ALPHA, base.dof)) - base.dof
@@ -149,27 +175,29 @@ def identifiability(chi: dict, expected: str, containers: list[str]) -> dict:
     return {"rival_gap_chi2": gap, "identifiable": bool(gap >= 2 * EVIDENCE_MARGIN)}
 
 
-def run_case(folder: Path, seed: int, effect: str | None, rho: float = 0.0, stated: bool = True) -> dict:
+def run_case(folder: Path, seed: int, effect: str | None, rho: float = 0.0, stated: bool = True,
+             alpha: float | None = None) -> dict:
     """One case. ``rho``: the noise is AR(1) of that lag-one correlation (one chain over the approach and the
     retract, :func:`diagnose_truth_curves.correlated`; the marginal sigma as drawn); ``stated = False``: the
     sidecar states no noise (most exports). Detectability and identifiability are then evaluated on the true
-    noise (its sigma and correlation), from a twin of the record whose sidecar states the sigma."""
+    noise (its sigma and correlation), from a twin of the record whose sidecar states the sigma. ``alpha``:
+    1/f^alpha noise instead of AR(1) (:func:`diagnose_truth_curves.power_law`; session 23)."""
     if effect == VISCO_EFFECT:
         path, truth = make_visco_case(folder, seed)
     else:
-        path, truth = make_curve_case(folder, seed, effect, noise_rho=rho, state_noise=stated)
+        path, truth = make_curve_case(folder, seed, effect, noise_rho=rho, state_noise=stated, noise_alpha=alpha)
     clean = truth.pop("force_clean")
     twin = path
     if effect and not stated:  # the same draws (the sidecar's text is the only difference)
-        twin, _ = make_curve_case(folder / "stated", seed, effect, noise_rho=rho, state_noise=True)
-    det = signal_chi2(twin, clean, EXPECTED[effect][0], rho) if effect else None
+        twin, _ = make_curve_case(folder / "stated", seed, effect, noise_rho=rho, state_noise=True, noise_alpha=alpha)
+    det = signal_chi2(twin, clean, EXPECTED[effect][0], rho, alpha) if effect else None
     t0, c0 = time.perf_counter(), time.process_time()
     res = run(path)
     row = {"seed": seed, "effect": effect, "truth": truth, "detectability": det, "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "wall_s": time.perf_counter() - t0,
            "cpu_s": time.process_time() - c0, "baseline_p": res["baseline"]["p_value"],
            "noise": {k: v for k, v in res["method"]["noise"].items()
-                     if k in ("model", "rho", "rho_scatter", "rho_lag1", "innovation_sd", "reason")},
+                     if k in ("model", "rho", "rho_scatter", "rho_lag1", "rho_marginal", "innovation_sd", "reason")},
            "candidates": [{"cause": c["cause"], "evidence": c["evidence"], "delta_chi2": c["delta_chi2"]}
                           for c in res["candidates"]]}
     if res["findings"]:
@@ -276,13 +304,14 @@ def summarize(rows: list[dict]) -> dict:
     }
 
 
-def main(argv: list[str], todo: list | None = None, rho: float = 0.0, stated: bool = True) -> dict:
+def main(argv: list[str], todo: list | None = None, rho: float = 0.0, stated: bool = True,
+         alpha: float | None = None) -> dict:
     n_h = int(argv[1]) if len(argv) > 1 else 50
     n_n = int(argv[2]) if len(argv) > 2 else 50
     out = Path(argv[3]) if len(argv) > 3 else ROOT / "benchmarks" / "results" / "diagnose_rates_curves.json"
     data = json.loads(out.read_text()) if out.exists() else {"rows": []}
-    if rho or not stated:
-        noise = {"rho": rho, "noise_stated": stated}
+    if rho or not stated or alpha is not None:
+        noise = {"rho": rho, "noise_stated": stated} | ({"alpha": alpha} if alpha is not None else {})
         if data.setdefault("noise", noise) != noise:
             raise SystemExit(f"{out} holds a run with noise {data['noise']}, not {noise}")
     done = {r["seed"] for r in data["rows"]}
@@ -290,7 +319,7 @@ def main(argv: list[str], todo: list | None = None, rho: float = 0.0, stated: bo
         for seed, effect in (cases(n_h, n_n) if todo is None else todo):
             if seed in done:
                 continue
-            row = run_case(Path(tmp), seed, effect, rho, stated)
+            row = run_case(Path(tmp), seed, effect, rho, stated, alpha)
             data["rows"].append(row)
             data["summary"] = summarize(data["rows"])
             data["machine"] = "2 cores shared with other jobs (wall times inflated; CPU time is per process)"
@@ -439,14 +468,16 @@ if __name__ == "__main__":
         todo = detector_cases(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), part, parts)
         print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "correlated":
-        # correlated N_HIDDEN N_NULL RHO OUT.json [--unstated] [PART PARTS]: the rate study with AR(1) noise
+        # correlated N_HIDDEN N_NULL RHO OUT.json [--unstated] [--alpha=A] [PART PARTS]: the rate study with AR(1) noise
         # (session 22); PART of PARTS takes every PARTS-th (hidden, null) pair of the interleaved list (merge
         # the parts' rows)
-        a = [x for x in sys.argv[2:] if x != "--unstated"]
+        # ``--alpha=A``: 1/f^A noise instead (RHO ignored; session 23)
+        a = [x for x in sys.argv[2:] if x != "--unstated" and not x.startswith("--alpha=")]
+        alpha = next((float(x.split("=", 1)[1]) for x in sys.argv if x.startswith("--alpha=")), None)
         part, parts = (int(a[4]), int(a[5])) if len(a) > 5 else (0, 1)
         todo = [c for i, c in enumerate(cases(int(a[0]), int(a[1]))) if (i // 2) % parts == part]
-        print(json.dumps(main(["", a[0], a[1], a[3]], todo, float(a[2]), "--unstated" not in sys.argv), indent=1,
-                         default=float))
+        print(json.dumps(main(["", a[0], a[1], a[3]], todo, 0.0 if alpha is not None else float(a[2]),
+                              "--unstated" not in sys.argv, alpha), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "spectra":
         print(json.dumps(main_spectra(sys.argv[1:]), indent=1, default=float))
     else:

@@ -91,9 +91,36 @@ def correlated(e: np.ndarray, rho: float) -> np.ndarray:
     return x
 
 
+def power_law_spectrum(n: int, alpha: float) -> np.ndarray:
+    """``|H(f)|^2 = f^-alpha`` on ``numpy.fft.rfftfreq(n)`` (the zero frequency given the first one's power, so
+    that the process is stationary with a finite mean), scaled to unit marginal variance: the spectrum of
+    :func:`power_law`'s noise."""
+    f = np.fft.rfftfreq(n)
+    f[0] = f[1]
+    s2 = f ** -alpha
+    return s2 / float(np.fft.irfft(s2, n)[0])
+
+
+def power_law_covariance(n: int, alpha: float) -> np.ndarray:
+    """The exact covariance of :func:`power_law`'s ``n`` samples: circulant, ``c(j) = irfft(|H|^2)[j]``."""
+    c = np.fft.irfft(power_law_spectrum(n, alpha), n)
+    j = np.arange(n)
+    return c[(j[None, :] - j[:, None]) % n]
+
+
+def power_law(e: np.ndarray, alpha: float) -> np.ndarray:
+    """Noise of power spectral density ``~ 1/f^alpha`` (alpha = 1: flicker, "1/f", noise; 2: a random walk) and
+    unit marginal variance, from the white draws ``e``: the circular convolution of ``e`` with the filter
+    ``sqrt(power_law_spectrum)`` (stationary over the record; its covariance is
+    :func:`power_law_covariance`). A detector's 1/f noise has more power at the record's scale than any AR(1)
+    noise with the same point-to-point statistics."""
+    n = len(e)
+    return np.fft.irfft(np.fft.rfft(e) * np.sqrt(power_law_spectrum(n, alpha)), n)
+
+
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300,
                     noise_rho: float = 0.0, state_noise: bool = True,
-                    declare_rho: float | None = None) -> tuple[Path, dict]:
+                    declare_rho: float | None = None, noise_alpha: float | None = None) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
 
@@ -182,7 +209,9 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         detector = A * np.cos(2 * math.pi * sep / period + float(aux.uniform(0, 2 * math.pi)))
         params.update(period=period, amplitude=A)
     clean = F + b0 + b1 * z + drift * tau + detector
-    Fm = clean + noise * correlated(rng.standard_normal(len(F)), noise_rho)  # the sidecar states the marginal sigma
+    e = rng.standard_normal(len(F))
+    # the sidecar states the marginal sigma; ``noise_alpha``: 1/f^alpha noise instead of AR(1)
+    Fm = clean + noise * (correlated(e, noise_rho) if noise_alpha is None else power_law(e, noise_alpha))
     fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     with_time = bool(rng.integers(2)) or effect == "hydrodynamic-drag"
     water = effect in DETECTOR_EFFECTS and bool(aux.integers(2))
@@ -201,7 +230,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         + (("" if state_noise else "[noise]\n") + f"correlation = {declare_rho!r}\n" if declare_rho is not None else "")
         + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
-             "noise_rho": noise_rho, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
+             "noise_rho": noise_rho, "noise_alpha": noise_alpha, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
              "water_declared": water, "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 

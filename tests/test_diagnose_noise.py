@@ -10,9 +10,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from probedyn.diagnose.noise import SCATTER_SE_SQRT_N, AR1Whitener, noise_correlation
+from probedyn.diagnose.noise import SCATTER_SE_SQRT_N, AR1Whitener, flicker_excess, noise_correlation
 
-from diagnose_truth_curves import correlated, make_curve_case
+from diagnose_truth_curves import correlated, make_curve_case, power_law, power_law_covariance
 
 
 def _problem(n_seq=2, m=300, stated=True):
@@ -76,6 +76,59 @@ def test_without_a_stated_noise_the_correlation_and_innovation_come_from_the_dif
     for _ in range(40):
         e = rng.standard_normal(600) * float(10 ** rng.uniform(-3, 3))
         assert noise_correlation(prob, e / _scatter_sigma(e))["model"] == "white"
+
+
+def test_without_a_stated_noise_a_1_over_f_noise_keeps_its_power_at_the_record_scale():
+    """No stated noise, 1/f noise (40 records of 600 samples, unit marginal variance): the first and second
+    differences see only its high-frequency part and read an AR(1) whose marginal sigma is about 2/3 of the
+    true one (median below 0.75), so that its power at the record's scale was understated and a smooth
+    cause fitted it (session 23: 5 of 6 force-curve nulls). The residuals' own variance is the marginal
+    sigma's estimate where it exceeds what the differences imply: the median marginal sigma is then within 15 %
+    of 1 (a finite record of 1/f noise loses the variance of its own mean, ~5-10 %), rho rises from ~0.46 to
+    ~0.66, and every record is whitened."""
+    rng = np.random.default_rng(9)
+    prob = _problem(stated=False)
+    marg, diffs = [], []
+    for _ in range(40):
+        e = power_law(rng.standard_normal(600), 1.0)
+        ss = _scatter_sigma(e)
+        nz = noise_correlation(prob, e / ss)
+        assert nz["model"] == "AR(1)" and nz["rho"] >= nz["rho_scatter"]
+        r0, q = nz["rho_scatter"], nz["high_frequency_scale"]
+        marg.append(nz["marginal_sd"] * ss)
+        diffs.append(q * math.sqrt(3.0 / ((1.0 - r0) * (3.0 - r0))) * ss)
+    assert abs(float(np.median(marg)) - 1.0) < 0.15
+    assert float(np.median(diffs)) < 0.75
+
+
+def test_flicker_excess_is_the_dense_covariance_ratio_and_bounds_a_misfit():
+    """``flicker_excess(m)`` against the ratio computed independently from the dense covariance of the truth's
+    1/f noise (:func:`diagnose_truth_curves.power_law_covariance` over 2 m samples, the first m observed, mean
+    removed, differences by matrices) to 1e-9, growing with m as log m. A record whose residuals carry a smooth
+    misfit of 10 sigma on AR(1) noise of 0.5 (the second effect a single cause leaves) reads no more
+    correlation than flicker noise with its differences would: rho at that bound (0.72 here, not 0.95)."""
+    for m in (64, 300):
+        C = power_law_covariance(2 * m, 1.0)[:m, :m]
+        P = np.eye(m) - 1.0 / m
+        D1, D2 = np.diff(np.eye(m), axis=0), np.diff(np.eye(m), 2, axis=0)
+        ms0 = np.trace(P @ C @ P) / m
+        ms1, ms2 = np.trace(D1 @ C @ D1.T) / (m - 1), np.trace(D2 @ C @ D2.T) / (m - 2)
+        rho = 3.0 - ms2 / ms1
+        assert flicker_excess(m) == pytest.approx(ms0 / (ms1 / (2.0 * (1.0 - rho))), rel=1e-9)
+    assert 1.7 < flicker_excess(300) < flicker_excess(3000) < 2.7
+    rng = np.random.default_rng(10)
+    prob = _problem(stated=False)
+    x = np.linspace(0, 1, 300)
+    misfit = np.concatenate([10 * np.sin(2 * np.pi * x)] * 2)
+    e = np.concatenate([correlated(rng.standard_normal(300), 0.5) for _ in range(2)])
+    r = (e + misfit) / _scatter_sigma(e)
+    nz = noise_correlation(prob, r)
+    rs, q = nz["rho_scatter"], nz["high_frequency_scale"]
+    ms0_cap = flicker_excess(300) * q * q * 3.0 / ((1.0 - rs) * (3.0 - rs))
+    assert nz["model"] == "AR(1)"
+    assert nz["rho"] == pytest.approx(min(2.0 - math.sqrt(1.0 + 3.0 * q * q / ms0_cap), nz["rho_lag1"] + nz["gate_lag1"]),
+                                      abs=1e-9)
+    assert nz["rho"] < 0.8
 
 
 def test_whitening_is_the_exact_ar1_likelihood_with_and_without_a_mask():

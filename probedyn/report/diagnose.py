@@ -65,7 +65,10 @@ def summary(res: dict[str, Any]) -> str:
                      + (": residuals are whitened (innovations) in every fit" if nz["model"] == "AR(1)" else ""))
     elif nz.get("model") == "AR(1)" and "innovation_sd" in nz:
         on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
-        lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (no stated noise: first against second differences"
+        how = ("the residuals' variance against their second differences (more power at the record's scale than "
+               f"the differences' AR(1) of rho {nz['rho_scatter']:.2f} gives: 1/f-like)"
+               if nz["rho"] > nz["rho_scatter"] + 1e-9 else "first against second differences")
+        lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (no stated noise: {how}"
                      f"{on}; marginal sigma {nz['marginal_sd']:.2f}x the scatter-read one; residual lag-one correlation "
                      f"{nz['rho_lag1']:.2f}): residuals are whitened (innovations) in every fit")
     elif nz.get("model") == "AR(1)":
