@@ -51,9 +51,14 @@ def _balance(L, A, mu, d, theta):
     return np.linalg.solve(M, b[..., None])[:, 0, 0]
 
 
-def make_loop_case(folder: Path, seed: int, effect: str | None) -> tuple[Path, dict]:
+def make_loop_case(folder: Path, seed: int, effect: str | None,
+                   load_factors: tuple[float, ...] | None = None) -> tuple[Path, dict]:
+    """One loop record. ``load_factors``: the scans' loads as multiples of the drawn load ``L`` (cycled over
+    the scans, at least one scan each; default: every scan at ``L``, the draws of earlier sessions)."""
     rng = np.random.default_rng([seed, 23])
     n_scans = int(rng.integers(1, 4))
+    factors = tuple(load_factors) if load_factors else (1.0,)
+    n_scans = max(n_scans, len(factors))
     n = int(rng.choice([128, 256, 512]))
     length = rng.uniform(5e-6, 25e-6)
     speed = 10 ** rng.uniform(np.log10(2e-6), np.log10(2e-5))
@@ -73,14 +78,16 @@ def make_loop_case(folder: Path, seed: int, effect: str | None) -> tuple[Path, d
     rows = []
     flat = effect is None
     tilt = rng.uniform(-0.01, 0.01)
+    loads = [L * factors[(sid - 1) % len(factors)] for sid in range(1, n_scans + 1)]
     for sid in range(1, n_scans + 1):
+        Ls = loads[sid - 1]
         xs = (x[:, None] + sub[None, :] * dx).ravel()
         h_true, ind = _surface(rng, np.concatenate([x, xs]), flat, tilt)
         h_pts, h_sub, ind_sub = h_true[:n], h_true[n:], ind[n:]
         theta = np.arctan(np.gradient(h_sub, xs))
         mu = mu0 * (1.0 + (contrast - 1.0) * ind_sub)
         for d in (1.0, -1.0):
-            F = _balance(L, A, mu, d, theta).reshape(n, 8).mean(axis=1)
+            F = _balance(Ls, A, mu, d, theta).reshape(n, 8).mean(axis=1)
             sig = g * F + zero + sigma * rng.standard_normal(n)
             hrec = np.roll(h_pts, int(d) * lag)
             if lag:
@@ -95,10 +102,10 @@ def make_loop_case(folder: Path, seed: int, effect: str | None) -> tuple[Path, d
     with open(folder / f"{name}.csv", "w") as fh:
         fh.write("scan,position_m,lateral_force_N,height_m\n")
         fh.writelines(f"{s},{xx:.9e},{f:.9e},{h:.9e}\n" for s, xx, f, h in rows)
-    scans = "".join(f"[[scans]]\nid = {s}\nspeed = {speed:.6e}\nload = {L:.6e}\n" for s in range(1, n_scans + 1))
+    scans = "".join(f"[[scans]]\nid = {s}\nspeed = {speed:.6e}\nload = {loads[s - 1]:.6e}\n" for s in range(1, n_scans + 1))
     (folder / f"{name}.toml").write_text(
         f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "interval-mean"\n'
         f"[lever]\nk_x = {k_x:.6g}\n[medium]\nname = \"air\"\n{scans}")
     truth = {"effect": effect, "params": {"c_slope": g} if effect else {}, "g": g, "mu": mu0, "A": A, "L": L,
-             "contrast": contrast, "sigma": sigma, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
+             "contrast": contrast, "sigma": sigma, "loads": loads, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
     return folder / f"{name}.toml", truth

@@ -142,3 +142,31 @@ def test_class6_cli_one_line_exit_2(tmp_path, capsys):
     assert err.startswith("probedyn: error: ") and err.count("\n") == 1
     assert main(["diagnose", "/dev/zero"]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+def _hertz_curve(sign: float, with_segment: bool) -> str:
+    """Approach and retract of a 1 N/m lever on a Hertz sample (contact at z = 0), z written times ``sign``."""
+    import numpy as np
+
+    z = np.linspace(-50e-9, 20e-9, 100)
+    # lever + Hertz in series: Z(delta) = delta + P(delta)/k, inverted on a fine grid of delta
+    dd = np.linspace(0.0, 20e-9, 4001)
+    P = 4 / 3 * 1e9 * np.sqrt(20e-9) * dd**1.5
+    F = np.where(z > 0, np.interp(z, dd + P / 1.0, P), 0.0)
+    zz, FF = np.concatenate([z, z[::-1]]), np.concatenate([F, F[::-1]])
+    seg = np.repeat([0, 1], len(z))
+    head = "z_m,force_N" + (",segment" if with_segment else "") + "\n"
+    rows = (f"{sign * a:.6e},{b:.6e}" + (f",{s}" if with_segment else "") + "\n" for a, b, s in zip(zz, FF, seg))
+    return head + "".join(rows)
+
+
+@pytest.mark.parametrize("with_segment", [True, False])
+def test_force_curve_piezo_axis_pointing_away_from_the_sample_is_refused(tmp_path, with_segment):
+    side = '[measurement]\nkind = "force"\ndata = "c.csv"\n[lever]\nk = 1.0\n[noise]\nforce = 1e-10\n'
+    (tmp_path / "c.toml").write_text(side)
+    (tmp_path / "c.csv").write_text(_hertz_curve(+1.0, with_segment))
+    m = read_measurement(tmp_path / "c.toml")  # the right sign reads
+    assert m.segment.sum() == 100
+    (tmp_path / "c.csv").write_text(_hertz_curve(-1.0, with_segment))  # a height column exported as is
+    with pytest.raises(DataFormatError, match="z_m must increase towards the sample"):
+        read_measurement(tmp_path / "c.toml")

@@ -77,12 +77,16 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
             raise col_error(d, "segment", int(np.nonzero((seg != 0) & (seg != 1))[0][0]), "segment must be 0 (approach) or 1 (retract)")
     else:  # approach up to the turning point (largest z), retract after it
         turn = int(np.argmax(z))
+        if turn < 10 and 10 <= int(np.argmin(z)) < len(z) - 10:
+            raise DataFormatError(f"{csv}: z_m must increase towards the sample: the record turns at its smallest z "
+                                  "(a height that decreases towards the sample? negate it)")
         seg = np.zeros(len(z), int)
         seg[turn + 1:] = 1
     for s_ in (0, 1):
         zz = z[seg == s_]
         if len(zz) < 10:
             raise DataFormatError(f"{csv}: the {'approach' if s_ == 0 else 'retract'} has {len(zz)} points (need >= 10)")
+    _check_towards_sample(csv, z[seg == 0], F[seg == 0])
     R = _num(meta, "tip", "radius", side, default=20e-9, lo=1e-10, hi=1e-3, unit="m")
     Et = _num(meta, "tip", "E", side, default=169e9, lo=1e6, hi=2e12, unit="Pa")
     nut = _num(meta, "tip", "nu", side, default=0.28, lo=-0.99, hi=0.5)
@@ -114,6 +118,20 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
             raise col_error(d, "time_s", bad, "times must be given on every row and increase")
     return ForceData(**common, z=z, force=F, segment=seg, k=k, sensitivity=sens, tip_radius=R, E_tip=Et, nu_tip=nut,
                      E_sample=Es, nu_sample=nus, sigma_force=sig, noise_stated=stated, time=t)
+
+
+def _check_towards_sample(csv: Path, z: np.ndarray, F: np.ndarray) -> None:
+    """One-line error for a piezo axis that points away from the sample. A repulsive contact makes the
+    approach's force largest at its largest ``z`` (closest to the sample); where the approach's force instead
+    rises towards its *smallest* z by more than half the record's range, the column is a height (JPK, and
+    most instruments' "height" channels, decrease towards the sample) exported without its sign changed --
+    a fit of it would put the sample on the wrong side."""
+    m = max(3, len(z) // 20)
+    order = np.argsort(z)
+    lo, hi = float(np.median(F[order[:m]])), float(np.median(F[order[-m:]]))
+    if lo - hi > 0.5 * float(np.ptp(F)):
+        raise DataFormatError(f"{csv}: z_m must increase towards the sample: the approach's force rises towards "
+                              "smaller z (a height that decreases towards the sample? negate it)")
 
 
 # ------------------------------------------------------------------------------------------
