@@ -10,7 +10,7 @@ plain Hertz; the lever's equilibrium along the ramp is followed here by **contin
 ends: the jump to contact where the force gradient exceeds k, the pull-off) -- a path
 independent of the diagnosis, which locates the equilibria on envelopes of the contact curve.
 
-Hidden effects: ``adhesion-dmt``, ``adhesion-jkr``, ``adhesion-md`` (lambda drawn), ``jump-to-
+Hidden effects: ``adhesion-dmt`` (the tail's range zeta_0 drawn, 0.15-0.5 nm), ``adhesion-jkr``, ``adhesion-md`` (lambda drawn), ``jump-to-
 contact`` (DMT on a soft lever: the van der Waals gradient exceeds k well before contact),
 ``tip-radius-error`` (the declared radius is wrong; the sample modulus is declared),
 ``deflection-drift`` (a drift of the deflection in time), ``tip-shape`` (the registry's blunted cone,
@@ -142,6 +142,11 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     if law:
         params["W"] = float(10 ** rng.uniform(-2.0, -0.7))  # 0.01 - 0.2 J/m^2
         kw = dict(E_t=E_TIP, nu_t=NU_TIP, E_s=E_s, nu_s=NU_S, R_t=R, R_s=0.0, W=params["W"])
+        if law == "dmt":  # the tail's range, from its own stream (the other draws unchanged): Israelachvili's
+            # 0.165 nm cut-off to half a nanometre, around the registry's 0.375 nm (session 25: a blind
+            # generator's 0.165 nm tail was named Maugis-Dugdale while the diagnosis held the range fixed)
+            params["z0"] = float(10 ** np.random.default_rng([seed, 31]).uniform(math.log10(0.15e-9), math.log10(0.5e-9)))
+            kw["z0"] = params["z0"]
         if law == "md":
             params["lam"] = float(10 ** rng.uniform(-0.5, 0.5))
             K = 4 / 3 * Es_star

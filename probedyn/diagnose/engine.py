@@ -275,7 +275,9 @@ class Fitter:
         hi = np.array([_u_bounds(p)[1] for p in free])
         m_all = None
         for si, st in enumerate(starts):
-            vals0 = {**st, **fixed}
+            # a start that leaves a parameter out (a problem's data-derived start written before the
+            # cause gained it) starts it at its null value
+            vals0 = {**{p.name: p.null for p in plist}, **st, **fixed}
             nu0 = st.get("__nuisance__") if isinstance(st, dict) else None
             vals0.pop("__nuisance__", None)
             if has_nu:

@@ -86,7 +86,7 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
         zz = z[seg == s_]
         if len(zz) < 10:
             raise DataFormatError(f"{csv}: the {'approach' if s_ == 0 else 'retract'} has {len(zz)} points (need >= 10)")
-    _check_towards_sample(csv, z[seg == 0], F[seg == 0])
+    _check_towards_sample(csv, z[seg == 0], F[seg == 0], k)
     R = _num(meta, "tip", "radius", side, default=20e-9, lo=1e-10, hi=1e-3, unit="m")
     Et = _num(meta, "tip", "E", side, default=169e9, lo=1e6, hi=2e12, unit="Pa")
     nut = _num(meta, "tip", "nu", side, default=0.28, lo=-0.99, hi=0.5)
@@ -120,16 +120,20 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
                      E_sample=Es, nu_sample=nus, sigma_force=sig, noise_stated=stated, time=t)
 
 
-def _check_towards_sample(csv: Path, z: np.ndarray, F: np.ndarray) -> None:
-    """One-line error for a piezo axis that points away from the sample. A repulsive contact makes the
-    approach's force largest at its largest ``z`` (closest to the sample); where the approach's force instead
-    rises towards its *smallest* z by more than half the record's range, the column is a height (JPK, and
-    most instruments' "height" channels, decrease towards the sample) exported without its sign changed --
-    a fit of it would put the sample on the wrong side."""
-    m = max(3, len(z) // 20)
+def _check_towards_sample(csv: Path, z: np.ndarray, F: np.ndarray, k: float) -> None:
+    """One-line error for a piezo axis that points away from the sample. In contact the approach's force
+    rises towards the sample with a slope up to ``k`` (``k P' / (k + P')``); out of contact its slope is the
+    baseline's tilt, a few per cent of ``k``. Where the steeper end of the approach (a linear fit to each
+    seventh by ``z``) is the *smallest* z and its force falls with z at more than ``k / 5``, the column is a
+    height (JPK, and most instruments' "height" channels, decrease towards the sample) exported without its
+    sign changed -- a fit of it would put the sample on the wrong side. A curve in contact throughout (both
+    ends steep) must rise with z at its steeper end too."""
     order = np.argsort(z)
-    lo, hi = float(np.median(F[order[:m]])), float(np.median(F[order[-m:]]))
-    if lo - hi > 0.5 * float(np.ptp(F)):
+    zs, Fs = z[order], F[order]
+    m = max(5, len(z) // 7)
+    s_lo = float(np.polyfit(zs[:m], Fs[:m], 1)[0])
+    s_hi = float(np.polyfit(zs[-m:], Fs[-m:], 1)[0])
+    if abs(s_lo) > abs(s_hi) and s_lo < -0.2 * k:
         raise DataFormatError(f"{csv}: z_m must increase towards the sample: the approach's force rises towards "
                               "smaller z (a height that decreases towards the sample? negate it)")
 
@@ -161,6 +165,7 @@ class ForceState:
     contact: str | None = None  # registry contact model with adhesion (None: Hertz)
     W: float = 0.0  # work of adhesion [J/m^2]
     lam: float | None = None  # Maugis transition parameter (md)
+    z0: float | None = None  # range zeta_0 of the DMT van der Waals tail [m] (None: the registry's default)
     alpha: float = 0.0  # cone half-angle [rad] of a conical tip (0: the sphere of radius R)
     z_shift: float = 0.0  # the retract's true piezo position minus the recorded one [m] (hysteresis)
     visco_strength: float = 0.0  # SLS relaxation strength E_0 / E_inf - 1 of the sample (0: elastic; E_star = E_inf)
@@ -178,7 +183,7 @@ def _interaction(st: ForceState, E_t, nu_t):
     """P(delta) for loading and unloading (callables) of the state's contact law (the registry model
     is kept for repeated evaluations with the same law parameters, e.g. finite-difference steps in
     the contact point or the baseline)."""
-    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, st.alpha, E_t, nu_t)
+    key = (st.contact if st.W > 0 else None, st.W, st.E_star, st.R, st.lam, st.z0, st.alpha, E_t, nu_t)
     hit = _LAW_CACHE.get(key)
     if hit is None:
         hit = _build_interaction(st, E_t, nu_t)
@@ -214,6 +219,8 @@ def _build_interaction(st: ForceState, E_t, nu_t):
     if st.contact == "md":
         lam = st.lam if st.lam is not None else 1.0
         model = get_contact_model("md", **kw, W=st.W, z0=_z0_for_lambda(lam, st.W, st.R, 4.0 / 3.0 * st.E_star))
+    elif st.contact == "dmt" and st.z0 is not None:
+        model = get_contact_model("dmt", **kw, W=st.W, z0=st.z0)
     else:
         model = get_contact_model(st.contact, **kw, W=st.W)
     return None, None, model

@@ -1,8 +1,11 @@
 """Adhesion of the tip to the sample, after the contact registry (probedyn.schemes.contact).
 
 Three causes, one per contact law of the registry: DMT (Hertz offset by the adhesion, with the
-van der Waals tail of range z0 = 0.375 nm that pulls the tip into contact where its gradient
-exceeds the lever's stiffness), JKR (adhesion inside the contact only: a jump into contact and a
+van der Waals tail ``-2 pi W R zeta_0^2 / D^2`` that pulls the tip into contact where its gradient
+exceeds the lever's stiffness; the tail's range ``zeta_0`` is fitted, from the registry's Table 4.4
+value 0.375 nm: it is no universal constant -- Israelachvili's "universal" cut-off 0.165 nm, an
+interatomic spacing, or longer for a rough tip -- and it sets the snap-in, since the Hamaker
+constant is ``H = 12 pi W zeta_0^2``), JKR (adhesion inside the contact only: a jump into contact and a
 hysteresis), and Maugis-Dugdale with its transition parameter lambda fitted (DMT for lambda -> 0,
 JKR for lambda -> infinity). Each replaces the baseline's Hertz contact by the registry model
 with the fitted work of adhesion W.
@@ -10,9 +13,14 @@ with the fitted work of adhesion W.
 
 from __future__ import annotations
 
+from probedyn.core.presets import preset
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 _W = CauseParam("W", "J/m^2", 0.0, 2.0, 0.0, "work of adhesion", starts=(0.003, 0.03, 0.3))
+#: the range of the DMT tail: null value the registry's (Table 4.4), bounds 0.05-2 nm (a tenth of an
+#: interatomic spacing to the nanometre asperities of a rough tip); irrelevant where W = 0
+_Z0 = CauseParam("z0", "m", 0.05e-9, 2e-9, preset("table-4.4")["zeta0"],
+                 "range zeta_0 of the van der Waals tail (H = 12 pi W zeta_0^2)", scale="log", starts=(0.165e-9, 1e-9))
 
 
 class _Adhesion(Cause):
@@ -37,10 +45,20 @@ class AdhesionDMT(_Adhesion):
     key = "adhesion-dmt"
     title = "Adhesion, DMT (with the van der Waals tail: jump to contact where its gradient exceeds k)"
     source = "contact registry 'dmt': eqs 2.20-2.21; pull-off 2 pi W R"
-    description = "Hertz contact offset by -2 pi W R plus the -H R / (6 D^2) tail outside contact: snap-in and pull-off without hysteresis of the contact law."
-    needs = "the retract below the baseline (pull-off), or a snap-in on the approach"
-    params = (_W,)
+    description = ("Hertz contact offset by -2 pi W R plus the -H R / (6 D^2) tail outside contact (H = 12 pi W zeta_0^2, "
+                   "zeta_0 fitted): snap-in and pull-off without hysteresis of the contact law.")
+    needs = "the retract below the baseline (pull-off), or a snap-in on the approach (for zeta_0)"
+    params = (_W, _Z0)
     contact = "dmt"
+
+    def effect(self, v, s):
+        super().effect(v, s)
+        s.z0 = v.get("z0", _Z0.null)
+
+    def derived(self, v, problem):
+        import math
+
+        return {**super().derived(v, problem), "hamaker_J": 12 * math.pi * v["W"] * v.get("z0", _Z0.null) ** 2}
 
 
 @CAUSES.register
