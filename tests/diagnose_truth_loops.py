@@ -52,9 +52,13 @@ def _balance(L, A, mu, d, theta):
 
 
 def make_loop_case(folder: Path, seed: int, effect: str | None,
-                   load_factors: tuple[float, ...] | None = None) -> tuple[Path, dict]:
+                   load_factors: tuple[float, ...] | None = None,
+                   adhesion_ratio: float | None = None) -> tuple[Path, dict]:
     """One loop record. ``load_factors``: the scans' loads as multiples of the drawn load ``L`` (cycled over
-    the scans, at least one scan each; default: every scan at ``L``, the draws of earlier sessions)."""
+    the scans, at least one scan each; default: every scan at ``L``, the draws of earlier sessions).
+    ``adhesion_ratio``: the adhesion load as a multiple of ``L`` instead of the drawn 0-0.5 (0: none).
+    ``effect``: None (flat surface), ``"surface-slope"`` (relief), ``"adhesion-load"`` (flat; the adhesion
+    is the hidden effect, which scans at two loads can show)."""
     rng = np.random.default_rng([seed, 23])
     n_scans = int(rng.integers(1, 4))
     factors = tuple(load_factors) if load_factors else (1.0,)
@@ -66,6 +70,8 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     L = rng.uniform(5e-9, 50e-9)
     mu0 = rng.uniform(0.1, 0.6)
     A = rng.uniform(0.0, 0.5) * L
+    if adhesion_ratio is not None:
+        A = adhesion_ratio * L
     g = rng.uniform(0.7, 1.4) if rng.random() < 0.5 else 1.0
     contrast = rng.uniform(0.6, 1.5) if rng.random() < 0.5 else 1.0
     sigma = rng.uniform(0.01, 0.05) * mu0 * (L + A)
@@ -76,7 +82,7 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     dx = x[1] - x[0]
     sub = (np.arange(8) + 0.5) / 8 - 0.5
     rows = []
-    flat = effect is None
+    flat = effect in (None, "adhesion-load")
     tilt = rng.uniform(-0.01, 0.01)
     loads = [L * factors[(sid - 1) % len(factors)] for sid in range(1, n_scans + 1)]
     for sid in range(1, n_scans + 1):
@@ -106,6 +112,7 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     (folder / f"{name}.toml").write_text(
         f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "interval-mean"\n'
         f"[lever]\nk_x = {k_x:.6g}\n[medium]\nname = \"air\"\n{scans}")
-    truth = {"effect": effect, "params": {"c_slope": g} if effect else {}, "g": g, "mu": mu0, "A": A, "L": L,
+    params = {"c_slope": g} if effect == "surface-slope" else {"n_adh": A} if effect == "adhesion-load" else {}
+    truth = {"effect": effect, "params": params, "g": g, "mu": mu0, "A": A, "L": L,
              "contrast": contrast, "sigma": sigma, "loads": loads, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
     return folder / f"{name}.toml", truth

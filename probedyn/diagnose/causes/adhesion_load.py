@@ -5,6 +5,12 @@ Parametrised so that the corrugation at the mean load N_ref stays the baseline's
 follows the load, not its level; referred to zero load instead, every change of N_adh changes the
 stick-slip pattern of every scan and the fit from the null value stalls (the pattern is not a
 smooth function of the corrugation once slips skip wells).
+
+On a mesoscale friction loop (:mod:`probedyn.diagnose.friction_loop`, whose baseline carries the FFM's
+friction at the reference load to each scan's load by Amontons' law) the same parameter is Derjaguin's:
+``F_k(N) = F_k(N_ref) (N + N_adh) / (N_ref + N_adh)``, the half loop's intercept on the load axis at
+``-N_adh``; offered there only for scans at two or more loads (one load cannot separate the intercept from
+the slope).
 """
 
 from __future__ import annotations
@@ -23,10 +29,13 @@ class AdhesionLoad(Cause):
     description = "The corrugation follows the total load N + N_adh instead of N: friction is finite at zero load."
     needs = "scans at two or more normal loads"
     changes = ("adhesion",)
+    regimes = ("stick-slip", "loop")
     params = (CauseParam("n_adh", "N", -1.0, 1.0, 0.0, "adhesion load"),)
 
     def constrain(self, problem):
         if super().constrain(problem) is None:
+            return None
+        if getattr(problem, "regime", "") == "loop" and not np.ptp(problem.loads) > 0:
             return None
         lo, hi = float(problem.loads.min()), float(problem.loads.max())
         c = AdhesionLoad((CauseParam("n_adh", "N", -0.9 * lo, 20.0 * hi, 0.0, "adhesion load",
@@ -34,14 +43,24 @@ class AdhesionLoad(Cause):
         c.N_ref = float(problem.N_mean)
         return c
 
-    def data_starts(self, problem, ref: dict) -> list[dict]:
+    def data_starts(self, problem, ref: dict, ref_causes: tuple = ()) -> list[dict]:
         """From the recorded loop: the corrugation U0 of each scan (from the ratio of the slip drop to
         the peak force, :func:`probedyn.diagnose.friction.loop_estimate`) against its load,
         ``U0 = u0 (N + N_adh)``: a straight line whose intercept over slope is N_adh."""
-        L = problem.loop
         N = problem.loads
         if np.ptp(N) <= 0:
             return []
+        if getattr(problem, "regime", "") == "loop":  # the half loops of the scans against their loads
+            hl = []
+            for i, s in enumerate(problem.data.scans):
+                fwd = s.direction > 0
+                hl.append(0.5 * (s.force[fwd].mean() - s.force[~fwd].mean()) if fwd.any() and (~fwd).any() else np.nan)
+            ok = np.isfinite(hl)
+            if ok.sum() < 2 or np.ptp(N[ok]) <= 0:
+                return []
+            B, A = np.polyfit(N[ok], np.asarray(hl)[ok], 1)
+            return [{"n_adh": float(A / B)}] if B > 0 else []
+        L = problem.loop
         B, A = np.polyfit(N, L.U0, 1)
         if not B > 0:
             return []
@@ -50,7 +69,7 @@ class AdhesionLoad(Cause):
 
     def effect(self, v, s):
         n_ref = getattr(self, "N_ref", None)
-        if n_ref:
+        if n_ref and getattr(s, "corrugation_follows_load", True):
             s.u0 *= n_ref / (n_ref + v["n_adh"])
         s.n_adh += v["n_adh"]
 

@@ -13,8 +13,11 @@ of the slope the instrument recorded (``height_m``) in ``F = (c N t + d F_k) / (
 order in t, ``mu_a = F_k / N`` the apparent friction coefficient. The truth's loop mean is
 ``g L t (1 + mu^2 (1 + A / L))`` with ``g`` the factor by which the declared lateral calibration is off and
 ``g mu (L + A) = F_k``: without adhesion ``g + mu_a^2 / g = c (1 + mu_a^2)``, whose root near ``c`` is the
-**calibration factor** reported (``c = g`` when ``g = 1``); an adhesion load lowers it by about
-``mu_a^2 A / ((L + A) (g - mu_a^2 / g))`` (two loads separate them: the half loop's intercept is ``g mu A``).
+**calibration factor** reported (``c = g`` when ``g = 1``). With an adhesion load ``A`` fitted as well
+(the adhesion-load cause, scans at two or more loads: the half loop's intercept is ``g mu A``) the model's
+loop mean is ``c N t (1 + Y)`` with ``Y = F_k^2 / (N (N + A))`` and the truth's ``g N t (1 + Y / g^2)``:
+``g`` is the root near ``c`` of ``g^2 - c (1 + Y) g + Y = 0`` (``Y = mu_a^2`` without adhesion; ignoring
+an adhesion that is there biases ``g`` by about ``-mu_a^2 A / ((L + A) (g - mu_a^2 / g))``).
 The friction coefficient is then ``F_k / (g (N + A))``.
 Applies to mesoscale loops (``regimes = ("loop",)``).
 """
@@ -59,20 +62,22 @@ class SurfaceSlope(Cause):
 
     def derived(self, v, problem):
         c = v["c_slope"]
+        A = float(v.get("n_adh", 0.0))  # the adhesion load, where the adhesion-load cause is in the model
         fk = abs(getattr(problem, "half_loop", 0.0))
         N = float(np.mean(problem.loads))
         out = {}
-        if c > 0 and N > 0:
-            g = calibration_factor(c, fk / N)
+        if c > 0 and N > 0 and N + A > 0:
+            g = calibration_factor(c, fk / math.sqrt(N * (N + A)))
             out["lateral_calibration_factor"] = g
-            out["friction_coefficient_if_no_adhesion"] = fk / (g * N)
+            out["friction_coefficient" if "n_adh" in v else "friction_coefficient_if_no_adhesion"] = fk / (g * (N + A))
             out["friction_N_calibrated"] = fk / g
         return out
 
 
 def calibration_factor(c: float, mu_a: float) -> float:
     """The lateral calibration factor ``g`` from the fitted coupling ``c`` and the apparent friction
-    coefficient ``mu_a = F_k / N`` (no adhesion): the root near ``c`` of ``g^2 - c (1 + mu_a^2) g + mu_a^2 = 0``
+    coefficient ``mu_a = F_k / N`` (no adhesion; with an adhesion load ``A``, ``mu_a = F_k / sqrt(N (N + A))``):
+    the root near ``c`` of ``g^2 - c (1 + mu_a^2) g + mu_a^2 = 0``
     (the larger root; ``c (1 + mu_a^2)`` where the discriminant is negative, i.e. ``c < 2 mu_a / (1 + mu_a^2)``)."""
     b = c * (1.0 + mu_a**2)
     disc = b * b - 4.0 * mu_a**2
