@@ -17,9 +17,9 @@ from probedyn.core.presets import preset
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 _W = CauseParam("W", "J/m^2", 0.0, 2.0, 0.0, "work of adhesion", starts=(0.003, 0.03, 0.3))
-#: the range of the DMT tail: null value the registry's (Table 4.4), bounds 0.05-2 nm (a tenth of an
+#: the range of the DMT tail: null value the registry's (Table 4.4), bounds 0.1-2 nm (a quarter of an
 #: interatomic spacing to the nanometre asperities of a rough tip); irrelevant where W = 0
-_Z0 = CauseParam("z0", "m", 0.05e-9, 2e-9, preset("table-4.4")["zeta0"],
+_Z0 = CauseParam("z0", "m", 0.1e-9, 2e-9, preset("table-4.4")["zeta0"],
                  "range zeta_0 of the van der Waals tail (H = 12 pi W zeta_0^2)", scale="log", starts=(0.165e-9, 1e-9))
 
 
