@@ -17,9 +17,12 @@ from probedyn.core.presets import preset
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 _W = CauseParam("W", "J/m^2", 0.0, 2.0, 0.0, "work of adhesion", starts=(0.003, 0.03, 0.3))
-#: the range of the DMT tail: null value the registry's (Table 4.4), bounds 0.1-2 nm (a quarter of an
-#: interatomic spacing to the nanometre asperities of a rough tip); irrelevant where W = 0
-_Z0 = CauseParam("z0", "m", 0.1e-9, 2e-9, preset("table-4.4")["zeta0"],
+#: the range of the DMT tail: null value the registry's (Table 4.4), bounds 0.15-2 nm: from just below
+#: Israelachvili's contact separation D0 = 0.165 nm (the one cut-off that gives most solids' surface energies
+#: from their Hamaker constants, Intermolecular and Surface Forces, 3rd ed., 13.6; no van der Waals contact
+#: is closer) to the nanometre asperities of a rough tip; irrelevant where W = 0. A shorter tail is not
+#: physics: it only lets the DMT jump mimic JKR's (docs/diagnose.md 9.12).
+_Z0 = CauseParam("z0", "m", 0.15e-9, 2e-9, preset("table-4.4")["zeta0"],
                  "range zeta_0 of the van der Waals tail (H = 12 pi W zeta_0^2)", scale="log", starts=(0.165e-9, 1e-9))
 
 
