@@ -164,31 +164,40 @@ def test_parsimony_prefers_the_contained_limit():
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
     claimed = [row(AdhesionMD, 100.0), row(DeflectionDrift, 99.9)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
-    # two contained limits, both unsupported against the container: the better in-sample fit leads (equal
-    # parameter counts), whatever their held-out evidence, and the other is no longer ahead of it
+    # the container's limits: JKR nested (one parameter fewer) and unsupported; DMT (W and its tail's
+    # range: as many parameters as MD) not nested, but the better Akaike score among the limits takes
+    # the lead (Akaike DMT 150.25 - 2 = 148.25, JKR 148 - 1 = 147), whatever the held-out evidence; MD
+    # is then a rival like any other (it does not contain DMT), JKR a sibling within the margin
     from probedyn.diagnose.causes.adhesion import AdhesionDMT
 
     claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionJKR, 99.0, 296.0), row(AdhesionDMT, 97.0, 300.5)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
+    jkr = next(d for d in claimed if d["cause"].key == "adhesion-jkr")
+    md = next(d for d in claimed if d["cause"].key == "adhesion-md")
+    assert jkr.get("sibling_limit") and not md.get("contains_leader")
     # ... and the other limit stays a rival while its in-sample Akaike score is within the margin (held-out
     # evidence 9 nats behind: a JKR truth under AR(1) noise, seed 2001), not when it is beyond it
-    jkr = next(d for d in claimed if d["cause"].key == "adhesion-jkr")
-    assert jkr.get("sibling_limit")
     claimed = [row(AdhesionMD, 59.6, 129.3), row(AdhesionDMT, 59.2, 132.2), row(AdhesionJKR, 50.2, 129.8)]
     _parsimony(claimed, EVIDENCE_MARGIN)
     assert claimed[0]["cause"].key == "adhesion-dmt" and claimed[2].get("sibling_limit")
-    # (DMT has two parameters, W and its tail's range: Akaike 150 - 2 = 148; JKR 146 - 1 = 145, 3 nats behind)
-    claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionDMT, 99.0, 300.0), row(AdhesionJKR, 90.0, 292.0)]
+    # a JKR nested and unsupported with the better Akaike score leads, MD hidden as its container
+    claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionJKR, 99.5, 299.0), row(AdhesionDMT, 95.0, 294.0)]
     _parsimony(claimed, EVIDENCE_MARGIN)
-    assert claimed[0]["cause"].key == "adhesion-dmt" and not claimed[2].get("sibling_limit")  # contained, 3 nats behind
+    assert claimed[0]["cause"].key == "adhesion-jkr" and claimed[1]["cause"].key == "adhesion-md"
+    assert claimed[1].get("contains_leader") and not claimed[2].get("sibling_limit")  # DMT 1.5 + 2.5 = 4 behind
+    # DMT alone next to MD (JKR's lambda supported): two alternatives of equal size, the rule does not act --
+    # an MD truth (seed 2058, lambda 0.73) was otherwise handed to a DMT at its shortest tail
+    claimed = [row(AdhesionMD, 100.0, 300.0), row(AdhesionDMT, 99.0, 300.0), row(AdhesionJKR, 90.0, 292.0)]
+    assert _parsimony(claimed, EVIDENCE_MARGIN) is None and claimed[0]["cause"].key == "adhesion-md"
 
 
 def test_a_contained_limit_is_never_pruned_before_the_parsimony_rule():
     """engine._score_in_order: a cause whose evidence cap is below the winner's evidence minus the margin
     is not cross-validated, except a limit of a passing container, which the parsimony rule's LR arm can
-    still hand the lead (seed 2067: DMT 4.7 behind Maugis-Dugdale in chi^2, below chi2_1(0.99) = 6.63,
-    its cap 0.07 nats below the pruning line). The same numbers end with DMT first."""
-    from probedyn.diagnose.causes.adhesion import AdhesionDMT, AdhesionMD
+    still hand the lead (seed 2067, when DMT's tail was held: DMT 4.7 behind Maugis-Dugdale in chi^2, below
+    chi2_1(0.99) = 6.63, its cap 0.07 nats below the pruning line). The same numbers with the nested JKR
+    end with JKR first; with DMT of MD's size (its tail's range fitted, session 26) the rule does not act."""
+    from probedyn.diagnose.causes.adhesion import AdhesionDMT, AdhesionJKR, AdhesionMD
     from probedyn.diagnose.causes.deflection_drift import DeflectionDrift
     from probedyn.diagnose.engine import EVIDENCE_MARGIN, _parsimony, _score_in_order
 
@@ -198,20 +207,21 @@ def test_a_contained_limit_is_never_pruned_before_the_parsimony_rule():
     def row(c, dchi2):
         return {"cause": c(), "fit": _F(), "dchi2": dchi2, "k": len(c.params), "lr_pass": True, "evidence": None}
 
-    md, dmt, drift = row(AdhesionMD, 24270.54), row(AdhesionDMT, 24265.79), row(DeflectionDrift, 24265.79)
-    scored = []
-
     def score(d):  # evidence at its cap, as the rate study's held-out scores were
         scored.append(d["cause"].key)
         d["evidence"] = 0.5 * d["dchi2"]
 
-    cands = [drift, dmt, md]
-    _score_in_order(cands, EVIDENCE_MARGIN, score)
-    assert 0.5 * dmt["dchi2"] < md["evidence"] - EVIDENCE_MARGIN  # below the pruning line ...
-    assert "adhesion-dmt" in scored and not dmt.get("pruned")  # ... and scored: a limit of the container
-    assert drift.get("pruned") and drift["evidence"] is None  # the same cap, not a limit: pruned (exact)
-    claimed = sorted([d for d in cands if d["evidence"] is not None], key=lambda d: -d["evidence"])
-    assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-dmt"
+    for limit, leader in ((AdhesionJKR, "adhesion-jkr"), (AdhesionDMT, "adhesion-md")):
+        md, lim, drift = row(AdhesionMD, 24270.54), row(limit, 24265.79), row(DeflectionDrift, 24265.79)
+        scored = []
+        cands = [drift, lim, md]
+        _score_in_order(cands, EVIDENCE_MARGIN, score)
+        assert 0.5 * lim["dchi2"] < md["evidence"] - EVIDENCE_MARGIN  # below the pruning line ...
+        assert limit.key in scored and not lim.get("pruned")  # ... and scored: a limit of the container
+        assert drift.get("pruned") and drift["evidence"] is None  # the same cap, not a limit: pruned (exact)
+        claimed = sorted([d for d in cands if d["evidence"] is not None], key=lambda d: -d["evidence"])
+        note = _parsimony(claimed, EVIDENCE_MARGIN)
+        assert claimed[0]["cause"].key == leader and (note is None) == (leader == "adhesion-md")
 
 
 def test_a_container_never_fits_worse_than_a_limit_it_contains(tmp_path):

@@ -1095,25 +1095,32 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
     applied between the two nested models), the data do not support the leader's extra parameter:
     the contained (simpler) cause leads, and the container is not counted as a confounded rival
     (it is the same explanation plus an unsupported parameter). The LR arm makes the rule immune to
-    the scatter of held-out evidence between models of equal in-sample fit. Reorders ``claimed``
-    in place; returns the note for the report."""
+    the scatter of held-out evidence between models of equal in-sample fit. Only a limit with fewer
+    parameters than the container is nested in it; a limit of equal size (DMT with its tail's range,
+    session 26) is an alternative, which can still take the lead from the nested one by the Akaike
+    score, the container then a rival like any other. Reorders ``claimed`` in place; returns the note
+    for the report."""
     if not claimed:
         return None
     best = claimed[0]
     lims = set(getattr(best["cause"], "limits", ()))
 
     def unsupported(d):
-        k_extra = max(best["k"] - d["k"], 1)
+        k_extra = best["k"] - d["k"]
         lr = float(chi2_dist.ppf(1 - alpha, k_extra))
         return d["evidence"] >= best["evidence"] - margin or best["dchi2"] - d["dchi2"] <= lr
 
-    inner = [d for d in claimed[1:] if d["cause"].key in lims and unsupported(d)]
+    # only a limit with fewer parameters is nested: DMT with its tail's range fitted (W, zeta_0) has as many
+    # as Maugis-Dugdale (W, lambda -- lambda is the Dugdale range in disguise), and MD's lambda -> 0 keeps a
+    # Dugdale tail, not DMT's van der Waals one: of equal size, they are alternatives (session 26: an MD
+    # truth, seed 2058, lambda 0.73, was handed to a DMT at its shortest tail and MD hidden as its container)
+    inner = [d for d in claimed[1:] if d["cause"].key in lims and best["k"] > d["k"] and unsupported(d)]
     if not inner:
         return None
-    # between several contained limits (JKR and DMT under Maugis-Dugdale) the in-sample likelihood with
-    # Akaike's parameter count decides, not the held-out evidence: the limits are not nested in each
-    # other, and where the data jump (snap-in, pull-off) the held-out evidence of a law is dominated by
-    # the few held-out samples next to a jump, whose prediction falls on one side of it or the other --
+    # between the container's limits (JKR and DMT under Maugis-Dugdale, nested or not) the in-sample
+    # likelihood with Akaike's parameter count decides, not the held-out evidence: the limits are not nested
+    # in each other, and where the data jump (snap-in, pull-off) the held-out evidence of a law is dominated
+    # by the few held-out samples next to a jump, whose prediction falls on one side of it or the other --
     # a scatter of several nats that says nothing about the law (a DMT truth, seed 2043: DMT best in
     # sample by 3.7 over JKR, 2.7 nats behind it held out); for the same reason the other limit stays a
     # confounded rival when its evidence *or its in-sample Akaike score* is within the margin of the new
@@ -1121,14 +1128,18 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
     def akaike(d):
         return 0.5 * d["dchi2"] - d["k"]
 
-    new = max(inner, key=akaike)
-    for d in inner:
+    siblings = [d for d in claimed[1:] if d["cause"].key in lims]
+    new = max(siblings, key=akaike)  # inner is among them
+    for d in siblings:
         if d is not new and akaike(d) >= akaike(new) - margin:
             d["sibling_limit"] = True
     claimed.remove(new)
     claimed.insert(0, new)
-    best["contains_leader"] = True
-    return {"rule": "a cause that contains the leader as a limit and is within the evidence margin does not lead",
+    if new in inner:  # the container is the leader plus an unsupported parameter: not a rival
+        best["contains_leader"] = True
+    return {"rule": "a cause that contains a claimed limit with fewer parameters, within the evidence margin or "
+                    "unsupported by the likelihood-ratio test against it, does not lead; the container's limits "
+                    "are then ranked by their in-sample Akaike score",
             "container": best["cause"].key, "container_evidence": best["evidence"],
             "container_parameters": {p.name: best["fit"].values[p.name] for p in best["cause"].params}}
 
