@@ -390,3 +390,23 @@ def test_force_curve_misfit_continuous_where_a_jump_crosses_a_sample(tmp_path):
     mix = largest_increment(h, False), largest_increment(h / 2, False)
     assert pt[1] > 100 and pt[1] / pt[0] > 0.9  # the point-sampled misfit jumps
     assert mix[1] / mix[0] < 0.6 and mix[1] < pt[1] / 10, (mix, pt)
+
+
+def test_an_offset_larger_than_the_force_range_is_read(tmp_path):
+    """A deflection's zero is the instrument's: an offset three times the whole force range (blind case
+    c23 had -19 nN on a 15 nN curve; the offset's bound was the force range about zero, and the problem
+    refused its own start with a traceback) is fitted like any other; the baseline of a null reaches the
+    noise and the offset is recovered within 10 noise levels (the far line's intercept at z = 0 has a
+    standard error of a few sigma / sqrt(n))."""
+    path, truth = make_curve_case(tmp_path, 6001, None)
+    csv = path.with_suffix(".csv")
+    header = csv.read_text().splitlines()[0]
+    data = np.loadtxt(csv, delimiter=",", skiprows=1)
+    shift = 3.0 * float(np.ptp(data[:, 1]))
+    data[:, 1] += shift
+    np.savetxt(csv, data, delimiter=",", header=header, comments="")
+    prob = make_problem(path)
+    per_unit = float(np.ptp(prob.data.force)) / float(np.ptp(data[:, 1]))  # N per unit of the column
+    base = Fitter(prob).baseline()
+    assert base.chi2 < _chi2_bound(base.n)
+    assert abs(base.values["b0"] - (truth["b0"] + shift * per_unit)) < 10 * truth["noise"]

@@ -277,3 +277,42 @@ def test_a_null_curve_with_a_declared_correlation(tmp_path):
     assert nz["model"] == "AR(1)" and nz["rho"] == 0.8 and nz["estimator"].startswith("declared")
     assert res["findings"] == [] and res["verdict"] == "no-significant-discrepancy"
     assert "AR(1) rho = 0.80 as declared" in summary(res)
+
+
+def test_an_unstated_white_noise_scale_is_reread_from_the_whole_record():
+    """White residuals in units of a sigma misread by a factor 1/1.27 (blind null c21: the far quarter of the
+    approach, ~75 second differences, read the force curve's noise 21 % low): the re-read scale is within 4.5 of
+    its standard errors (1.27 / sqrt n) of 1.27 on all 200 records (a 4.5 SE deviation: 7e-6 each); at the right scale the gate (2 SE) fires on about 5 % of records."""
+    from probedyn.diagnose.noise import SCALE_GATE_SE
+
+    rng = np.random.default_rng(27)
+    n = 600
+    prob = _problem(stated=False)
+    misread = [noise_correlation(prob, 1.27 * rng.standard_normal(n)) for _ in range(200)]
+    assert all(nz["model"] == "white" and abs(nz["white_scale"] / 1.27 - 1) < 4.5 / math.sqrt(n) for nz in misread)
+    right = [noise_correlation(prob, rng.standard_normal(n)) for _ in range(400)]
+    fired = sum("white_scale" in nz for nz in right) / len(right)
+    expected = 2 * (1 - 0.5 * (1 + math.erf(SCALE_GATE_SE / math.sqrt(2))))  # 4.6 %
+    assert abs(fired - expected) < 4 * math.sqrt(expected * (1 - expected) / len(right))
+    # a stated noise or a declared correlation keeps the problem's sigma
+    assert "white_scale" not in noise_correlation(_problem(stated=True), 1.27 * rng.standard_normal(n))
+    declared = SimpleNamespace(**vars(prob), noise_correlation_declared=0.0)
+    assert "white_scale" not in noise_correlation(declared, 1.27 * rng.standard_normal(n))
+
+
+def test_a_null_curve_whose_noise_was_read_low_is_no_discrepancy(tmp_path):
+    """A white null without a stated noise whose problem sigma is 0.8 of the true one (as blind c21's far
+    quarter read it): the baseline fails the white test on that sigma (chi^2 ~ 1.56 n); the diagnosis re-reads
+    the scale from the residuals' second differences (1.25 within 4 SE), refits, and claims nothing."""
+    from probedyn.diagnose.engine import Fitter, diagnose
+    from probedyn.diagnose.problems import make_problem
+
+    path, truth = make_curve_case(tmp_path, 6004, None, state_noise=False)
+    prob = make_problem(path)
+    prob.sigma = 0.8 * truth["noise"]
+    assert Fitter(prob).baseline().p_value < 1e-6
+    res = diagnose(prob)
+    nz = res["method"]["noise"]
+    assert nz["model"] == "white" and abs(nz["white_scale"] - 1.25) < 4 / math.sqrt(prob.n), nz
+    assert res["findings"] == [] and res["verdict"] == "no-significant-discrepancy"
+    assert prob.sigma == 0.8 * truth["noise"]  # the problem is left as it was given

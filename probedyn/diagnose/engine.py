@@ -848,7 +848,18 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                      judged_on=("the best nested candidate's residuals ("
                                 + ", ".join(c.key for c in best.causes) + ")") if best.causes else "the baseline")
         if again["model"] != "AR(1)":
-            break
+            q = again.get("white_scale")
+            if q is None or not isinstance(getattr(problem, "sigma", None), float):
+                break
+            # an unstated white noise whose scale the whole record's residuals read differently from the
+            # part the problem read it from (:mod:`.noise`): every fit again on the re-read sigma
+            noise["sigma_before_N"] = problem.sigma
+            F.close_pool()  # the workers were forked with the old sigma
+            problem.sigma = problem.sigma * float(q)
+            b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
+            base = b1 if b1.chi2 <= b2.chi2 else b2
+            F.open_pool()
+            continue
         F.close_pool()  # the workers were forked with the white residuals
         base = _whiten(F, again, base)
         F.open_pool()

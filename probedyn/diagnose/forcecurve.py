@@ -503,9 +503,13 @@ class ForceCurveProblem:
         # of the opposite sign to the contact force cancels part of the range (stiff levers: a 2 % tilt of
         # k over the span against the contact force), so the range alone can leave the true tilt out of bounds
         B1 = max(Fs / self.span, 3.0 * abs(float(b1)))
+        # the offset's bound: a deflection's zero is the instrument's (an offset larger than the whole force
+        # range is common: blind case c23, -19 nN on a 15 nN curve), so it is centred on the far line's
+        # intercept, widened by the force range and by what a tilt within its bound moves the intercept at z = 0
+        B0 = Fs + B1 * float(np.max(np.abs(d.z)))
         self.base_params = [
             CauseParam("z_c", "m", float(d.z.min()), float(d.z.max()), zc0, "contact point (piezo position)"),
-            CauseParam("b0", "N", -Fs, Fs, float(b0), "force offset of the baseline"),
+            CauseParam("b0", "N", float(b0) - B0, float(b0) + B0, float(b0), "force offset of the baseline"),
             CauseParam("b1", "N/m", -B1, B1, float(b1), "baseline tilt (virtual deflection)"),
         ]
         if self.E_star_declared is None:

@@ -75,6 +75,10 @@ def summary(res: dict[str, Any]) -> str:
         lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (the stated noise is {1 / nz['high_frequency_scale']:.2f}x "
                      f"its sample-to-sample part; residual lag-one correlation {nz['rho_lag1']:.2f}): residuals are "
                      "whitened (innovations) in every fit")
+    elif nz.get("model") == "white" and nz.get("white_scale"):
+        on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
+        lines.append(f"noise: white (no stated noise: its sigma re-read from the second differences{on}, "
+                     f"{nz['white_scale']:.2f}x the part of the record first read)")
     if res.get("peaks"):
         rej = [p for p in res["peaks"]["peaks"] if not p["accepted"]]
         acc = [p for p in res["peaks"]["peaks"] if p["accepted"]]
@@ -89,7 +93,8 @@ def summary(res: dict[str, Any]) -> str:
             lines.append(f"  another labelling fits as well: best model {a['best_model']}" + (f" ({vals})" if vals else ""))
     v = res["verdict"]
     if v == "no-significant-discrepancy":
-        lines.append("no significant discrepancy: the residual is consistent with the stated noise; nothing is claimed")
+        lines.append("no significant discrepancy: the residual is consistent with the "
+                     + ("stated" if res.get("data", {}).get("noise_stated", True) else "estimated") + " noise; nothing is claimed")
     elif v == "unexplained":
         lines.append("significant discrepancy, but no catalog cause explains it out of sample")
     for f in res["findings"]:
