@@ -120,7 +120,8 @@ def power_law(e: np.ndarray, alpha: float) -> np.ndarray:
 
 def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300,
                     noise_rho: float = 0.0, state_noise: bool = True,
-                    declare_rho: float | None = None, noise_alpha: float | None = None) -> tuple[Path, dict]:
+                    declare_rho: float | None = None, noise_alpha: float | None = None,
+                    white_floor: float | None = None) -> tuple[Path, dict]:
     from probedyn.schemes.contact import get_contact_model
     from probedyn.schemes.contact.base import MAUGIS_206
 
@@ -217,6 +218,10 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
     e = rng.standard_normal(len(F))
     # the sidecar states the marginal sigma; ``noise_alpha``: 1/f^alpha noise instead of AR(1)
     Fm = clean + noise * (correlated(e, noise_rho) if noise_alpha is None else power_law(e, noise_alpha))
+    if white_floor is not None:  # a detector: a white floor carrying this share of the variance under the slow
+        # noise (its own stream: every other draw unchanged; the marginal sigma stays ``noise``)
+        floor = np.random.default_rng([seed, 43]).standard_normal(len(F))
+        Fm = clean + math.sqrt(1.0 - white_floor) * (Fm - clean) + math.sqrt(white_floor) * noise * floor
     fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     with_time = bool(rng.integers(2)) or effect == "hydrodynamic-drag"
     water = effect in DETECTOR_EFFECTS and bool(aux.integers(2))
@@ -235,7 +240,7 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         + (("" if state_noise else "[noise]\n") + f"correlation = {declare_rho!r}\n" if declare_rho is not None else "")
         + ('\n[medium]\nname = "water"\n' if water else ""))
     truth = {"effect": effect, "params": params, "k": k, "E_s": E_s, "z_c": z_c, "b0": b0, "b1": b1, "noise": noise,
-             "noise_rho": noise_rho, "noise_alpha": noise_alpha, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
+             "noise_rho": noise_rho, "noise_alpha": noise_alpha, "white_floor": white_floor, "noise_stated": state_noise, "R_nom": R_nom, "declared_E": declare_E, "format": fmt, "time_column": with_time, "snap_in": snap_in,
              "water_declared": water, "force_clean": clean}  # the noise-free record [N] (for the detectability criterion; not written)
     return outdir / f"{name}.toml", truth
 

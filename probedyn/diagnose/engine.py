@@ -108,7 +108,7 @@ from scipy.stats import chi2 as chi2_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.core.registry import RegistryError
 from probedyn.diagnose.causes import Cause, CauseParam
-from probedyn.diagnose.noise import AR1Whitener, noise_correlation
+from probedyn.diagnose.noise import MIXTURE, AR1Whitener, MixtureWhitener, noise_correlation
 
 __all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
 
@@ -743,10 +743,14 @@ def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
     truth, seed 2001 at rho = 0.8, named DMT with the sigma unstated and JKR with it stated)."""
     isd = noise.get("innovation_sd")
     prob = F.problem
-    if isd is not None and noise.get("marginal_sd") and isinstance(getattr(prob, "sigma", None), float):
+    mixture = noise["model"] == MIXTURE
+    if (isd is not None or mixture) and noise.get("marginal_sd") and isinstance(getattr(prob, "sigma", None), float):
         prob.sigma = prob.sigma * float(noise["marginal_sd"])
         isd = None
-    F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), isd)
+    if mixture:  # a white floor plus a slow AR(1): exact dense whitening per sequence (:class:`.noise.MixtureWhitener`)
+        F.white = MixtureWhitener(noise["share"], noise["rho"], F.problem.sequences, len(base.r))
+    else:
+        F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), isd)
     # a problem judging its own residuals against the noise (a force curve's data starts: "the reference
     # already fits within the noise") judges them on the noise the fits use
     prob.whitener = F.white
@@ -847,7 +851,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         noise = dict(again, baseline_estimate={k: noise[k] for k in ("rho", "rho_scatter", "rho_lag1")},
                      judged_on=("the best nested candidate's residuals ("
                                 + ", ".join(c.key for c in best.causes) + ")") if best.causes else "the baseline")
-        if again["model"] != "AR(1)":
+        if again["model"] not in ("AR(1)", MIXTURE):
             q = again.get("white_scale")
             if q is None or not isinstance(getattr(problem, "sigma", None), float):
                 break

@@ -75,6 +75,12 @@ def summary(res: dict[str, Any]) -> str:
         lines.append(f"noise: correlated, AR(1) rho = {nz['rho']:.2f} (the stated noise is {1 / nz['high_frequency_scale']:.2f}x "
                      f"its sample-to-sample part; residual lag-one correlation {nz['rho_lag1']:.2f}): residuals are "
                      "whitened (innovations) in every fit")
+    elif nz.get("model") == "white + AR(1)":
+        on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
+        lines.append(f"noise: white floor plus a slow AR(1) of rho {nz['rho']:.3f} carrying {100 * nz['share']:.0f} % of "
+                     f"the variance (no stated noise: white from sample to sample, rho {nz['rho_scatter']:.2f} from the "
+                     f"differences, but lag-one correlation {nz['rho_lag1']:.2f}{on}; likelihood ratio "
+                     f"{nz['mixture_lr']:.1f} against white): residuals are whitened in every fit")
     elif nz.get("model") == "white" and nz.get("white_scale"):
         on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
         lines.append(f"noise: white (no stated noise: its sigma re-read from the second differences{on}, "
