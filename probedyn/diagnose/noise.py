@@ -264,16 +264,19 @@ def white_plus_ar1(r: np.ndarray, seqs) -> dict[str, float]:
     xs = [np.asarray(r, float)[s] for s in seqs]
     n = sum(len(x) for x in xs)
 
-    def nll(u):
-        share, phi = 1.0 / (1.0 + math.exp(-u[0])), 1.0 / (1.0 + math.exp(-u[1]))
+    def quad_logdet(share: float, phi: float) -> tuple[float, float]:  # sum r' C^-1 r and sum log det C
         q = logdet = 0.0
         for x in xs:
-            try:
-                cf = cho_factor(_mix_cov(len(x), share, phi), lower=True, check_finite=False)
-            except np.linalg.LinAlgError:
-                return 1e300
+            cf = cho_factor(_mix_cov(len(x), share, phi), lower=True, check_finite=False)
             q += float(x @ cho_solve(cf, x, check_finite=False))
             logdet += 2.0 * float(np.sum(np.log(np.diag(cf[0]))))
+        return q, logdet
+
+    def nll(u):
+        try:
+            q, logdet = quad_logdet(1.0 / (1.0 + math.exp(-u[0])), 1.0 / (1.0 + math.exp(-u[1])))
+        except np.linalg.LinAlgError:
+            return 1e300
         return 0.5 * (n * math.log(q / n) + logdet)
 
     logit = lambda p: math.log(p / (1.0 - p))  # noqa: E731
@@ -283,7 +286,7 @@ def white_plus_ar1(r: np.ndarray, seqs) -> dict[str, float]:
     u = res.x if res.fun < nll(u0) else np.asarray(u0)
     share, phi = 1.0 / (1.0 + math.exp(-u[0])), 1.0 / (1.0 + math.exp(-u[1]))
     white = 0.5 * n * math.log(float(sum(x @ x for x in xs)) / n)
-    q = sum(float(x @ np.linalg.solve(_mix_cov(len(x), share, phi), x)) for x in xs)
+    q, _ = quad_logdet(share, phi)
     return {"variance": q / n, "share": share, "phi": phi, "lr": max(2.0 * (white - nll(u)), 0.0)}
 
 
