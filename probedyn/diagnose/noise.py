@@ -74,7 +74,11 @@ noise above its white floor: the differences see only the floor (the scatter gat
 residuals' lag-one correlation passes its gate. That state is ambiguous between such a noise and a misfit; on
 a force curve it is read by maximum likelihood as white noise plus an AR(1) (:func:`white_plus_ar1`), taken
 when its likelihood ratio against white exceeds ``MIX_LR_GATE``, and every fit is whitened exactly by the
-dense covariance per sequence (:class:`MixtureWhitener`). Blind nulls with such noise claimed a drift or a
+dense covariance per sequence (:class:`MixtureWhitener`), provided the fitted mixture implies the scatter
+statistic read within its gate (:func:`mixture_rho_scatter`; session 28: the real JPK curve's slow misfit and
+segment-dependent noise fitted as an AR(1) of share 1 and rho 0.99, implying 0.99 against the 0.10 read, which
+made its marginal sigma 55x the scatter and every finding vanish; the white-floor nulls imply within 0.09 of
+what they read). Blind nulls with such noise claimed a drift or a
 hysteresis on 3 of 4 records; on this model none. Not on friction loops: there the state more often means a
 second effect's misfit (a contrast beside a slope, 7022 and 7064 lost their second finding to it).
 
@@ -228,18 +232,34 @@ def noise_correlation(problem, r: np.ndarray) -> dict[str, Any] | None:
         # the ambiguous state: correlated at the record's scale (lag one) but white from sample to sample
         # (the differences): a white floor plus a slow noise (a detector's 1/f above its white floor), or a misfit
         mix = white_plus_ar1(r, seqs)
-        if mix["lr"] > MIX_LR_GATE:
+        # ... that must reproduce the state it is chosen for: the differences' statistic it implies within
+        # the scatter gate of the one read (a slow misfit fitted as an AR(1) of share 1 and rho 0.99 implies
+        # rho_scatter = 0.99: the JPK curve, read 0.10, whose marginal sigma came out 55x its scatter)
+        implied = mixture_rho_scatter(mix["share"], mix["phi"])
+        if mix["lr"] > MIX_LR_GATE and abs(implied - rho_s) <= gate_s:
             out.pop("white_scale", None)
             out.update(model=MIXTURE, rho=mix["phi"], share=mix["share"], mixture_lr=mix["lr"],
-                       marginal_sd=math.sqrt(mix["variance"]))
+                       mixture_rho_scatter=implied, marginal_sd=math.sqrt(mix["variance"]))
         else:
-            out["mixture_lr"] = mix["lr"]
+            out.update(mixture_lr=mix["lr"], mixture_rho_scatter=implied)
+            if mix["lr"] > MIX_LR_GATE:
+                out["reason"] = (f"white + AR(1) rejected: it implies rho_scatter {implied:.2f}, the record's "
+                                 f"differences read {rho_s:.2f} (a slow misfit, not a white floor under a slow noise)")
     if applied and not stated:
         # s^2 (1 - rho)(3 - rho) / 3 = q^2 gives the marginal sigma s (ill-determined as rho -> 1) and the
         # innovation's s^2 (1 - rho^2) = q^2 3 (1 + rho) / (3 - rho) (well determined: the 1 - rho cancels)
         out["innovation_sd"] = q * math.sqrt(3.0 * (1.0 + rho) / (3.0 - rho))
         out["marginal_sd"] = q * math.sqrt(3.0 / ((1.0 - rho) * (3.0 - rho)))
     return out
+
+
+def mixture_rho_scatter(share: float, phi: float) -> float:
+    """The scatter statistic ``3 - Var(Delta^2 e) / Var(Delta e)`` of white noise plus an AR(1) carrying the
+    fraction ``share`` of the variance (autocorrelation ``share phi^k`` at lag ``k >= 1``): with ``c_k`` the
+    autocorrelation, ``Var Delta = 2 (1 - c_1)`` and ``Var Delta^2 = 6 - 8 c_1 + 2 c_2``. ``share = 0``: 0
+    (white); ``share = 1``: ``phi`` (the AR(1)'s own)."""
+    c1, c2 = share * phi, share * phi * phi
+    return float(3.0 - (6.0 - 8.0 * c1 + 2.0 * c2) / (2.0 * (1.0 - c1)))
 
 
 def _mix_cov(m: int, share: float, phi: float) -> np.ndarray:
