@@ -393,14 +393,69 @@ def test_a_slow_misfit_is_not_read_as_a_white_floor_under_a_slow_noise():
     over a white scatter whose scale differs between approach and retract. White-plus-AR(1) beats white noise
     by a likelihood ratio in the thousands there, but only as an AR(1) of share ~1 and rho ~0.99, which implies
     a scatter statistic ~0.99 where the record's differences read ~0.1 (session 27 took it: marginal sigma 55x
-    the scatter, every finding gone). Rejected by the consistency gate: white noise on the re-read scale."""
+    the scatter, every finding gone). Rejected by the consistency gate: white noise on the re-read scale.
+    Read per segment (session 28) the retract's scale is over 2x the approach's (chance: 1.4x at 4 SE; a
+    detector's white noise through ten times the bandwidth: sqrt 10 = 3.2x)."""
     from probedyn.diagnose.engine import Fitter
     from probedyn.diagnose.noise import MIX_LR_GATE, MIXTURE
     from probedyn.diagnose.problems import make_problem
 
     root = Path(__file__).resolve().parents[1]
     prob = make_problem(str(root / "examples" / "measurements" / "afm_force_curve_jpk_qi.toml"))
-    out = noise_correlation(prob, Fitter(prob).baseline().r)
+    r = Fitter(prob).baseline().r
+    prob.noise_per_sequence = False  # the record pooled, as session 27 read it
+    out = noise_correlation(prob, r)
     assert out["mixture_lr"] > MIX_LR_GATE and out["model"] != MIXTURE
     assert abs(out["mixture_rho_scatter"] - out["rho_scatter"]) > out["gate_scatter"]
     assert out["model"] == "white" and out["white_scale"] > 1.0
+    prob.noise_per_sequence = True
+    approach, retract = noise_correlation(prob, r)["sequence_scales"]
+    assert retract / approach > 2.0
+
+
+def test_sequence_scales_are_read_only_where_they_differ_beyond_chance():
+    """:func:`sequence_scales` on two sequences of 300 white samples: equal scales are flagged on none of 200
+    records (the gate's false rate is 6e-5); a retract twice as noisy (8.6 standard errors of ln q) on all of
+    50, its ratio within 4 standard errors (``LOGQ_SE_SQRT_N sqrt(2 / 298)``)."""
+    from probedyn.diagnose.noise import LOGQ_SE_SQRT_N, sequence_scales
+
+    rng = np.random.default_rng(8)
+    seqs = [np.arange(300), np.arange(300, 600)]
+    assert all(sequence_scales(rng.standard_normal(600), seqs) is None for _ in range(200))
+    se = LOGQ_SE_SQRT_N * math.sqrt(2.0 / 298)
+    for _ in range(50):
+        x = rng.standard_normal(600) * np.r_[np.ones(300), 2.0 * np.ones(300)]
+        sc = sequence_scales(x, seqs)
+        assert sc is not None and abs(math.log(sc["scales"][1] / sc["scales"][0] / 2.0)) < 4 * se
+
+
+def test_a_sequence_scale_composes_with_the_correlated_whitener():
+    """:class:`SequenceScale` divides each sequence by its own scale and hands the result to the AR(1)
+    whitener: the same as whitening the rescaled residuals, with and without a held-out mask."""
+    from probedyn.diagnose.noise import SequenceScale
+
+    rng = np.random.default_rng(2)
+    seqs = [np.arange(50), np.arange(50, 120)]
+    r = rng.standard_normal(121)  # the last row outside every sequence (a prior's pseudo-residual)
+    inner = AR1Whitener(0.6, seqs, 121)
+    W = SequenceScale([2.0, 0.5], seqs, 121, inner)
+    scaled = r / np.r_[2.0 * np.ones(50), 0.5 * np.ones(70), 1.0]
+    mask = np.ones(121, bool)
+    mask[10:20] = False
+    assert np.allclose(W(r), inner(scaled)) and np.allclose(W(r, mask), inner(scaled, mask))
+    assert np.allclose(SequenceScale([2.0, 0.5], seqs, 121)(r), scaled)
+
+
+def test_a_retract_noisier_than_the_approach_is_read_per_segment(tmp_path):
+    """A Hertz null (seed 6000) whose retract noise is 4x its approach's (recorded at a higher rate, as the JPK
+    QI curve's 50 against 5 kHz), no noise in the sidecar: one pooled sigma left the baseline failing
+    ('unexplained', session 27 code); read per segment, the ratio comes out 4 within 4 standard errors of
+    ln q (0.081 each way at 300 samples) and nothing is claimed."""
+    from probedyn.diagnose.engine import run
+    from probedyn.diagnose.noise import LOGQ_SE_SQRT_N
+
+    path, _ = make_curve_case(tmp_path, 6000, None, state_noise=False, retract_noise=4.0)
+    res = run(path)
+    sc = res["method"]["noise"]["sequence_scales"]
+    assert abs(math.log(sc[1] / sc[0] / 4.0)) < 4 * LOGQ_SE_SQRT_N * math.sqrt(2.0 / 298)
+    assert res["findings"] == [] and res["verdict"] == "no-significant-discrepancy"

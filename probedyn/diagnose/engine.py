@@ -108,7 +108,7 @@ from scipy.stats import chi2 as chi2_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.core.registry import RegistryError
 from probedyn.diagnose.causes import Cause, CauseParam
-from probedyn.diagnose.noise import MIXTURE, AR1Whitener, MixtureWhitener, noise_correlation
+from probedyn.diagnose.noise import MIXTURE, AR1Whitener, MixtureWhitener, SequenceScale, noise_correlation
 
 __all__ = ["diagnose", "Fit", "Fitter", "ALPHA", "EVIDENCE_MARGIN", "run"]
 
@@ -751,6 +751,8 @@ def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
         F.white = MixtureWhitener(noise["share"], noise["rho"], F.problem.sequences, len(base.r))
     else:
         F.white = AR1Whitener(noise["rho"], F.problem.sequences, len(base.r), isd)
+    if noise.get("sequence_scales"):  # each sequence in units of its own noise first (:func:`.noise.sequence_scales`)
+        F.white = SequenceScale(noise["sequence_scales"], F.problem.sequences, len(base.r), F.white)
     # a problem judging its own residuals against the noise (a force curve's data starts: "the reference
     # already fits within the noise") judges them on the noise the fits use
     prob.whitener = F.white
@@ -852,14 +854,19 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                      judged_on=("the best nested candidate's residuals ("
                                 + ", ".join(c.key for c in best.causes) + ")") if best.causes else "the baseline")
         if again["model"] not in ("AR(1)", MIXTURE):
-            q = again.get("white_scale")
-            if q is None or not isinstance(getattr(problem, "sigma", None), float):
+            q, scales = again.get("white_scale"), again.get("sequence_scales")
+            if (q is None and scales is None) or not isinstance(getattr(problem, "sigma", None), float):
                 break
             # an unstated white noise whose scale the whole record's residuals read differently from the
-            # part the problem read it from (:mod:`.noise`): every fit again on the re-read sigma
-            noise["sigma_before_N"] = problem.sigma
+            # part the problem read it from, or differently in its sequences (:mod:`.noise`): every fit
+            # again on the re-read sigma, each sequence in units of its own
             F.close_pool()  # the workers were forked with the old sigma
-            problem.sigma = problem.sigma * float(q)
+            if q is not None:
+                noise["sigma_before_N"] = problem.sigma
+                problem.sigma = problem.sigma * float(q)
+            if scales is not None:
+                F.white = SequenceScale(scales, problem.sequences, len(base.r))
+                problem.whitener = F.white
             b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
             base = b1 if b1.chi2 <= b2.chi2 else b2
             F.open_pool()

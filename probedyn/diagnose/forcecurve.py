@@ -445,6 +445,9 @@ class ForceCurveProblem:
         # detector (1/f above its floor) and the deflection's slow thermal drift; not on friction loops, whose
         # second effect's misfit (a contrast beside a slope, 7022 and 7064) the mixture took for noise
         self.noise_mixture = True
+        # ... and without a stated noise, the approach's and the retract's noise each its own where they differ
+        # (:func:`.noise.sequence_scales`: recorded at different rates, as the JPK QI curve's 5 and 50 kHz)
+        self.noise_per_sequence = True
         self.noise_correlation_declared = d.noise_correlation
         self.cv_warm = True  # interleaved groups: folds start from the null and the full-data optimum
         # ... of every parameter, not only the cause's own: the snap-in and pull-off make the misfit

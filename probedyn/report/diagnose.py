@@ -85,6 +85,11 @@ def summary(res: dict[str, Any]) -> str:
         on = f" on {nz['judged_on']}" if nz.get("judged_on") else ""
         lines.append(f"noise: white (no stated noise: its sigma re-read from the second differences{on}, "
                      f"{nz['white_scale']:.2f}x the part of the record first read)")
+    if nz.get("sequence_scales"):
+        sc = ", ".join(f"{x:.2f}" for x in nz["sequence_scales"])
+        lines.append(f"noise: each recording sequence on its own scale ({sc} x the sigma; for a force curve approach, "
+                     f"retract), their second differences differing beyond chance (chi2 {nz['sequence_scale_chi2']:.0f} "
+                     f"against {nz['sequence_scale_threshold']:.1f})")
     if res.get("peaks"):
         rej = [p for p in res["peaks"]["peaks"] if not p["accepted"]]
         acc = [p for p in res["peaks"]["peaks"] if p["accepted"]]
