@@ -206,7 +206,8 @@ def run_case(folder: Path, seed: int, effect: str | None, rho: float = 0.0, stat
            "findings": [f["cause"] for f in res["findings"]], "wall_s": time.perf_counter() - t0,
            "cpu_s": time.process_time() - c0, "baseline_p": res["baseline"]["p_value"],
            "noise": {k: v for k, v in res["method"]["noise"].items()
-                     if k in ("model", "rho", "rho_scatter", "rho_lag1", "rho_marginal", "innovation_sd", "reason")},
+                     if k in ("model", "rho", "rho_scatter", "rho_lag1", "rho_marginal", "innovation_sd", "reason",
+                              "white_scale", "sequence_scales", "share", "mixture_lr", "mixture_rho_scatter")},
            "candidates": [{"cause": c["cause"], "evidence": c["evidence"], "delta_chi2": c["delta_chi2"]}
                           for c in res["candidates"]]}
     if res["findings"]:
