@@ -410,3 +410,42 @@ def test_an_offset_larger_than_the_force_range_is_read(tmp_path):
     base = Fitter(prob).baseline()
     assert base.chi2 < _chi2_bound(base.n)
     assert abs(base.values["b0"] - (truth["b0"] + shift * per_unit)) < 10 * truth["noise"]
+
+
+def test_cached_maugis_dugdale_polylines_move_no_equilibrium():
+    """The Maugis-Dugdale polylines are kept per lambda on a ladder of radii (:func:`forcecurve._contact_polyline`):
+    they only bracket the equilibria that Newton steps on the exact curve refine, so the lever curve is the
+    uncached construction's to round-off (1e-9 of a 0.1 nN noise allowed; measured 2e-12 over 40 laws) and the
+    same samples carry a jump alternative; the alternative's value at a fold is read from the polyline (not
+    refined) and moves by the polylines' own resolution, about 1e-3 of the law's force unit pi W R for 500
+    points (5e-3 allowed; measured at most 3e-3 over 30 laws, 8 pN). A second law at the same lambda (another
+    W) hits the cache."""
+    from probedyn.diagnose import forcecurve as fc
+    from probedyn.schemes.contact import get_contact_model
+
+    rng = np.random.default_rng(3)
+    E_t, nu_t, nu_s = 169e9, 0.27, 0.3
+    for _ in range(6):
+        lam, W, E = 10 ** rng.uniform(-0.5, 0.5), 10 ** rng.uniform(-2, -0.7), 10 ** rng.uniform(8.5, 10.5)
+        R, k = float(rng.choice([8e-9, 20e-9, 30e-9])), 10 ** rng.uniform(-1.3, 1.0)
+        K = 4 / 3 / ((1 - nu_t**2) / E_t + (1 - nu_s**2) / E)
+        z0 = fc._z0_for_lambda(lam, W, R, K)
+        if not 1.1e-11 < z0 < 0.9e-8:  # the registry's plausible range of z0
+            continue
+        m = get_contact_model("md", E_t=E_t, nu_t=nu_t, E_s=E, nu_s=nu_s, R_t=R, R_s=0.0, W=W, z0=z0)
+        span = 60e-9 / k + 20e-9
+        z = np.linspace(-span, 60e-9 / k + 5e-9, 300)
+        zz, seg = np.r_[z, z[::-1]], np.r_[np.zeros(300, int), np.ones(300, int)]
+        dz = np.full(600, z[1] - z[0])
+        cached = fc.lever_curve_registry(zz, seg, m, k, span, dz)
+        n_cached = len(fc._POLYLINES)
+        W2 = W * 1.001  # the same lambda: z0 follows W
+        m2 = get_contact_model("md", E_t=E_t, nu_t=nu_t, E_s=E, nu_s=nu_s, R_t=R, R_s=0.0, W=W2,
+                               z0=fc._z0_for_lambda(lam, W2, R, K))
+        fc.lever_curve_registry(zz, seg, m2, k, span, dz)
+        assert len(fc._POLYLINES) == n_cached  # a hit
+        m.nd_key = lambda: None  # the uncached construction
+        plain = fc.lever_curve_registry(zz, seg, m, k, span, dz)
+        assert np.max(np.abs(cached[0] - plain[0])) < 1e-19
+        assert np.max(np.abs(cached[1] - plain[1])) < 5e-3 * m.scales.P_unit
+        assert np.array_equal(np.isfinite(cached[2]), np.isfinite(plain[2]))

@@ -173,5 +173,10 @@ class MaugisDugdale(ContactModel):
         D, P, dD, dP, _ = md_curve(A, self.lam)
         return D, P, dD, dP
 
+    def nd_key(self) -> tuple:
+        """The normalised curve depends on lambda alone (a cache key for its polylines; to 12 digits: lambda
+        recomputed from z0 = f(lambda, W) differs in its last bits as W changes)."""
+        return ("md", float(f"{self.lam:.12g}"))
+
     def nd_endpoint(self):
         return endpoint(self.lam)
