@@ -281,26 +281,26 @@ def _contact_polyline(model, Dmax: float, n_contact: int):
         while True:
             hit = _POLYLINES.get((key, A_hi, n_contact))
             if hit is None:
-                Ag = np.linspace(0.0, 1.0, n_fine) ** 2 * A_hi + 1e-10
-                Dg = model.nd_curve(Ag)[0]
-                i_star = int(np.argmin(Dg))
-                A_star, D_min = float(Ag[i_star]), float(Dg[i_star])
-                Ac = np.linspace(0.0, 1.0, n_c) ** 2 * (A_hi - A_star) + A_star
-                Dc, Pc, _, _ = model.nd_curve(Ac)
-                hit = (float(Dg[-1]), (A_star, D_min, Ac, Dc, Pc))
+                hit = _nd_contact(model, A_hi, n_fine, n_c)
                 if len(_POLYLINES) >= _POLYLINES_MAX:
                     _POLYLINES.pop(next(iter(_POLYLINES)))
                 _POLYLINES[(key, A_hi, n_contact)] = hit
             if hit[0] >= Dmax:
                 return hit[1]
             A_hi *= _LADDER
+    return _nd_contact(model, A_hi, n_fine, n_c)[1]
+
+
+def _nd_contact(model, A_hi: float, n_fine: int, n_c: int):
+    """``(D(A_hi), (A_star, D_min, Ac, Dc, Pc))``: the penetration minimum on ``n_fine`` radii up to ``A_hi``,
+    then the stable branch from it on ``n_c`` radii (both uniform in sqrt A: dense where the curve turns)."""
     Ag = np.linspace(0.0, 1.0, n_fine) ** 2 * A_hi + 1e-10
     Dg = model.nd_curve(Ag)[0]
     i_star = int(np.argmin(Dg))
     A_star, D_min = float(Ag[i_star]), float(Dg[i_star])
     Ac = np.linspace(0.0, 1.0, n_c) ** 2 * (A_hi - A_star) + A_star
     Dc, Pc, _, _ = model.nd_curve(Ac)
-    return A_star, D_min, Ac, Dc, Pc
+    return float(Dg[-1]), (A_star, D_min, Ac, Dc, Pc)
 
 
 def _jump_alternatives(Z, P, zq, dzq):
