@@ -373,9 +373,6 @@ def make_visco_case(outdir: Path, seed: int, *, n: int = 300) -> tuple[Path, dic
     clean = F + b0 + b1 * z
     Fm = clean + noise * rng.standard_normal(len(F))
     seg = np.concatenate([np.zeros(n, int), np.ones(n, int)])
-    if retract_noise != 1.0:  # the retract recorded at a higher rate than the approach, through a wider
-        # detector bandwidth: its noise this many times the approach's (the JPK QI curve: 5 and 50 kHz, 4.3x)
-        Fm = clean + (Fm - clean) * np.where(seg == 1, retract_noise, 1.0)
     fmt, sens, col, noise_line = _as_recorded(Fm, noise, k, rng)
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)

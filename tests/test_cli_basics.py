@@ -41,15 +41,6 @@ def test_user_error_is_one_line_without_traceback():
     assert "Traceback" not in proc.stderr
 
 
-def test_python_dash_m_probedyn_is_the_command():
-    """``python -m probedyn`` runs the same command line (its exit codes and one-line errors included)."""
-    ok = subprocess.run([sys.executable, "-m", "probedyn", "--help"], capture_output=True, text=True, timeout=120)
-    assert ok.returncode == 0 and "diagnose" in ok.stdout
-    bad = subprocess.run([sys.executable, "-m", "probedyn", "no-such-command"], capture_output=True, text=True,
-                         timeout=120)
-    assert bad.returncode == 2 and bad.stderr.strip().startswith("probedyn: error:") and "Traceback" not in bad.stderr
-
-
 def test_diagnose_noise_model_is_checked_before_reading(capsys):
     """``probedyn diagnose --noise`` takes auto or white; anything else is a one-line usage error (exit 2)."""
     assert main(["diagnose", "no-such-file.toml", "--noise", "pink"]) == 2
