@@ -266,9 +266,9 @@ def _contact_polyline(model, Dmax: float, n_contact: int):
     from a ladder of factors 1.5 and 1.5x the points (never coarser than the radius it needs) and keeps the
     result: the polylines are a bracket that Newton steps on the exact curve refine
     (:func:`lever_curve_registry`), so the ladder moves no equilibrium (2e-12 of a 0.1 nN noise over 40 laws;
-    a jump's alternative value at the fold, read off the polyline, by its resolution: <= 3e-3 of pi W R), and a fit's evaluations at
-    one lambda solve the Maugis equation on the grid once (blind soft-lever case c17, Maugis-Dugdale alone:
-    409 -> 315 s CPU, W and lambda within 3e-5 and 1.4e-3)."""
+    a jump's alternative value at the fold, read off the polyline, by its resolution: <= 3e-3 of pi W R), and a
+    fit's evaluations at one lambda solve the Maugis equation on the grid once (blind soft-lever case c17,
+    Maugis-Dugdale alone: 409 -> 315 s CPU, W and lambda within 3e-5 and 1.4e-3)."""
     key = model.nd_key() if hasattr(model, "nd_key") else None
     A_need = max(2.0, math.sqrt(Dmax) * 1.5 + 2.0)
     if key is None:

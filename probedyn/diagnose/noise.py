@@ -311,7 +311,6 @@ class SequenceScale:
         self.row_scale = np.ones(n)
         for s, qs in zip(sequences, scales):
             self.row_scale[np.asarray(s, int)] = float(qs)
-        self.scales = [float(x) for x in scales]
         self.inner = inner
 
     def __call__(self, r: np.ndarray, mask: np.ndarray | None = None) -> np.ndarray:
