@@ -274,7 +274,7 @@ def _contact_polyline(model, Dmax: float, n_contact: int):
     if key is None:
         A_hi, n_fine, n_c = A_need, 4 * n_contact, n_contact
         while model.nd_curve(np.array([A_hi]))[0][0] < Dmax:
-            A_hi *= 1.5
+            A_hi *= _LADDER
     else:
         A_hi = 2.0 * _LADDER ** math.ceil(math.log(A_need / 2.0) / math.log(_LADDER) - 1e-9)
         n_fine, n_c = 6 * n_contact, (3 * n_contact) // 2
