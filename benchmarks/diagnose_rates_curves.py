@@ -6,7 +6,9 @@ spectrum peak-identification study (:func:`run_spectrum_case`). Resumable: the J
 case and cases already in it are skipped. ``... visco N_VISCO OUT.json NULL_SEEDS HIDDEN_SEEDS`` (seed lists
 comma-separated): the viscoelastic-sample study (:func:`visco_cases`; session 11: ``visco 12
 benchmarks/results/diagnose_rates_curves_visco.json`` with the 12 first time-column nulls and the 9 detectable
-time-column hidden cases of the 2000-series whose effect changes the contact branch).
+time-column hidden cases of the 2000-series whose effect changes the contact branch). ``... calibration N_CAL
+N_NULL N_HIDDEN OUT.json [PART PARTS]`` (session 29): the deflection-sensitivity cases (seeds 2300 + i) with the
+nulls and the 2000-series rerun (:func:`calibration_cases`; parts merged with ``merge``).
 
 Truth (``tests/diagnose_truth_curves.py``, independent of the diagnosis): approach and retract of
 a lever over one of probedyn's contact registry laws (DMT with its van der Waals tail, JKR,
@@ -27,7 +29,8 @@ noisy baseline chi-square is about ``dof + signal`` (a non-central chi-square), 
 (with their signal) and left out of the correct-first rate, which is also given over all cases.
 
 Identifiability (stated the same way; evaluated between the contact registry's adhesion laws, for the
-cases whose effect is one of them): each adhesion law is fitted, nested in the baseline as the diagnosis
+cases whose effect is one of them, and between the tip-radius error and the deflection sensitivity,
+``SCALE_RIVALS``, for theirs): each adhesion law is fitted, nested in the baseline as the diagnosis
 does, to the noise-free record; if a rival's noise-free chi-square is within twice the
 evidence margin (2 ln 10 = 4.6) of the expected cause's, no amount of data at this noise can name the
 expected cause rather than that rival (the diagnosis should say *confounded*): the correct-first rate is
@@ -58,8 +61,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from diagnose_truth_curves import (CURVE_EFFECTS, DETECTOR_EFFECTS, EXPECTED, VISCO_EFFECT, make_curve_case,  # noqa: E402
-                                   make_visco_case)
+from diagnose_truth_curves import (CALIBRATION_EFFECTS, CURVE_EFFECTS, DETECTOR_EFFECTS, EXPECTED,  # noqa: E402
+                                   VISCO_EFFECT, make_curve_case, make_visco_case)
 
 from probedyn.diagnose.engine import run  # noqa: E402
 
@@ -92,12 +95,33 @@ def detector_cases(n_each: int, n_null: int, n_hidden: int, part: int = 0, parts
     ``n_hidden`` hidden cases of the 2000-series rerun (do the new causes steal their findings?); ``part`` of
     ``parts`` takes every ``parts``-th case of that order (processes of one run)."""
     det = [(2200 + i, DETECTOR_EFFECTS[i % len(DETECTOR_EFFECTS)]) for i in range(2 * n_each)]
+    return _with_nulls_and_hidden(det, n_null, n_hidden, part, parts)
+
+
+def _with_nulls_and_hidden(new: list, n_null: int, n_hidden: int, part: int, parts: int) -> list[tuple[int, str | None]]:
+    """A new effect's cases interleaved with the noise-only ones, then the 2000-series hidden cases; every
+    ``parts``-th from ``part``."""
     nul = [(6000 + i, None) for i in range(n_null)]
     out = []
-    for i in range(max(len(det), len(nul))):
-        out += det[i:i + 1] + nul[i:i + 1]
+    for i in range(max(len(new), len(nul))):
+        out += new[i:i + 1] + nul[i:i + 1]
     out += [(2000 + i, CURVE_EFFECTS[i % len(CURVE_EFFECTS)]) for i in range(n_hidden)]
     return out[part::parts]
+
+
+def calibration_cases(n_cal: int, n_null: int, n_hidden: int, part: int = 0, parts: int = 1) -> list[tuple[int, str | None]]:
+    """The calibration study (session 29): ``n_cal`` cases of a miscalibrated deflection sensitivity (seeds
+    2300 + i, ``CALIBRATION_EFFECTS``), interleaved with the ``n_null`` noise-only cases, then the ``n_hidden``
+    hidden cases of the 2000-series rerun with the new cause in the catalog; ``part`` of ``parts`` as
+    :func:`detector_cases`."""
+    cal = [(2300 + i, CALIBRATION_EFFECTS[i % len(CALIBRATION_EFFECTS)]) for i in range(n_cal)]
+    return _with_nulls_and_hidden(cal, n_null, n_hidden, part, parts)
+
+
+#: causes that scale the contact force alike: a tip radius (Hertz ``sqrt R``) and the deflection sensitivity
+#: (``g P``, told apart only by the lever's compliance): identifiability is evaluated between them as between the
+#: contact laws
+SCALE_RIVALS = ("tip-radius-error", "deflection-sensitivity")
 
 
 class CovarianceWhitener:
@@ -156,8 +180,10 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho:
         # noise-free record; a rival whose noise-free chi-square is within 2 x the evidence margin of
         # the expected cause's cannot be told from it by any amount of such data at this noise
         laws = [c for c in prob.causes if "adhesion" in c.changes]
+        if expected in SCALE_RIVALS:
+            laws = [c for c in prob.causes if c.key in SCALE_RIVALS]
         if expected not in {c.key for c in laws}:
-            return out  # identifiability evaluated between the registry's contact laws only
+            return out  # identifiability evaluated between the registry's contact laws and the scale rivals only
         chi = {c.key: F.nested(base, (c,)).chi2 for c in laws}
         containers = containers_of(laws, expected)
         out.update(cause_chi2=chi, containers=containers, **identifiability(chi, expected, containers))
@@ -274,7 +300,7 @@ def summarize(rows: list[dict]) -> dict:
     nul = [r for r in rows if not r["effect"]]
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
     per = {}
-    for e in CURVE_EFFECTS + [VISCO_EFFECT] + DETECTOR_EFFECTS:
+    for e in CURVE_EFFECTS + [VISCO_EFFECT] + DETECTOR_EFFECTS + CALIBRATION_EFFECTS:
         rr = [r for r in eff if r["effect"] == e]
         if rr:
             re = [r["recovery_error"] for r in rr if "recovery_error" in r]
@@ -476,6 +502,11 @@ if __name__ == "__main__":
         # detector N_EACH N_NULL N_HIDDEN OUT.json [PART PARTS]: one process of a run (merge the parts' rows)
         part, parts = (int(sys.argv[6]), int(sys.argv[7])) if len(sys.argv) > 7 else (0, 1)
         todo = detector_cases(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), part, parts)
+        print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
+    elif len(sys.argv) > 1 and sys.argv[1] == "calibration":
+        # calibration N_CAL N_NULL N_HIDDEN OUT.json [PART PARTS]: one process of a run (merge the parts' rows)
+        part, parts = (int(sys.argv[6]), int(sys.argv[7])) if len(sys.argv) > 7 else (0, 1)
+        todo = calibration_cases(int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), part, parts)
         print(json.dumps(main(["", "0", "0", sys.argv[5]], todo), indent=1, default=float))
     elif len(sys.argv) > 1 and sys.argv[1] == "correlated":
         # correlated N_HIDDEN N_NULL RHO OUT.json [--unstated] [--alpha=A] [PART PARTS]: the rate study with AR(1) noise

@@ -16,7 +16,8 @@ contact`` (DMT on a soft lever: the van der Waals gradient exceeds k well before
 ``deflection-drift`` (a drift of the deflection in time), ``tip-shape`` (the registry's blunted cone,
 half-angle 15-35 deg, on a soft sample indented 1.2-4 times deeper than the cap's edge depth R cot^2(alpha),
 where the flanks carry the load), ``piezo-hysteresis`` (the retract's true piezo position offset by
-0.5-5 nm from the recorded one). Noise-only cases: Hertz + the linear
+0.5-5 nm from the recorded one), ``deflection-sensitivity`` (:data:`CALIBRATION_EFFECTS`: the recorded
+deflection a factor 1.05-1.5 or its inverse times the lever's true one). Noise-only cases: Hertz + the linear
 lever only (with the same tilted baseline, formats and noise). The sample modulus is declared in
 half of the other cases, whatever their effect, so the sidecar does not betray the truth.
 """
@@ -47,6 +48,11 @@ DETECTOR_EFFECTS = ["hydrodynamic-drag", "optical-interference"]
 EXPECTED.update({"hydrodynamic-drag": ("hydrodynamic-drag", "b_drag"),
                  "optical-interference": ("optical-interference", "period")})
 LASERS_M = (635e-9, 670e-9, 785e-9, 830e-9, 850e-9)
+#: calibration effects (seeds 2300 + i; drawn from a third stream of the seed): the deflection sensitivity
+#: (InvOLS) declared in the sidecar is ``s_ratio`` times the true one, 5-50 % off either way, so every recorded
+#: deflection (and force) is that factor times the lever's true deflection
+CALIBRATION_EFFECTS = ["deflection-sensitivity"]
+EXPECTED["deflection-sensitivity"] = ("deflection-sensitivity", "s_ratio")
 ETA_WATER = 8.9e-4
 
 
@@ -214,7 +220,12 @@ def make_curve_case(outdir: Path, seed: int, effect: str | None, *, n: int = 300
         A = noise * float(10 ** aux.uniform(-0.3, 0.7))
         detector = A * np.cos(2 * math.pi * sep / period + float(aux.uniform(0, 2 * math.pi)))
         params.update(period=period, amplitude=A)
-    clean = F + b0 + b1 * z + drift * tau + detector
+    gain = 1.0
+    if effect == "deflection-sensitivity":
+        cal = np.random.default_rng([seed, 53])
+        gain = float(math.exp(cal.choice([-1, 1]) * cal.uniform(math.log(1.05), math.log(1.5))))
+        params["s_ratio"] = gain
+    clean = gain * F + b0 + b1 * z + drift * tau + detector
     e = rng.standard_normal(len(F))
     # the sidecar states the marginal sigma; ``noise_alpha``: 1/f^alpha noise instead of AR(1)
     Fm = clean + noise * (correlated(e, noise_rho) if noise_alpha is None else power_law(e, noise_alpha))

@@ -17,7 +17,7 @@ def test_list_causes_json(capsys):
     for need in ("clamp-compliance", "point-mass", "thickness-error", "width-error", "length-error", "modulus-error",
                  "fluid-loading", "axial-prestress", "thermal-activation", "scanner-nonlinearity", "force-offset-drift",
                  "lattice-misalignment", "viscous-friction", "adhesion-load", "force-calibration", "adhesion-dmt",
-                 "adhesion-jkr", "adhesion-md", "tip-radius-error"):
+                 "adhesion-jkr", "adhesion-md", "tip-radius-error", "deflection-sensitivity"):
         assert need in ids
     for r in rows:
         assert r["parameters"] and all(p["unit"] and len(p["bounds"]) == 2 for p in r["parameters"])

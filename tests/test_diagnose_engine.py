@@ -174,3 +174,43 @@ def test_a_cause_parameter_may_not_shadow_a_baseline_parameter(tmp_path):
     prob.causes.append(Shadow())
     with pytest.raises(RegistryError, match="b0"):
         diagnose(prob)
+
+
+def test_an_extension_pushed_onto_a_bound_yields_to_one_within_its_range():
+    """The greedy extension's order (:func:`probedyn.diagnose.engine._strained`): a cause whose parameter sits at a
+    bound of its physical range other than its null value is strained (the real JPK curve's sensitivity at its 2x
+    bound); a parameter at a bound that *is* its null (a drag's effective height at its far limit) or inside its
+    range is not."""
+    from probedyn.diagnose.causes import Cause, CauseParam
+    from probedyn.diagnose.engine import Fit, _strained, _to_u
+
+    class Two(Cause):
+        key, kind = "two", "force"
+        params = (CauseParam("g", "1", 0.5, 2.0, 1.0, scale="log"), CauseParam("h", "m", 1e-6, 1.0, 1.0, scale="log"))
+
+    c = Two()
+    plist = [CauseParam("z_c", "m", -1.0, 1.0, 0.0), *c.params]
+
+    def fit(g, h):
+        v = {"z_c": 0.1, "g": g, "h": h}
+        return Fit((c,), plist, np.array([_to_u(p, v[p.name]) for p in plist]), v, np.zeros(3), 3.0, 3)
+
+    assert _strained(fit(2.0, 0.01), c) and _strained(fit(0.5, 0.01), c)
+    assert not _strained(fit(1.3, 1.0), c) and not _strained(fit(1.0, 0.01), c)
+
+
+def test_a_baseline_modulus_run_to_the_rigid_limit_is_not_refused(tmp_path):
+    """A contact branch steeper than the lever (a deflection sensitivity 13 % high on a 1.7 GPa sample, seed 2321)
+    drives the Hertz baseline's E* towards the rigid-sample limit, where the curve depends on it only as a shift of
+    the contact point: the parameter is held by its bound, not a combination the user must remove, and the
+    diagnosis runs (it used to stop with "cannot inform the baseline parameters z_c, E_star separately")."""
+    from diagnose_truth_curves import make_curve_case
+
+    from probedyn.diagnose.engine import _check_baseline_identifiable, _u_bounds
+
+    path, _ = make_curve_case(tmp_path, 2321, "deflection-sensitivity")
+    base = Fitter(make_problem(path)).baseline()
+    j = [p.name for p in base.plist].index("E_star")
+    lo, hi = _u_bounds(base.plist[j])
+    assert hi - base.u[j] < 1e-3 * (hi - lo)  # at the rigid limit
+    _check_baseline_identifiable(base)  # no DataFormatError

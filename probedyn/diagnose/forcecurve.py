@@ -19,7 +19,8 @@ of the contact registry's models), the declared tip radius; calibrated: the cont
 force offset and tilt of the baseline (``F_meas = F + b0 + b1 z``: a virtual deflection of the
 optical lever), and ``E*`` unless the sample's modulus is declared. Causes: adhesion after the
 contact registry (:mod:`probedyn.schemes.contact`: DMT with its van der Waals tail -- the long-range
-attraction that snaps the tip in -- JKR, Maugis-Dugdale with lambda fitted) and a tip-radius error; and
+attraction that snaps the tip in -- JKR, Maugis-Dugdale with lambda fitted), a tip-radius error and a
+miscalibrated deflection sensitivity (the recorded force ``g F`` behind a lever deflected by ``F / k``); and
 signals the deflection records besides the force (:meth:`ForceCurveProblem._detector_terms`): the lever's
 hydrodynamic drag at the piezo velocity and the optical lever's interference, both functions of the
 tip-sample separation and bounded by what the non-contact baseline shows (:meth:`_far_baseline`).
@@ -152,6 +153,9 @@ def hertz(delta, E_star: float, R: float):
 #: relative uncertainty of an independent tip-radius measurement (SEM or blind tip reconstruction of a
 #: 5-50 nm apex: ~1-3 nm, i.e. about a tenth of the radius); used only to name a separating measurement
 TIP_IMAGING_REL_SIGMA = 0.1
+#: relative uncertainty of a deflection sensitivity (InvOLS) re-measured from the constant-compliance slope on a
+#: rigid sample (a few per cent: the slope's fit range and the spot's position on the lever); naming a measurement only
+INVOLS_REL_SIGMA = 0.03
 
 
 @dataclass
@@ -173,6 +177,7 @@ class ForceState:
     drag_b: float = 0.0  # hydrodynamic drag coefficient of the lever at contact [N s/m] (0: none)
     drag_h: float = 1.0  # its effective height [m]: b(s) = drag_b h / (s + h) at tip-sample separation s
     optical: tuple = ()  # interference of the optical lever: (a_cos [N], a_sin [N], period [m]) in the separation
+    gain: float = 1.0  # recorded / true deflection (declared / true sensitivity: deflection-sensitivity)
     transforms: list = field(default_factory=list)
 
 
@@ -638,8 +643,8 @@ class ForceCurveProblem:
         F, F_alt, w = self._curve(st, self._z_rel(st), d.segment, d.k, self.dz, d.time)
         out = []
         z_rel = self._z_rel(st)
-        for G in (F, F_alt):
-            G = G + st.b0 + st.b1 * d.z + st.drift * self.tau + self._detector_terms(st, G, z_rel)
+        for Gt in (F, F_alt):  # the true force; recorded: times the sensitivity's gain, plus the detector's terms
+            G = st.gain * Gt + st.b0 + st.b1 * d.z + st.drift * self.tau + self._detector_terms(st, Gt, z_rel)
             for tf in st.transforms:
                 G = tf(self, G)
             out.append(G)
@@ -673,7 +678,7 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         Fx = d.force - st.b0 - st.b1 * d.z - st.drift * self.tau
-        Fx = Fx - self._detector_terms(st, Fx, self._z_rel(st))
+        Fx = (Fx - self._detector_terms(st, Fx / st.gain, self._z_rel(st))) / st.gain  # the true force
         delta = self._z_rel(st) - Fx / d.k
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)
@@ -696,7 +701,7 @@ class ForceCurveProblem:
                 dP[sel] = (np.interp(delta[sel] + h, x, y) - np.interp(delta[sel] - h, x, y)) / (2 * h)
         # effective variance: the force noise enters delta through F / k, so the misfit's standard
         # deviation is sigma (1 + P'(delta) / k) on a stable branch (P' > -k)
-        r = (Fx - P) / (self.sigma * np.maximum(1.0 + dP / d.k, 0.1))
+        r = st.gain * (Fx - P) / (self.sigma * np.maximum(1.0 + dP / d.k, 0.1))
         # robust (soft-l1) misfit: near a fold the noise can move a point's measured penetration
         # across the end of its branch, where the law jumps; such points must not steer the start
         return np.sign(r) * np.sqrt(2.0 * (np.sqrt(1.0 + r * r) - 1.0))
@@ -707,13 +712,18 @@ class ForceCurveProblem:
         (called by the engine besides the null start and the declared starts): a fit in the
         force-separation domain (:meth:`_separation_residuals`, smooth where the lever curve
         jumps) from the works of adhesion that give the measured pull-off force under the DMT
-        (2 pi W R) and the JKR (3/2 pi W R) limits and Maugis' lambda at 0.3 and 3. Only the
-        training points (``mask``) are used."""
-        from probedyn.diagnose.engine import Fitter  # the engine imports no problem module
-
+        (2 pi W R) and the JKR (3/2 pi W R) limits and Maugis' lambda at 0.3 and 3; and each new cause's own
+        ``data_starts`` (the deflection sensitivity from the contact branch's slope), as read and refined in the
+        same domain. Only the training points (``mask``) are used."""
+        causes = tuple(ref_causes) + tuple(new)
+        # a cause's own reading of the record (:meth:`DeflectionSensitivity.data_starts`), offered as read and
+        # refined in the force-separation domain
+        own = [{**ref_values, **st} for c in new if hasattr(c, "data_starts")
+               for st in c.data_starts(self, dict(ref_values), mask)]
+        own = own + self._separation_optima(causes, own, mask) if own else []
         laws = [c for c in new if any(p.name == "W" for p in c.params)]
         if not laws:
-            return []
+            return own
         d = self.data
         m = np.ones(self.n, bool) if mask is None else np.asarray(mask, bool)
         r_ref = self.residuals(ref_values, tuple(ref_causes))
@@ -721,10 +731,10 @@ class ForceCurveProblem:
         r_ref = (white(r_ref, None if mask is None else m) if white is not None else r_ref)[m]
         n_m = int(m.sum())
         if float(np.sum(r_ref**2)) < n_m + 3.0 * math.sqrt(2.0 * n_m):
-            return []  # the reference already fits within the noise: no minimum to escape from
+            return own  # the reference already fits within the noise: no minimum to escape from
         ret = m & (d.segment == 1)
         if not ret.any():
-            return []
+            return own
         exc = d.force[ret] - ref_values["b0"] - ref_values["b1"] * d.z[ret]
         F_po = max(-float(np.min(exc)), 3.0 * self.sigma)
         R = d.tip_radius * ref_values.get("r_ratio", 1.0)
@@ -747,13 +757,20 @@ class ForceCurveProblem:
                     if lam is not None:
                         st["lam"] = lam
                     starts.append(st)
+        return own + self._separation_optima(causes, starts, mask)
+
+    def _separation_optima(self, causes: tuple, starts: list[dict], mask=None) -> list[dict]:
+        """The optimum of a fit in the force-separation domain (:meth:`_separation_residuals`) from each start;
+        every one is offered (that misfit ranks them only roughly)."""
+        from probedyn.diagnose.engine import Fitter  # the engine imports no problem module
+
         F = Fitter(self)
         out = []
         self.separation = True
-        try:  # every start's optimum is offered (the separation-domain misfit ranks them only roughly)
+        try:
             for st in starts:
                 try:
-                    out.append(dict(F.fit(tuple(ref_causes) + tuple(new), [st], mask).values))
+                    out.append(dict(F.fit(causes, [st], mask).values))
                 except ProbedynError:
                     continue
         finally:
@@ -835,7 +852,9 @@ class ForceCurveProblem:
         d = self.data
         st = self.state(values, causes)
         out = [{"measure": "tip radius imaged independently (SEM / tip characteriser)", "value": float(st.R),
-                "sigma": TIP_IMAGING_REL_SIGMA * d.tip_radius, "unit": "m"}]
+                "sigma": TIP_IMAGING_REL_SIGMA * d.tip_radius, "unit": "m"},
+               {"measure": "deflection sensitivity re-measured on a rigid sample (recorded / true deflection)",
+                "value": float(st.gain), "sigma": INVOLS_REL_SIGMA, "unit": "1"}]
         for label, kf in (("pull-off force with a lever 10x softer", 0.1), ("pull-off force with a lever 10x stiffer", 10.0)):
             z = np.concatenate([np.linspace(-0.2, 0.2, 400), np.linspace(0.2, -0.2, 400)]) * self.span
             seg = np.concatenate([np.zeros(400, int), np.ones(400, int)])
