@@ -515,3 +515,26 @@ def test_deflection_sensitivity_found_and_recovered(tmp_path):
     p = f["parameters"]["s_ratio"]
     g = truth["params"]["s_ratio"]
     assert abs(p["value"] - g) < 4 * p["sigma"] and abs(p["value"] / g - 1) < 0.01
+
+
+def test_a_noise_free_twin_is_offered_the_escape_starts(tmp_path):
+    """The benchmark's identifiability fits each adhesion law to the noise-free record (``noise_free``): its
+    chi-square is the effect's signal alone, below the noise's own ``n``, so the shortcut that spares the
+    escape starts where the reference fits 'within the noise' must not apply (session 30: seed 2032 under
+    AR(1) whitening, the DMT law that made the record stopped at chi^2 484 from its declared starts)."""
+    from probedyn.diagnose.forcecurve import ForceCurveProblem
+    from probedyn.diagnose.noise import AR1Whitener
+
+    path, truth = make_curve_case(tmp_path, 2032, "adhesion-dmt", noise_rho=0.8)
+    clean = np.asarray(truth["force_clean"], float)
+    prob = ForceCurveProblem(replace(read_measurement(path), force=clean))
+    F = Fitter(prob)
+    F.white = AR1Whitener(0.8, prob.sequences, len(clean))
+    base = F.baseline()
+    dmt = next(c for c in prob.causes if c.key == "adhesion-dmt")
+    assert prob.nested_starts(dict(base.values), (), (dmt,)) == []  # looks like noise: no escape starts
+    prob.noise_free = True
+    assert prob.nested_starts(dict(base.values), (), (dmt,))
+    fit = F.nested(base, (dmt,))
+    assert base.chi2 > 300 and fit.chi2 < 2.0  # the law that made it, to the record's 9 written digits
+    assert fit.values["W"] == pytest.approx(truth["params"]["W"], rel=0.05)

@@ -463,6 +463,10 @@ class ForceCurveProblem:
     kind = "force"
     unit = "N"
     reduced = False
+    #: the record carries no noise (a benchmark's noise-free twin, whose chi-square is the effect's signal
+    #: alone): the escape starts of :meth:`nested_starts` are then offered whenever the reference misfits at
+    #: all, not only beyond the noise's own chi-square
+    noise_free = False
 
     def __init__(self, data: ForceData) -> None:
         self.data = data
@@ -730,7 +734,8 @@ class ForceCurveProblem:
         white = getattr(self, "whitener", None)  # the AR(1) noise the fits use (engine._whiten), if any
         r_ref = (white(r_ref, None if mask is None else m) if white is not None else r_ref)[m]
         n_m = int(m.sum())
-        if float(np.sum(r_ref**2)) < n_m + 3.0 * math.sqrt(2.0 * n_m):
+        floor = 0.0 if self.noise_free else n_m
+        if float(np.sum(r_ref**2)) < floor + 3.0 * math.sqrt(2.0 * n_m):
             return own  # the reference already fits within the noise: no minimum to escape from
         ret = m & (d.segment == 1)
         if not ret.any():
