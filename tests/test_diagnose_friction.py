@@ -213,3 +213,25 @@ def test_misaligned_scan_profile_and_one_model_one_residual(tmp_path):
         c = by[key]
         r0 = prob.residuals({**v, **{p.name: p.null for p in c.params}}, (mis, c))
         assert np.array_equal(r0, r), key
+
+
+def test_scans_recorded_one_way_only_have_a_structure_report(tmp_path):
+    """A record of trace scans only (no retrace: no half loop per scan) at two speeds: the residual's structure
+    report leaves out the friction-against-speed trend instead of reducing an empty selection (a blind
+    generator's record, session 30: a traceback after the baseline fit)."""
+    import pandas as pd
+
+    path, truth = make_friction_case(tmp_path, 3, None)
+    csv = path.with_suffix(".csv")
+    lines = csv.read_text().splitlines(keepends=True)
+    head = [ln for ln in lines if ln.startswith("#")]
+    df = pd.read_csv(csv, comment="#")
+    keep = []
+    for _, g in df.groupby("scan", sort=False):
+        dx = np.diff(g["position_m"].to_numpy(), prepend=-np.inf)
+        keep.append(g[dx > 0])  # the forward run of each scan
+    csv.write_text("".join(head) + pd.concat(keep).to_csv(index=False))
+    prob = make_problem(path)
+    assert all((s.direction > 0).all() for s in prob.data.scans) and len(set(prob.speeds)) > 1
+    rep = prob.structure(np.zeros(int(np.sum(prob.use))))
+    assert "friction_vs_ln_speed_slope" not in rep and len(rep["scans"]) == len(prob.data.scans)

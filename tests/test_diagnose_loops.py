@@ -257,3 +257,17 @@ def test_a_friction_below_the_stick_slip_threshold_s_sliding_friction_is_reachab
     res = diagnose(prob)
     assert res["findings"] == [] and res["verdict"] == "no-significant-discrepancy", res["verdict"]
     assert res["baseline"]["p_value"] > 1e-3
+
+
+def test_a_loop_recorded_one_way_is_refused_in_one_line(tmp_path):
+    """Interval means of the trace alone: the friction (half the trace-retrace difference) cannot be told from
+    the lateral channel's zero, so the record is refused with a one-line error (session 30: it was fitted,
+    the offset's bounds could not reach the level, chi^2 6e5 and a slope coupling at its bound claimed)."""
+    path = _coulomb_loop(tmp_path, 20.0, 1e-6, 1e-8, 0.3, 1e-11)
+    csv = path.with_suffix(".csv")
+    head, *rows = csv.read_text().splitlines(keepends=True)
+    xs = [float(r.split(",")[1]) for r in rows]
+    fwd = [r for i, r in enumerate(rows) if i == 0 or xs[i] > xs[i - 1]]  # the trace runs up
+    csv.write_text(head + "".join(fwd))
+    with pytest.raises(DataFormatError, match="one way only.*trace and its retrace"):
+        make_problem(path)

@@ -368,7 +368,7 @@ def _common(meta: dict, side: Path, kind: str) -> dict[str, Any]:
             out["medium"] = (float(rho_f), float(eta_f))
             out["medium_name"] = name or "declared fluid"
         if "temperature" in med:
-            out["temperature"] = _num(meta, "medium", "temperature", side, lo=0.01, hi=2000.0, unit="K")
+            out["temperature"] = _num(meta, "medium", "temperature", side, lo=1e-3, hi=2000.0, unit="K")
     free = meta.get("baseline", {}).get("free", ())
     if isinstance(free, str) or not all(isinstance(x, str) for x in free):
         raise DataFormatError(f"{side}: [baseline] free must be a list of names")

@@ -1112,7 +1112,7 @@ class FrictionProblem:
         fr = np.array(fr)
         for key, xv in (("ln_speed", np.log(self.speeds)), ("load", self.loads)):
             ok = np.isfinite(fr)
-            if np.ptp(xv[ok]) > 0 and ok.sum() >= 2:
+            if ok.sum() >= 2 and np.ptp(xv[ok]) > 0:  # scans recorded one way only have no half loop
                 A = np.vstack([np.ones(ok.sum()), xv[ok] - xv[ok].mean()]).T
                 out[f"friction_vs_{key}_slope"] = float(np.linalg.lstsq(A, fr[ok], rcond=None)[0][1])
         return out

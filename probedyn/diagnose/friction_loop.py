@@ -42,7 +42,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from probedyn.core.errors import ProbedynError
+from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData
 from probedyn.diagnose.friction import RTOL, _ffm, _scatter, bind_scans, clipped_starts, scan_groups
@@ -180,6 +180,11 @@ class FrictionLoopProblem:
     def __init__(self, data: FrictionData) -> None:
         bind_scans(self, data)
         sc = data.scans
+        for s in sc:  # the friction is half the trace-retrace difference: one direction cannot tell it from the zero
+            if not ((s.direction > 0).any() and (s.direction < 0).any()):
+                raise DataFormatError(f"{data.path}: scan {s.id} runs one way only: a friction loop of interval means "
+                                      "needs its trace and its retrace (the friction is half their difference; one "
+                                      "direction cannot separate it from the lateral channel's zero)")
         self.sigma_scatter = _scatter(sc)
         self.sigma = data.sigma_force if data.sigma_force > 0 else max(self.sigma_scatter, 1e-15)
         self.force = np.concatenate([s.force for s in sc])
