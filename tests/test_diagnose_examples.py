@@ -146,7 +146,9 @@ def test_friction_loop_example_names_the_blend_contrast_and_the_slope(capsys):
     surface rises, so friction-contrast is claimed with a ratio below 1, and the slope coupling beside it.
     Independent check of the ratio: the half loop ``(trace - retrace) / 2`` at each position regressed on
     the relief coordinate by plain least squares, ``W = a (1 + beta zeta)``; the fit (whitened, with the
-    slope law) agrees within 10 % (the slope enters the half loop at second order in t)."""
+    slope law) agrees within twice the ratio's own jackknife uncertainty over the four lines (the slope enters
+    the half loop at second order in t; the two weigh the samples differently: white against AR(1)), and
+    the uncertainty is a real one, under 20 % of the ratio."""
     from probedyn.diagnose.problems import make_problem
 
     res = _diagnose("friction_loops_sbs_pmma", capsys)
@@ -162,7 +164,9 @@ def test_friction_loop_example_names_the_blend_contrast_and_the_slope(capsys):
         Z.append(0.5 * (p.relief[sl][tr][o1] + p.relief[sl][~tr][o2]))
     a, b = np.linalg.lstsq(np.column_stack([np.ones(sum(map(len, Z))), np.concatenate(Z)]), np.concatenate(W), rcond=None)[0]
     ratio = found["friction-contrast"]["derived"]["friction_ratio_high_to_low"]
-    assert ratio < 1.0 and ratio == pytest.approx(1.0 + b / a, rel=0.10)
+    sigma = found["friction-contrast"]["derived_sigma_jackknife"]["friction_ratio_high_to_low"]
+    assert ratio < 1.0 and 0.0 < sigma < 0.2 * ratio
+    assert abs(ratio - (1.0 + b / a)) < 2.0 * sigma, (ratio, sigma, 1.0 + b / a)
 
 
 @pytest.mark.slow
