@@ -624,15 +624,21 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
     scans = [(0, v_lo, N1), (1, 10 * v_lo, N1), (2, v_lo, 2 * N1)]
     rows = ["scan,position_m,lateral_force_N,time_s"]
     tom = []
+    runs = []
     for sid, v, N in scans:
         U0 = u0 * (N + params.get("n_adh", 0.0))
-        pos, F, t, d = langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
-                                     gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
-                                     bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid)
+        runs.append(langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
+                                  gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
+                                  bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid))
+    # the detector drifts at one rate, drift / (the longest scan's duration); each scan's clock restarts (its
+    # times written from 0), so the drift is about each scan's middle (session 30: before, the same amount over
+    # every scan, a scan ten times faster drifting ten times faster -- the diagnosis' own old model)
+    t_ref = max(r[2][-1] - r[2][0] for r in runs)
+    for (sid, v, N), (pos, F, t, d) in zip(scans, runs):
         F = params.get("g", 1.0) * F
         if "offset" in params:
             tm = 0.5 * (t[0] + t[-1])
-            F = F + params["offset"] + params.get("drift", 0.0) * (t - tm) / (t[-1] - t[0])
+            F = F + params["offset"] + params.get("drift", 0.0) * (t - tm) / t_ref
         F = F + noise * rng.standard_normal(len(F))
         for x, f, tt in zip(pos, F, t):
             rows.append(f"{sid},{x:.9e},{f:.9e},{tt - t[0]:.9e}")

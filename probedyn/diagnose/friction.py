@@ -218,12 +218,29 @@ class FrictionState:
     gamma: float = 0.0  # viscous coefficient of the registry PT model [N s/m]
     n_adh: float = 0.0  # adhesion load [N]
     offset: float = 0.0  # [N]
-    drift: float = 0.0  # [N over one scan]
+    drift: float = 0.0  # [N over the longest scan: the detector's drift rate times that scan's duration]
     bow: float = 0.0  # scanner nonlinearity
     theta: float = 0.0  # scan angle to the lattice rows [rad]
     gain: float = 1.0  # lateral-force calibration factor
     thermal: tuple[float, float] | None = None  # (T [K], attempt frequency [Hz])
     transforms: list = field(default_factory=list)  # f(problem, scan, F) -> F, applied last
+
+
+def drift_clock(scans) -> tuple[str, list[np.ndarray]]:
+    """The detector's clock for a drift linear in time: ``("record", t - t_mid)`` where the scans' ``time_s``
+    run on one clock through the file (each scan starts at or after the previous one ends; ``t_mid`` the
+    record's middle: the scans' mean offsets then differ by the drift between them), else ``("scan", t - t_mid_i)``
+    (each scan's clock restarts, as exports of separate lines do: the time between the scans is unknown, so
+    the drift is taken within each scan, at one rate, about a common zero). A drift is a rate: a scan ten
+    times faster drifts a tenth as much (before session 30 the drift was 'the same amount over every scan',
+    which a blind generator's one-clock drift, 2.2e-10 N/s over three scans, left unexplained)."""
+    t0 = [float(s.time[0]) for s in scans]
+    t1 = [float(s.time[-1]) for s in scans]
+    one = len(scans) > 1 and all(t0[i + 1] >= t1[i] for i in range(len(scans) - 1))
+    if one:
+        mid = 0.5 * (min(t0) + max(t1))
+        return "record", [np.asarray(s.time, float) - mid for s in scans]
+    return "scan", [np.asarray(s.time, float) - 0.5 * (s.time[0] + s.time[-1]) for s in scans]
 
 
 def _ffm(data: FrictionData, U0: float, a: float, gamma: float) -> FFM:
@@ -722,6 +739,10 @@ def scan_groups(scans) -> tuple[list[slice], np.ndarray, list[str]]:
     return slices, np.concatenate(gid), labels
 
 
+#: the starts kept from a cause's ridge (:meth:`FrictionProblem.nested_starts`), best first by the model's chi^2
+RIDGE_KEEP = 2
+
+
 def clipped_starts(base_params, ref_values: dict, new: tuple, starts_of) -> list[dict]:
     """The data-derived starts ``starts_of(cause)`` of the new causes as full value dicts: the reference
     fit's values, the new parameters at their nulls, each start's values clipped into their bounds."""
@@ -820,6 +841,9 @@ class FrictionProblem:
         self.v_max = float(self.speeds.max())
         self.t_mid = [0.5 * (s.time[0] + s.time[-1]) for s in sc]
         self.t_span = [max(s.time[-1] - s.time[0], 1e-12) for s in sc]
+        self.drift_clock, self.t_drift = drift_clock(sc)
+        #: the drift parameter is the detector's drift over the longest scan: a rate drift / t_ref [N/s]
+        self.t_ref = max(self.t_span)
         self.train_mask = None
         self.fixed_nuisance = None
         # (model key, scan, training mask) -> (registry, chi^2 of the scan): the best registry seen
@@ -864,8 +888,18 @@ class FrictionProblem:
         start a factor of 1.9 is not found (the baseline's corrugation has absorbed it)."""
         if self.loop is None:
             return []
-        return clipped_starts(self.base_params, ref_values, new,
-                              lambda c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [])
+        out = clipped_starts(self.base_params, ref_values, new,
+                             lambda c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [])
+        if mask is None:  # a cause's ridge of starts (parameters that trade), ranked by the whole model's chi^2
+            causes = tuple(ref_causes) + tuple(new)
+            for c in new:
+                if not hasattr(c, "ridge_starts"):
+                    continue
+                cands = clipped_starts(self.base_params, ref_values, new,
+                                       lambda cc, c=c: cc.ridge_starts(self, dict(ref_values)) if cc is c else [])
+                scored = sorted(((float(np.sum(self.residuals(v, causes) ** 2)), i) for i, v in enumerate(cands)))
+                out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
+        return out
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
@@ -940,7 +974,7 @@ class FrictionProblem:
         w = [math.cos(st.theta), math.sin(st.theta)]
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
-        F = F + st.offset + st.drift * (s.time - self.t_mid[i]) / self.t_span[i]
+        F = F + st.offset + st.drift * self.t_drift[i] / self.t_ref
         for tf in st.transforms:
             F = tf(self, s, F)
         return F, var
@@ -985,8 +1019,8 @@ class FrictionProblem:
                     sse = []
                     for dph in (-h, 0.0, h):
                         ph = [phis[0] + dph, 0.0]
-                        F = st.gain * simulate_scan(self.data, st, s, ph) + st.offset + st.drift * (
-                            s.time - self.t_mid[i]) / self.t_span[i]
+                        F = (st.gain * simulate_scan(self.data, st, s, ph) + st.offset
+                             + st.drift * self.t_drift[i] / self.t_ref)
                         sse.append(float(np.sum((s.force - F)[mask] ** 2)))
                     den = sse[0] - 2 * sse[1] + sse[2]
                     if den > 0:
