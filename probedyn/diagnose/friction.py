@@ -839,11 +839,9 @@ class FrictionProblem:
         self.temperature = data.temperature
         self.N_mean = N
         self.v_max = float(self.speeds.max())
-        self.t_mid = [0.5 * (s.time[0] + s.time[-1]) for s in sc]
-        self.t_span = [max(s.time[-1] - s.time[0], 1e-12) for s in sc]
         self.drift_clock, self.t_drift = drift_clock(sc)
         #: the drift parameter is the detector's drift over the longest scan: a rate drift / t_ref [N/s]
-        self.t_ref = max(self.t_span)
+        self.t_ref = max(max(s.time[-1] - s.time[0], 1e-12) for s in sc)
         self.train_mask = None
         self.fixed_nuisance = None
         # (model key, scan, training mask) -> (registry, chi^2 of the scan): the best registry seen
@@ -1178,7 +1176,9 @@ class FrictionProblem:
                 "loads_N": sorted(set(self.loads.tolist())), "k_x_N_per_m": d.k_x, "sigma_force_N": self.sigma,
                 "noise_stated": d.noise_stated, "sigma_stated_N": d.sigma_force, "sigma_scatter_N": self.sigma_scatter,
                 "noise_excess": self.noise_excess, "sampling": d.sampling, "lattice_estimate_m": self.a_est,
-                "temperature_K": d.temperature, "medium": d.medium_name or "not declared"}
+                "temperature_K": d.temperature, "medium": d.medium_name or "not declared",
+                "drift_clock": ("one clock through the record" if self.drift_clock == "record"
+                                else "each scan's own clock (the time between scans unknown)")}
 
     def model_description(self) -> dict[str, Any]:
         ffm = _ffm(self.data, 1e-21, self.a_est, 0.0)
