@@ -3,13 +3,19 @@
 If the measurement declares its medium ([medium]), the baseline already carries that medium's
 loading, air and vacuum fix density and viscosity, and the cause means an *excess* hydrodynamic
 load (a squeeze film near a surface, a meniscus, a denser gas): one factor on the declared load
-(null 1). In a declared vacuum there is no fluid and the cause does not apply. Only an
+(null 1). In a declared vacuum the cause is a **residual gas**: air at a pressure p (null 0, at most
+1.2 bar: a chamber is not pumped above the ambient pressure), its density ``rho_air p / p_atm``, its viscosity
+air's (independent of the pressure in continuum flow, Knudsen number lambda / w below ~0.1: above ~10 mbar for
+levers wider than 20 um; below that the continuum hydrodynamic function overstates the damping). Only an
 undeclared medium is fitted with its density and viscosity.
 """
 
 from __future__ import annotations
 
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
+from probedyn.diagnose.hydrodynamics import MEDIA
+
+P_ATM = 101325.0  # Pa: the pressure of MEDIA["air"]
 
 
 @CAUSES.register
@@ -34,7 +40,10 @@ class FluidLoading(Cause):
         if med is None:
             return self
         if med[0] == 0.0:
-            return None  # declared vacuum: no fluid
+            # declared vacuum: the fluid a vacuum can hold is a residual gas (air at pressure p)
+            return FluidLoading((CauseParam("p_gas", "Pa", 0.0, 1.2 * P_ATM, 0.0, "residual gas (air) pressure",
+                                            starts=(1e3, P_ATM)),),
+                                note="vacuum declared: the cause is a residual gas, air at pressure p (continuum flow)")
         c = FluidLoading((CauseParam("load_factor", "1", 0.0, 30.0, 1.0,
                                      "hydrodynamic load / that of the declared medium", starts=(3.0,)),),
                          note=f"medium declared ({problem.medium_name}): the cause is an excess load on it")
@@ -43,6 +52,9 @@ class FluidLoading(Cause):
     def effect(self, v, s):
         if "load_factor" in v and len(self.params) == 1:
             s.fluid_factor *= v["load_factor"]
+        elif "p_gas" in v and len(self.params) == 1:
+            rho_air, eta_air = MEDIA["air"]
+            s.medium = (rho_air * v["p_gas"] / P_ATM, eta_air)
         else:
             s.medium = (v["rho_f"], v["eta_f"])
 
