@@ -64,8 +64,8 @@ MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a p
 #: below the Zener frequency (Q_TED of flapwise 2 about 6 x lower than of flapwise 1 in a thin silicon lever),
 #: clamping loss falls with the mode number, surface loss is about mode-independent (Yasumura et al.,
 #: J. Microelectromech. Syst. 9, 117 (2000)); probedyn has no model of them, so a vacuum Q is held to one
-#: Q_int only within a factor of 2 per mode (a blind generator's vacuum nulls, Q_int drawn per mode: 3 of 5
-#: 'unexplained' with frequencies within their noise, docs 9.17)
+#: Q_int only within a factor of 2 per mode (a blind generator's spectra, Q_int drawn per mode: 3 of its first 8
+#: nulls 'unexplained' with every frequency within its noise, docs 9.17)
 Q_INT_SCATTER = math.log(2.0)
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 
@@ -285,7 +285,7 @@ class ModalProblem:
             Q[self.rows_of[L]] = qq
         return f, Q
 
-    def _residuals(self, f, Q, Q_int: float = math.inf) -> np.ndarray:
+    def _residuals(self, f, Q, intrinsic_only: bool = False) -> np.ndarray:
         d = self.data
         r = (d.freq - f) / self.sigma_f
         r = np.where(np.isfinite(r), r, 1e6)
@@ -306,9 +306,9 @@ class ModalProblem:
         if len(self.q_idx):
             i = self.q_idx
             sig = d.Q_sigma_rel[i]
-            if self.q_int_scatter and math.isfinite(Q_int):
+            if intrinsic_only:
                 # the intrinsic loss is not one number for every mode (Q_INT_SCATTER): a model whose damping
-                # is intrinsic only (Q_int finite here: no fluid) holds each Q to it within that scatter
+                # is intrinsic only holds each Q to its one Q_int within that scatter
                 sig = np.sqrt(sig**2 + Q_INT_SCATTER**2)
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
@@ -336,22 +336,21 @@ class ModalProblem:
         return a
 
     def residuals(self, values, causes=()) -> np.ndarray:
-        r = self._residuals(*self.predict(values, causes), self._intrinsic_only_Q(values, causes))
+        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes))
         if self.defect is not None:
             r = r + self.defect
         return r
 
     def full_residuals(self, values, causes=()) -> np.ndarray:
-        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only_Q(values, causes))
+        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes))
 
-    def _intrinsic_only_Q(self, values, causes) -> float:
-        """The one intrinsic Q of a model whose damping is intrinsic only (no fluid: its Q residuals carry the
-        intrinsic loss's mode-to-mode scatter), else inf (a fluid model's Q is the fluid's, computed, and is held
-        to the measurement's sigma: a scatter weighted by the intrinsic share Q / Q_int would let a fit lower
-        Q_int to widen its own error bars)."""
-        if not self.q_int_scatter or "Q_int" not in values:
-            return math.inf
-        return values["Q_int"] if self.state(values, causes, self.lengths[0]).medium[0] == 0.0 else math.inf
+    def _intrinsic_only(self, values, causes) -> bool:
+        """Whether the model's damping is intrinsic only (a Q_int, no fluid: its Q residuals carry the intrinsic
+        loss's mode-to-mode scatter). A fluid model's Q is the fluid's, computed, and is held to the measurement's
+        sigma: a scatter weighted by the intrinsic share Q / Q_int would let a fit lower Q_int to widen its own
+        error bars."""
+        return (self.q_int_scatter and "Q_int" in values
+                and self.state(values, causes, self.lengths[0]).medium[0] == 0.0)
 
     def physical_rms(self, r: np.ndarray) -> float:
         """RMS relative frequency error of the frequency part of a whitened residual."""
