@@ -972,10 +972,14 @@ class FrictionProblem:
         w = [math.cos(st.theta), math.sin(st.theta)]
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
-        F = F + st.offset + st.drift * self.t_drift[i] / self.t_ref
+        F = F + self._zero(i, st)
         for tf in st.transforms:
             F = tf(self, s, F)
         return F, var
+
+    def _zero(self, i: int, st: FrictionState) -> np.ndarray:
+        """The detector's zero at scan i's samples: the offset and the drift, one rate on the drift clock."""
+        return st.offset + st.drift * self.t_drift[i] / self.t_ref
 
     def _scan_chi2(self, i: int, F: np.ndarray, var: np.ndarray) -> float:
         """The weighted squared residuals of scan i over the samples the fit uses."""
@@ -1017,8 +1021,7 @@ class FrictionProblem:
                     sse = []
                     for dph in (-h, 0.0, h):
                         ph = [phis[0] + dph, 0.0]
-                        F = (st.gain * simulate_scan(self.data, st, s, ph) + st.offset
-                             + st.drift * self.t_drift[i] / self.t_ref)
+                        F = st.gain * simulate_scan(self.data, st, s, ph) + self._zero(i, st)
                         sse.append(float(np.sum((s.force - F)[mask] ** 2)))
                     den = sse[0] - 2 * sse[1] + sse[2]
                     if den > 0:
