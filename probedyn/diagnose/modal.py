@@ -14,19 +14,27 @@ levers. How much these 3D details move each mode *of this probe* is computable: 
 ``g_i = ln(f_FEM,i / f_beam,i)`` between the FEM and probedyn's own beam theory of the same prism
 (:meth:`FEMBaseline._beam_gap`: Timoshenko bending with ``E``, Saint-Venant torsion without
 warping; the FEM lies between that beam and the plate-modulus beam, a bracket the tests check).
-The noise model carries that gap as one nuisance direction, ``ln f_i`` moving by ``a g_i``, with
-a Gaussian prior ``a ~ N(0, 1)`` -- the model form is uncertain by about one FEM-to-beam gap --
-truncated at ``MF_BOUND`` = 3 (a larger discrepancy is not model form and is left to the
-causes). The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode
-by mode (1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
+The noise model carries that gap as one nuisance direction, ``ln f_i`` moving by ``a g_i``. The
+amplitude has a physical range: a real root restrains the anticlastic curvature and the warping
+of its section at most as fully as the FEM's rigid clamp (``a = 0``) and at least not at all, as
+the beam (``a = -1``); softer than the beam is a compliant clamp (a cause), stiffer than the
+rigid-clamp FEM is no model form at all (a geometry or material cause). The prior is
+``a ~ N(MF_CENTRE, MF_SCALE^2)`` = ``N(-0.5, 0.35^2)`` -- both limits at 1.43 sigma -- truncated at
+``MF_BOUND`` = 3 sigmas (``-1.55 <= a <= 0.55``; a larger discrepancy is not model form and is left
+to the causes). Until session 32 the prior was ``N(0, 1)``, symmetric about the FEM: a length error
+(every bending mode ``-2 dL / L``, torsion ``-dL / L``) plus a model form 0.8 gap stiffer than the
+rigid clamp then imitated a compliant clamp (bending ``-2 c``, torsion nearly unchanged;
+``tests/test_clamp_mass_duality.py``), the gap being largest on torsion.
+The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode by mode (1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
 0.21 % and 1.8 % on 300 x 30 x 10 um), and shrinks where they agree (long, narrow levers), keeping
 the sensitivity there; a uniform modulus change is not absorbed, because the gap is not uniform
 over the families. Probes without a beam model (a meshed tip, several materials, an anisotropic
 crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 %.
 
 The amplitude enters linearly and is profiled in closed form in every residual evaluation
-(ridge least squares on the fitted data only, the prior as a pseudo-residual ``a`` that belongs to
-no cross-validation group), which equals fitting it jointly with its Gaussian prior.
+(ridge least squares on the fitted data only, the prior as a pseudo-residual
+``(a - MF_CENTRE) / MF_SCALE`` that belongs to no cross-validation group; the amplitude is reported
+in those prior sigmas), which equals fitting it jointly with its Gaussian prior.
 
 **Ranking** (``rank_by_heldout``): claimed causes are ranked, and confounding is judged, by their
 leave-one-mode-out evidence: whether a cause fitted to the other modes predicts a mode's
@@ -56,7 +64,7 @@ from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
 from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve
 
-__all__ = ["ModalProblem", "MF_UNIFORM", "MF_BOUND"]
+__all__ = ["ModalProblem", "MF_UNIFORM", "MF_BOUND", "MF_CENTRE", "MF_SCALE"]
 
 MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a probe without a beam model
 #: mode-to-mode scatter of the intrinsic quality factor (1 sigma of ln Q_int,i about the one fitted Q_int):
@@ -68,6 +76,14 @@ MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a p
 #: nulls 'unexplained' with every frequency within its noise, docs 9.17)
 Q_INT_SCATTER = math.log(2.0)
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
+#: the model-form amplitude's prior, in units of the probe's own 1D-3D gap (module docstring): the real root
+#: lies between the beam (anticlastic curvature and warping free, -1) and the FEM's rigid clamp (both
+#: restrained, 0), so the prior is centred between them with both limits at 1.43 sigma; truncated at MF_BOUND
+#: sigmas it reaches 0.55 gap beyond either limit (the beam's own approximations: Cowper's kappa, Saint-Venant
+#: torsion) and no further. Session 32: a prior N(0, 1) let a length error plus a model form 0.8 gap *stiffer*
+#: than the rigid-clamp FEM imitate a compliant clamp (rate study seed 1049; blind m13, m23, m30).
+MF_CENTRE = -0.5
+MF_SCALE = 0.35
 
 _FREE = {  # [baseline] free quantity -> calibration parameter
     "thickness": CauseParam("cal_thickness", "1", 0.5, 2.0, 1.0, "thickness / nominal (calibrated)"),
@@ -160,7 +176,11 @@ class ModalProblem:
         self.q_idx = np.nonzero(np.isfinite(d.Q))[0]
         # the model-form direction (relative frequency per unit prior sigma), see the module docstring
         self.beam_gap, self.mf_floor = self._model_form_gap()
-        self.mf_dirs = self.beam_gap[:, None]
+        # the prior's centre as a fixed relative shift, its sigma in the direction (a uniform stiffness
+        # direction has no physical bracket: centred on the FEM, MF_UNIFORM per sigma)
+        centre, scale = (MF_CENTRE, MF_SCALE) if self.mf_floor == "beam" else (0.0, 1.0)
+        self.mf_offset = centre * self.beam_gap
+        self.mf_dirs = scale * self.beam_gap[:, None]
         self.mf_names = ("1D-3D model form" if self.mf_floor == "beam" else "uniform stiffness",)
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
         # groups: modes, their Q, and the model-form prior (-1: never held out)
@@ -287,7 +307,7 @@ class ModalProblem:
 
     def _residuals(self, f, Q, intrinsic_only: bool = False) -> np.ndarray:
         d = self.data
-        r = (d.freq - f) / self.sigma_f
+        r = (d.freq - f * (1.0 + self.mf_offset)) / self.sigma_f
         r = np.where(np.isfinite(r), r, 1e6)
         a = self.model_form(r, f)
         B = self.mf_dirs * (f / self.sigma_f)[:, None]
@@ -382,7 +402,7 @@ class ModalProblem:
         if len(self.q_idx):
             out["Q_residual_sigma"] = [float(v) for v in r[self.n:self.n + len(self.q_idx)]]
         out["model_form"] = {nm: {"amplitude_prior_sigmas": float(a),
-                                  "relative_frequency_shift_mode1": float(a * self.mf_dirs[0, k])}
+                                  "relative_frequency_shift_mode1": float(self.mf_offset[0] + a * self.mf_dirs[0, k])}
                              for k, (nm, a) in enumerate(zip(self.mf_names, r[len(r) - len(self.mf_names):]))}
         return out
 
