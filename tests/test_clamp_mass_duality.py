@@ -10,8 +10,8 @@ determinant, not probedyn's code) with
 Results (exact, not fitted):
 
 1. **Duality**: the root-spring cantilever's characteristic equation
-   ``1 + cos b cosh b + c b (sin b cosh b - cos b sinh b) = 0`` is the tip-mass cantilever's
-   ``1 + cos b cosh b + mu b (sin b cosh b - cos b sinh b) = 0`` with ``c = mu``: *every* flapwise
+   ``1 + cos b cosh b + c b (cos b sinh b - sin b cosh b) = 0`` is the tip-mass cantilever's
+   ``1 + cos b cosh b + mu b (cos b sinh b - sin b cosh b) = 0`` with ``c = mu``: *every* flapwise
    frequency of a lever with root compliance ``c`` equals that of a rigidly clamped lever carrying a tip
    mass ``c rho A L``, at any ``c``. With the same support for lateral bending (clamp_compliance.py: the
    rotational stiffness per unit area ``k_n``, so ``EI_lat / k_r,lat = EI_flap / k_r,flap = E / k_n``) the
@@ -75,6 +75,10 @@ def test_root_compliance_and_tip_mass_are_dual(c):
     b_clamp = _roots(lambda b: root_spring_equation(b, c), 4)
     b_mass = _roots(lambda b: tip_mass_equation(b, c), 4)
     assert b_clamp == pytest.approx(b_mass, rel=1e-10)
+    # both are roots of the closed form of the module docstring
+    for b in b_clamp:
+        closed = 1 + np.cos(b) * np.cosh(b) + c * b * (np.cos(b) * np.sinh(b) - np.sin(b) * np.cosh(b))
+        assert abs(closed) / np.cosh(b) < 1e-9
     # and both agree with probedyn's tip-mass equation (lumped/beam.py, eq 3.10)
     assert b_mass == pytest.approx(bm.tip_mass_roots(c, 4), rel=1e-9)
     # the rigid limit
