@@ -25,7 +25,8 @@ to the causes). Until session 32 the prior was ``N(0, 1)``, symmetric about the 
 (every bending mode ``-2 dL / L``, torsion ``-dL / L``) plus a model form 0.8 gap stiffer than the
 rigid clamp then imitated a compliant clamp (bending ``-2 c``, torsion nearly unchanged;
 ``tests/test_clamp_mass_duality.py``), the gap being largest on torsion.
-The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode by mode (1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
+The floor is thus as large as beam theory and 3D elasticity disagree on this probe, mode by mode
+(1.36-1.55 % flapwise, 0.64 % lateral, 8.9 % torsion on a 100 x 40 x 10 um lever; 0.43-0.73 %,
 0.21 % and 1.8 % on 300 x 30 x 10 um), and shrinks where they agree (long, narrow levers), keeping
 the sensitivity there; a uniform modulus change is not absorbed, because the gap is not uniform
 over the families. Probes without a beam model (a meshed tip, several materials, an anisotropic
