@@ -1,7 +1,10 @@
 """Correct-cause, false-discovery and parameter-recovery rates of the modal diagnosis on seeded cases.
 
-Usage: ``python benchmarks/diagnose_rates.py N_EFFECT N_NULL OUT.json`` (resumable: the cases
-already in OUT.json are kept and skipped; the file is rewritten atomically after every case).
+Usage: ``python benchmarks/diagnose_rates.py N_EFFECT N_NULL OUT.json [--static REL]`` (resumable: the
+cases already in OUT.json are kept and skipped; the file is rewritten atomically after every case).
+``--static REL``: the FEM-truth cases also declare a measured static spring constant (end load) with
+relative noise REL (``tests/diagnose_truth.static_truth``: the truth FEM's own static solve); the
+Timoshenko nulls stay frequency-only.
 
 Cases: ``tests/diagnose_cases.py`` (seeds 1000 + i with the effects cycling and the levers A
 (long), B (short and wide: shear matters), C (narrow) cycling every 8; nulls 5000 + i on the
@@ -46,6 +49,7 @@ MAIN = {"point-mass": ("mass", 0.0), "clamp-compliance": ("c_rot", 0.0), "thickn
         "width-error": ("w_ratio", 1.0), "length-error": ("dL", 0.0), "modulus-error": ("e_ratio", 1.0),
         "axial-prestress": ("sigma", 0.0), "fluid-loading": ("rho_f", 0.0), "crystal-anisotropy": ("a_crystal", 0.0)}
 _BASES: dict = {}
+STATIC_REL: float | None = None  # --static
 try:  # the commit the rows were computed with (a resumed study may mix commits: each row says which)
     CODE = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                           cwd=Path(__file__).resolve().parent).stdout.strip() or None
@@ -63,14 +67,15 @@ def _problem(path: Path, lever: str) -> ModalProblem:
 def run_case(folder, case):
     seed, effect, lever, truth_kind = case["seed"], case["effect"], case["lever"], case["truth_kind"]
     t0, c0 = time.perf_counter(), time.process_time()
+    static = STATIC_REL if truth_kind == "fem" else None
     path, truth = make_modal_case(Path(folder), seed, effect, lever, truth_kind=truth_kind,
-                                  declared_medium=case.get("declared_medium", "vacuum"))
+                                  declared_medium=case.get("declared_medium", "vacuum"), static_rel=static)
     t_truth, c_truth = time.perf_counter() - t0, time.process_time() - c0
     t0, c0 = time.perf_counter(), time.process_time()
     res = diagnose(_problem(path, lever))
     dt, dc = time.perf_counter() - t0, time.process_time() - c0
     row = {"code": CODE, "seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
-           "declared_medium": case.get("declared_medium"), "verdict": res["verdict"],
+           "declared_medium": case.get("declared_medium"), "static_rel": static, "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt, "cpu_s": dc,
            "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"]}
     return add_outcome(row, res, effect, truth)
@@ -162,6 +167,11 @@ def run_cases(mixed: list, rows: list, outp: Path, run, keys: tuple) -> dict:
 
 
 if __name__ == "__main__":
-    n_eff, n_null = int(sys.argv[1]), int(sys.argv[2])
-    out = sys.argv[3] if len(sys.argv) > 3 else "benchmarks/diagnose_rates_modal.json"
+    args = list(sys.argv[1:])
+    if "--static" in args:
+        i = args.index("--static")
+        STATIC_REL = float(args[i + 1])
+        del args[i:i + 2]
+    n_eff, n_null = int(args[0]), int(args[1])
+    out = args[2] if len(args) > 2 else "benchmarks/diagnose_rates_modal.json"
     print(json.dumps(study(n_eff, n_null, out), indent=1, default=float))

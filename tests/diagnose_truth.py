@@ -162,15 +162,8 @@ def tip_overrides(tip: dict | None) -> dict:
     return {"tip_shape": tip["shape"], "tip_height": float(tip["height"]), "tip_half_angle": float(tip["half_angle"])}
 
 
-def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
-              detector=None, tip: dict | None = None) -> dict:
-    """Vacuum frequencies [Hz] of the MODES of lever ``lever`` carrying ``effect`` (FEM, ``ett``
-    elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`).
-    ``detector(model) -> (node index, unit direction)``: also return each MODE's mass-normalised
-    displacement there along that direction (``"detector_disp"``, for thermal spectra).
-    ``tip``: a meshed tip (:func:`tip_overrides`; P2 tetrahedra, ``ett`` layers through the
-    thickness -- the diagnosis meshes a tipped lever with 3); a thickness error leaves the tip as
-    it is (a thicker lever carrying the same tip), as on a real lever."""
+def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, tip: dict | None = None):
+    """The truth's FEM with ``effect`` built into the mesh or the matrices: (model, K, M, clamped, extra)."""
     from probedyn.fem.model import PointMass
 
     probe = _probe()
@@ -212,12 +205,65 @@ def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT
         clamped = False
     if effect == "axial-prestress":
         K = (K + _geometric_stiffness(model, params["sigma"])).tocsr()
+    return model, K, M, clamped, extra
+
+
+def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
+              detector=None, tip: dict | None = None) -> dict:
+    """Vacuum frequencies [Hz] of the MODES of lever ``lever`` carrying ``effect`` (FEM, ``ett``
+    elements through the thickness). Fluid loading is applied afterwards (:func:`fluid_loaded`).
+    ``detector(model) -> (node index, unit direction)``: also return each MODE's mass-normalised
+    displacement there along that direction (``"detector_disp"``, for thermal spectra).
+    ``tip``: a meshed tip (:func:`tip_overrides`; P2 tetrahedra, ``ett`` layers through the
+    thickness -- the diagnosis meshes a tipped lever with 3); a thickness error leaves the tip as
+    it is (a thicker lever carrying the same tip), as on a real lever."""
+    model, K, M, clamped, extra = _truth_model(lever, effect, params, ett, tip)
     f, fams, Phi = _solve_custom(model, K, M, n_modes, clamped, shapes=True)
     if detector is not None:
         j, e = detector(model)
         d = np.asarray(e, float) @ Phi.reshape(model.n_nodes, 3, -1)[j]
         extra["detector_disp"] = _families_pick(d, fams, MODES).tolist()
     return {"freqs": _families_pick(f, fams, MODES).tolist(), "fem_families": fams, "dofs": int(model.dofs), **extra}
+
+
+def static_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT) -> float:
+    """The truth's static spring constant [N/m] for an end load: a force F spread over the
+    ``free_end`` face as lumped nodal forces (:func:`_face_nodal_areas`, HRZ lumping) along z, over
+    the area-weighted mean z deflection of the face -- the same work-conjugate pair as the
+    diagnosis' consistent face average, built here independently, on the truth's own matrices
+    (clamp springs, prestress, point mass)."""
+    from probedyn.fem.eigen import factorize
+
+    model, K, _, clamped, _ = _truth_model(lever, effect, params, ett)
+    a = _face_nodal_areas(model, "free_end")
+    f = np.zeros(model.ndofs_total)
+    f[2::3] = a / a.sum()  # 1 N in total
+    free = model.free_dofs if clamped else np.arange(model.ndofs_total)
+    fac = factorize(K[free][:, free].tocsc(), spd=True)
+    try:
+        u = np.zeros(model.ndofs_total)
+        u[free] = fac.solve(f[free])
+    finally:
+        fac.release()
+    return float(1.0 / (f @ u))
+
+
+STATIC_CACHE = HERE / "data" / "diagnose_modal_static_truth.json"
+
+
+def cached_static_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT) -> float:
+    """:func:`static_truth`, cached in ``tests/data/diagnose_modal_static_truth.json`` (the modal truths' keys)."""
+    fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
+    fem_effect = effect if effect != "fluid-loading" else None
+    k = _key(lever, fem_effect, fem_params, ett)
+    cache = json.loads(STATIC_CACHE.read_text()) if STATIC_CACHE.exists() else {}
+    if k not in cache:
+        cache[k] = {"k_static": static_truth(lever, fem_effect, fem_params, ett), "lever": lever, "effect": fem_effect,
+                    "params": fem_params}
+        tmp = STATIC_CACHE.with_suffix(".tmp")
+        tmp.write_text(json.dumps(cache, indent=0, sort_keys=True))
+        os.replace(tmp, STATIC_CACHE)
+    return float(cache[k]["k_static"])
 
 
 def timoshenko_truth(lever: str) -> dict:
@@ -311,11 +357,15 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
 def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, noise: float = 1e-3,
                     q_noise: float = 0.05, with_Q: bool | None = None, declared_medium: str | None = "vacuum",
                     truth_kind: str = "fem", compute: bool = True, params: dict | None = None,
-                    name: str | None = None, tip: dict | None = None) -> tuple[Path, dict]:
+                    name: str | None = None, tip: dict | None = None, static_rel: float | None = None
+                    ) -> tuple[Path, dict]:
     """Write a modal measurement of lever ``lever`` (a name of LEVERS or a geometry dict, whose truth is
     solved uncached) with a hidden ``effect`` (None: noise only); ``params``: the effect's parameters
     (default: drawn from ``seed``); ``name``: the file stem (default ``modal_<seed>``); ``tip``: the lever
-    carries a meshed tip (:func:`tip_overrides`, FEM truths only), declared in the sidecar's [probe]."""
+    carries a meshed tip (:func:`tip_overrides`, FEM truths only), declared in the sidecar's [probe];
+    ``static_rel``: also a measured static spring constant (:func:`cached_static_truth`, FEM truths of a
+    named lever only) with that relative noise, declared in [static] (its own random stream: the
+    frequencies are those of the case without it)."""
     rng = np.random.default_rng(seed)
     if params is None:
         params = draw_modal_effect(effect, lever, rng) if effect else {}
@@ -357,12 +407,21 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
             rows.append(f"{fa},{o},{ff:.10g}" + (f",{qq:.6g}" if with_Q else ""))
     (outdir / f"{name}.csv").write_text("\n".join(rows) + "\n")
     med = "" if declared_medium is None else f'[medium]\nname = "{declared_medium}"\n'
+    static = ""
+    k_true = None
+    if static_rel is not None:
+        if truth_kind != "fem" or tip or not isinstance(lever, str):
+            raise ValueError("a static spring constant is generated for untipped FEM truths of a named lever only")
+        k_true = cached_static_truth(lever, effect, params)
+        k_meas = k_true * (1 + static_rel * np.random.default_rng(seed + 10**6).standard_normal())
+        static = f"\n[static]\nspring_constant = {k_meas:.8g}\nsigma = {static_rel * k_meas:.6g}\n"
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "modal"\ndata = "{name}.csv"\n\n[probe]\nname = "cantilever"\n'
         f"length = {g['length']!r}\nwidth = {g['width']!r}\nthickness = {g['thickness']!r}\n"
         + "".join(f"{k} = {v!r}\n" for k, v in tip_overrides(tip).items()) + f"\n{med}\n"
-        f"[noise]\nfrequency_rel = {noise!r}\nQ_rel = {q_noise!r}\n")
+        f"[noise]\nfrequency_rel = {noise!r}\nQ_rel = {q_noise!r}\n" + static)
     truth = {"effect": effect, "params": params, "lever": lever, "truth_kind": truth_kind, "Q_int": Q_int,
+             **({"k_static": k_true} if k_true is not None else {}),
              **{k: v for k, v in tr.items() if k in ("xi_node",)}, **({"tip": tip} if tip else {})}
     return outdir / f"{name}.toml", truth
 

@@ -37,6 +37,10 @@ Tables:
   declared instead of estimated (:mod:`probedyn.diagnose.noise`).
 * ``[baseline]``: ``free`` = quantities calibrated by the baseline fit (thickness, width,
   length, modulus, density; friction: nothing else).
+* modal: ``[static]`` ``spring_constant`` [N/m] = a measured static spring constant of the lever at the
+  probe's declared length, for a load at its free end along the thickness (a reference lever, a force
+  standard; not a thermal tune, which infers it from mode 1), ``sigma`` [N/m] its 1-sigma uncertainty
+  (default :data:`STATIC_K_REL_DEFAULT` = 5 % of it).
 * friction: ``[lever]`` ``k_x`` [N/m], ``m_x`` [kg], ``c_x`` [N s/m] or ``Q_x``; ``[sample]``
   ``lattice`` [m]; ``[measurement] sampling`` = ``point`` or ``interval-mean``.
 * force: ``[lever]`` ``k`` [N/m], ``sensitivity`` [m/V] (for deflection_V); ``[tip]``
@@ -63,6 +67,7 @@ __all__ = ["read_measurement", "read_csv", "Measurement", "ModalData", "Spectrum
            "FrictionScan", "ForceData", "FAMILIES", "KINDS"]
 
 KINDS = ("modal", "spectrum", "timeseries", "friction", "force")
+STATIC_K_REL_DEFAULT = 0.05  # default relative uncertainty of a declared static spring constant
 F_MAX = 1e11  # Hz: above any mechanical mode of a probe (a 1 um silicon beam's first mode is ~ 1e9 Hz)
 ORDER_MAX = 50  # highest mode order of one family the diagnosis resolves
 FAMILIES = ("flapwise", "lateral", "torsion", "axial")
@@ -84,9 +89,10 @@ TABLES: dict[str, dict[str, tuple[str, ...]]] = {
     "lever": {"friction": ("k_x", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
     "sample": {"friction": ("lattice",), "force": ("E", "nu")},
     "tip": {"force": ("radius", "E", "nu")},
+    "static": {"modal": ("spring_constant", "sigma")},
 }
 KIND_TABLES = {
-    "modal": ("measurement", "probe", "medium", "noise", "baseline"),
+    "modal": ("measurement", "probe", "medium", "noise", "baseline", "static"),
     "spectrum": ("measurement", "probe", "medium", "noise", "baseline"),
     "timeseries": ("measurement", "probe", "medium", "noise", "baseline"),
     "friction": ("measurement", "lever", "sample", "medium", "noise", "baseline", "scans"),
@@ -194,6 +200,7 @@ class ModalData(Measurement):
     Q_sigma_rel: np.ndarray = None  # type: ignore[assignment]
     length: np.ndarray = None  # type: ignore[assignment]
     known_mass: tuple[float, float] | None = None  # (kg, x/L) not at the free end
+    static: tuple[float, float] | None = None  # measured static spring constant and its sigma [N/m] (end load)
     noise_stated: bool = True
     csv: dict | None = None
 
@@ -513,9 +520,15 @@ def _read_modal(side: Path, csv: Path, meta: dict, common: dict) -> ModalData:
         if key in seen:
             raise col_error(d, "order", k, f"mode {key[0]} {key[1]} appears twice (first on line {d['_lines'][seen[key]]})")
         seen[key] = k
+    static = None
+    if "static" in meta:
+        k = _num(meta, "static", "spring_constant", side, positive=True, lo=1e-6, hi=1e7, unit="N/m")
+        ks = _num(meta, "static", "sigma", side, positive=True, lo=1e-3 * k, hi=k, unit="N/m",
+                  default=STATIC_K_REL_DEFAULT * k) if "sigma" in meta["static"] else STATIC_K_REL_DEFAULT * k
+        static = (k, ks)
     return ModalData(**common, probe=probe, probe_values=values, family=fam, order=d["order"].astype(int), freq=f,
                      freq_sigma=sig, Q=Q, Q_sigma_rel=qsr, length=L, known=known, known_mass=known_mass,
-                     noise_stated=stated or has_sig, csv=d)
+                     static=static, noise_stated=stated or has_sig, csv=d)
 
 
 def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -> SpectrumData:

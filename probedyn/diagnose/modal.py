@@ -63,9 +63,10 @@ import numpy as np
 from probedyn.core.errors import DataFormatError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
-from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve
+from probedyn.diagnose.modal_model import (FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve,
+                                           full_static_stiffness)
 
-__all__ = ["ModalProblem", "MF_UNIFORM", "MF_BOUND", "MF_CENTRE", "MF_SCALE"]
+__all__ = ["ModalProblem", "MF_UNIFORM", "MF_BOUND", "MF_CENTRE", "MF_SCALE", "STATIC_K_SEPARATING", "GEOMETRY_SEPARATING"]
 
 MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a probe without a beam model
 #: mode-to-mode scatter of the intrinsic quality factor (1 sigma of ln Q_int,i about the one fitted Q_int):
@@ -85,6 +86,15 @@ MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a 
 #: than the rigid-clamp FEM imitate a compliant clamp (rate study seed 1049; blind m13, m23, m30).
 MF_CENTRE = -0.5
 MF_SCALE = 0.35
+#: relative uncertainty of a static spring constant named as a separating measurement (a calibration against
+#: a force standard or a precise reference lever; a reference-lever calibration is often 5-10 %): the
+#: separation the report promises is the one such a measurement resolves at 3 sigma
+STATIC_K_SEPARATING = 0.02
+#: relative uncertainty of a lever dimension named as a separating measurement (optical or electron microscopy of
+#: length and width, of the cross-section or a profilometer for the thickness): a length error and a compliant
+#: clamp shift every bending mode alike (-2 dL/L, -2 c) and the static stiffness alike (-3 dL/L, -3 c); only
+#: the geometry itself tells them apart
+GEOMETRY_SEPARATING = {"length": 0.005, "width": 0.01, "thickness": 0.02}
 
 _FREE = {  # [baseline] free quantity -> calibration parameter
     "thickness": CauseParam("cal_thickness", "1", 0.5, 2.0, 1.0, "thickness / nominal (calibrated)"),
@@ -184,10 +194,13 @@ class ModalProblem:
         self.mf_dirs = scale * self.beam_gap[:, None]
         self.mf_names = ("1D-3D model form" if self.mf_floor == "beam" else "uniform stiffness",)
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
-        # groups: modes, their Q, and the model-form prior (-1: never held out)
-        self.groups = np.concatenate([np.arange(self.n), self.q_idx, -np.ones(len(self.mf_names), int)])
+        self._static_setup()
+        # groups: modes, the static spring constant, the modes' Q, and the model-form prior (-1: never held out)
+        self.groups = np.concatenate([np.arange(self.n_f), self.q_idx, -np.ones(len(self.mf_names), int)])
         self.group_labels = [f"{fa} {o}" + (f" @ L = {L:.4g} m" if len(self.lengths) > 1 else "")
                              for fa, o, L in zip(d.family, d.order, d.length)]
+        if self.static is not None:
+            self.group_labels.append("static spring constant")
         base: list[CauseParam] = []
         if len(self.q_idx):
             q0 = float(np.median(d.Q[self.q_idx]))
@@ -226,6 +239,62 @@ class ModalProblem:
             b.reduced = r
             self.reds[L] = r
         return r
+
+    def _static_setup(self) -> None:
+        """A measured static spring constant (``[static]``; :func:`~probedyn.diagnose.modal_model.end_stiffness`'s
+        definition: an end load on the free-end face, along the thickness) is one more observable, held out
+        like a mode: ``(k_meas - k_model (1 + c g_s)) / sigma_k`` with the model-form amplitude shared with the
+        frequencies, ``g_s = ln(k_FEM / k_beam)`` the probe's own 1D-3D gap of the end stiffness (Timoshenko
+        beam, ``3 E I / L^3`` with shear; twice the uniform direction without a beam, k ~ f^2) and ``sigma_k^2``
+        the stated uncertainty plus the FEM's discretisation estimate (twice the relative one of flapwise 1:
+        ``k = m_1 (2 pi f_1)^2`` at fixed mass) in quadrature. It separates causes the frequencies confound:
+        a compliant clamp softens it (``k / (1 + 3 c)`` in beam theory), a point mass leaves it unchanged (the
+        exact duality of the bending frequencies, ``tests/test_clamp_mass_duality.py``), a thickness error
+        moves it as ``t^3`` where the frequencies move as ``t``, a modulus error as ``E`` against ``sqrt(E)``."""
+        d = self.data
+        self.static = d.static
+        self.n_f = self.n
+        if d.static is None:
+            return
+        L = d.probe_values.get("length")
+        L = None if L is None or self.lengths == [None] else round(float(L), 15)
+        if L not in self.bases:
+            raise DataFormatError(f"{d.path}: [static] spring_constant: the modes are at lengths "
+                                  f"{', '.join(f'{x:g}' for x in self.lengths)} m, none of them the probe's declared "
+                                  "length, at which the static spring constant is taken")
+        b = self.bases[L]
+        red = self._red(L)
+        if red.end_op is None:
+            raise DataFormatError(f"{d.path}: [static] spring_constant: probe '{b.probe.name}' has no free-end face "
+                                  "to load (the static spring constant is an end load)")
+        self.static_L = L
+        self.n_f = self.n + 1
+        k0 = red.static_stiffness(self.state({}, (), L))
+        if getattr(b, "prism", None) is not None:
+            from probedyn.lumped import beam as bm
+
+            g = math.log(k0 / bm.static_tip_stiffness(bm.RectBeam(*b.prism), "flapwise", shear=True))
+            centre, scale = MF_CENTRE, MF_SCALE
+        else:
+            g, centre, scale = 2 * MF_UNIFORM, 0.0, 1.0
+        if self.mf_floor != "beam":  # the frequencies carry the uniform direction: the same for k
+            g, centre, scale = 2 * MF_UNIFORM, 0.0, 1.0
+        self.static_gap = g
+        self.static_offset = centre * g
+        self.static_dir = scale * g
+        try:
+            i1 = b.index("flapwise", 1)
+            disc_rel = 2.0 * float(b.disc_err[i1] / b.freqs[i1])
+        except DataFormatError:
+            disc_rel = 0.0
+        self.static_disc = disc_rel * k0
+        self.static_sigma = math.hypot(d.static[1], self.static_disc)
+
+    def _static_model(self, values, causes, full: bool = False) -> float:
+        s = self.state(values, causes, self.static_L)
+        if full:
+            return full_static_stiffness(self.bases[self.static_L], s)
+        return self._red(self.static_L).static_stiffness(s)
 
     def _model_form_gap(self) -> tuple[np.ndarray, str]:
         """The first model-form direction (relative frequency per prior sigma, one entry per
@@ -306,19 +375,22 @@ class ModalProblem:
             Q[self.rows_of[L]] = qq
         return f, Q
 
-    def _residuals(self, f, Q, intrinsic_only: bool = False) -> np.ndarray:
+    def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None) -> np.ndarray:
         d = self.data
         r = (d.freq - f * (1.0 + self.mf_offset)) / self.sigma_f
-        r = np.where(np.isfinite(r), r, 1e6)
-        a = self.model_form(r, f)
         B = self.mf_dirs * (f / self.sigma_f)[:, None]
-        r = r - B @ a
+        if self.static is not None:  # the static spring constant: one more row of the same linear profile
+            r = np.append(r, (self.static[0] - k * (1.0 + self.static_offset)) / self.static_sigma)
+            B = np.vstack([B, np.full((1, B.shape[1]), self.static_dir * k / self.static_sigma)])
+        r = np.where(np.isfinite(r), r, 1e6)
+        a = self._profile(r, B)
+        r = r - np.where(np.isfinite(B), B, 0.0) @ a
         if self.train_mask is not None:
             # held-out modes: the residual is whitened by its predictive sigma, which includes the
             # model-form amplitude's uncertainty left after the training modes (posterior covariance
             # (B_t^T B_t + I)^-1 of the ridge profile): a mode the training data constrain poorly
             # in that direction is not held to the bare noise (diagonal; one mode per fold here)
-            held = ~np.asarray(self.train_mask)[: self.n]
+            held = ~np.asarray(self.train_mask)[: self.n_f]
             if held.any():
                 Bt = np.where(np.isfinite(B), B, 0.0)
                 P = np.linalg.inv(Bt[~held].T @ Bt[~held] + np.eye(B.shape[1]))
@@ -338,8 +410,13 @@ class ModalProblem:
     def model_form(self, r: np.ndarray, f: np.ndarray) -> np.ndarray:
         """The model-form amplitude(s) (in prior sigmas) that best explain the whitened frequency
         residuals ``r`` of the fitted modes (ridge least squares = Gaussian prior N(0, 1))."""
-        B = self.mf_dirs * (np.where(np.isfinite(f), f, 0.0) / self.sigma_f)[:, None]
-        m = np.ones(self.n, bool) if self.train_mask is None else np.asarray(self.train_mask)[: self.n]
+        return self._profile(r, self.mf_dirs * (f / self.sigma_f)[:, None])
+
+    def _profile(self, r: np.ndarray, B: np.ndarray) -> np.ndarray:
+        """:meth:`model_form` on the rows of ``r`` (frequencies, then the static spring constant if
+        measured) with their directions ``B`` (per prior sigma, whitened)."""
+        B = np.where(np.isfinite(B), B, 0.0)
+        m = np.ones(len(r), bool) if self.train_mask is None else np.asarray(self.train_mask)[: len(r)]
         Bm, rm = B[m], r[m]
         A = Bm.T @ Bm + np.eye(B.shape[1])
         a = np.linalg.solve(A, Bm.T @ rm)
@@ -357,13 +434,15 @@ class ModalProblem:
         return a
 
     def residuals(self, values, causes=()) -> np.ndarray:
-        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes))
+        k = self._static_model(values, causes) if self.static is not None else None
+        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes), k)
         if self.defect is not None:
             r = r + self.defect
         return r
 
     def full_residuals(self, values, causes=()) -> np.ndarray:
-        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes))
+        k = self._static_model(values, causes, full=True) if self.static is not None else None
+        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes), k)
 
     def _intrinsic_only(self, values, causes) -> bool:
         """Whether the model's damping is intrinsic only (a Q_int, no fluid: its Q residuals carry the intrinsic
@@ -400,8 +479,13 @@ class ModalProblem:
                 item["slope_per_order_sigma"] = float(coef[1])
                 item["slope_t"] = float(coef[1] * math.sqrt(np.sum((x - x.mean()) ** 2)))
             out["by_family"][fam] = item
+        if self.static is not None:
+            out["static"] = {"k_meas_N_per_m": float(self.static[0]), "sigma_N_per_m": float(self.static_sigma),
+                             "fem_discretisation_N_per_m": float(self.static_disc),
+                             "residual_sigma": float(r[self.n]),
+                             "residual_rel": float(r[self.n] * self.static_sigma / self.static[0])}
         if len(self.q_idx):
-            out["Q_residual_sigma"] = [float(v) for v in r[self.n:self.n + len(self.q_idx)]]
+            out["Q_residual_sigma"] = [float(v) for v in r[self.n_f:self.n_f + len(self.q_idx)]]
         out["model_form"] = {nm: {"amplitude_prior_sigmas": float(a),
                                   "relative_frequency_shift_mode1": float(self.mf_offset[0] + a * self.mf_dirs[0, k])}
                              for k, (nm, a) in enumerate(zip(self.mf_names, r[len(r) - len(self.mf_names):]))}
@@ -409,8 +493,10 @@ class ModalProblem:
 
     # -- observables that would separate confounded causes --------------------------------------
     def predict_observables(self, values, causes) -> list[dict[str, Any]]:
-        """Frequencies of the FEM modes not measured (at the reference length), and Q of the
-        flapwise modes if no Q was measured."""
+        """Frequencies of the FEM modes not measured (at the reference length), Q of the
+        flapwise modes if no Q was measured, the static spring constant at the free end if not
+        measured (to :data:`STATIC_K_SEPARATING`) and the lever's dimensions that are neither known
+        nor calibrated (to :data:`GEOMETRY_SEPARATING`)."""
         d = self.data
         L = self.lengths[-1]
         b = self.bases[L]
@@ -424,12 +510,23 @@ class ModalProblem:
             cnt[fa] = cnt.get(fa, 0) + 1
             if (fa, cnt[fa]) not in have:
                 cand.append((fa, cnt[fa]))
-        if not cand:
-            return []
         s = self.state(values, causes, L)
-        f, Q = self._red(L).solve(s, cand)
-        rel = float(np.median(d.freq_sigma / d.freq))
         out = []
+        red = self._red(L)
+        if self.static is None and red.end_op is not None:
+            k0 = red.static_stiffness(self.state({}, (), L))
+            out.append({"measure": "static spring constant (end load)", "value": red.static_stiffness(s),
+                        "sigma": STATIC_K_SEPARATING * k0, "unit": "N/m"})
+        nominal = {"length": b.L, "width": b.w, "thickness": b.t}
+        axis = {"length": b.length_axis, "width": b.width_axis, "thickness": b.thickness_axis}
+        for q, rel in GEOMETRY_SEPARATING.items():
+            if q not in self.known:  # a known or calibrated dimension is no cause's to change
+                out.append({"measure": f"lever {q} (microscopy)", "value": nominal[q] * float(s.scale[axis[q]]),
+                            "sigma": rel * nominal[q], "unit": "m"})
+        if not cand:
+            return out
+        f, Q = red.solve(s, cand)
+        rel = float(np.median(d.freq_sigma / d.freq))
         for (fa, o), ff, qq in zip(cand, f, Q):
             out.append({"measure": f"{fa} mode {o} frequency", "value": float(ff), "sigma": rel * float(ff), "unit": "Hz"})
             if not len(self.q_idx) and fa == "flapwise" and np.isfinite(qq):
@@ -444,6 +541,7 @@ class ModalProblem:
                 "lengths_m": [float(x) for x in self.lengths if x is not None],
                 "noise_stated": d.noise_stated, "medium": self.medium_name or "not declared",
                 "known": sorted(self.data.known), "calibrated": list(d.free),
+                "static_spring_constant_N_per_m": None if self.static is None else list(self.static),
                 "probe": b.probe.name, "probe_mass_kg": self.probe_mass, "group_labels": list(self.group_labels)}
 
     def model_description(self) -> dict[str, Any]:

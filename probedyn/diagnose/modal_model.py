@@ -383,6 +383,7 @@ class FEMBaseline:
         crystal, attached masses): no beam of it exists."""
         from probedyn.lumped import beam as bm
 
+        self.prism = None  # (L, w, t, E, nu, rho) of the beam, when the probe is a plain isotropic prism
         m = self.model
         mats = list(m.materials)
         if m.point_masses or m.springs or not all(mt.is_isotropic(rtol=1e-6) for mt in mats):
@@ -396,6 +397,7 @@ class FEMBaseline:
         L, w, t = self.L, self.w, self.t
         if not abs(m.total_mass() / (rho * L * w * t) - 1.0) < 1e-3:
             return None, None, "no beam model (the body is not the prism of its clamp face and length)"
+        self.prism = (L, w, t, E, nu, rho)
         counts = {fa: self.families.count(fa) for fa in FAMILIES}
         gap = np.full(len(self.families), np.nan)
         plate = np.full(len(self.families), np.nan)
@@ -635,7 +637,12 @@ class ReducedModal:
     * ``mass``: static responses to unit forces on the mass path (at four positions);
     * ``prestress``: ``K^-1 G phi_i``;
     * ``crystal``: ``K^-1 dK phi_i`` with ``dK`` the stiffness of ``C_crystal - C_iso``
-      (:func:`crystal_delta`; only when a region has a crystal).
+      (:func:`crystal_delta`; only when a region has a crystal);
+    * ``static``: the static response to a uniform traction on the ``free_end`` face along the
+      thickness axis (only for :meth:`static_stiffness`, never in an eigenproblem's basis): with it
+      the reduced static compliance of the baseline is the FEM's to round-off; ``static_clamp``: the
+      foundation shapes (as the clamp block's) of its root reaction and of theirs, for a compliant
+      clamp.
 
     One factorisation of the clamped stiffness serves every block. A state uses the blocks its
     effects need (``blocks_for``): a smaller eigenproblem, and no cross-talk from shapes the
@@ -646,7 +653,7 @@ class ReducedModal:
     written as quadratic forms on the basis.
     """
 
-    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal")
+    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal", "static", "static_clamp")
 
     def __init__(self, base: FEMBaseline, n_modes: int | None = None, n_mass_corr: int = 4) -> None:
         t0 = time.perf_counter()
@@ -667,6 +674,7 @@ class ReducedModal:
             return out
 
         blocks: dict[str, list[np.ndarray]] = {b: [] for b in self.BLOCKS}
+        A_end = None
         try:
             sh = Phi0.reshape(m.n_nodes, 3, nm)
             blocks["modes"].append(Phi0)
@@ -694,21 +702,27 @@ class ReducedModal:
                 e[a] = 1.0
                 rig[:, :, 3 + a] = np.cross(e[None, :], X.T)
             blocks["clamp"].append(rig.reshape(N, 6))
-            R = KP - MP * lam0[None, :]
             cd = m.clamped_dofs
             Sface = face_mass_scalar(m, base.clamp_face)
             nn = np.outer(base.clamp_normal, base.clamp_normal)
-            for D in (nn, np.eye(3) - nn):
-                Sd = directional(Sface, np.eye(3))[cd][:, cd]
-                Dfull = sp.kron(sp.identity(m.n_nodes), sp.csr_matrix(D), format="csr")[cd][:, cd]
-                uf = np.asarray(sp.linalg.spsolve(Sd.tocsc(), Dfull @ R[cd]))
-                uf = uf.reshape(len(cd), -1)
-                u = np.zeros((N, nm))
-                u[cd] = uf
-                # static extension into the body with the face held at uf: K_ff u_f = -K_fc u_c
-                rhs = -(K[:, cd] @ uf)
-                u[free] = fac.solve(np.ascontiguousarray(rhs[free]))
-                blocks["clamp"].append(u)
+            Sd = directional(Sface, np.eye(3))[cd][:, cd].tocsc()
+
+            def foundation_shapes(R: np.ndarray) -> list[np.ndarray]:
+                """The body's static extension of the face displacement a Winkler foundation takes
+                under the root reactions ``R`` (columns), normal and tangential parts."""
+                out = []
+                for D in (nn, np.eye(3) - nn):
+                    Dfull = sp.kron(sp.identity(m.n_nodes), sp.csr_matrix(D), format="csr")[cd][:, cd]
+                    uf = np.asarray(sp.linalg.spsolve(Sd, Dfull @ R[cd])).reshape(len(cd), -1)
+                    u = np.zeros((N, R.shape[1]))
+                    u[cd] = uf
+                    # static extension into the body with the face held at uf: K_ff u_f = -K_fc u_c
+                    rhs = -(K[:, cd] @ uf)
+                    u[free] = fac.solve(np.ascontiguousarray(rhs[free]))
+                    out.append(u)
+                return out
+
+            blocks["clamp"] += foundation_shapes(KP - MP * lam0[None, :])
             # point masses on the mass path
             xi_c = np.linspace(1.0, 0.0, n_mass_corr, endpoint=False)[::-1]
             try:
@@ -727,6 +741,14 @@ class ReducedModal:
 
                 dK = el.assemble_stiffness(m.mesh, m.elem_region, parts, m.orientations, element=m.element, basis=m.basis)
                 blocks["crystal"].append(ksolve(dK @ Phi0))
+            # the static end load (uniform traction on the free-end face, thickness direction)
+            # and, for a compliant clamp, the foundation's face displacement under its root reaction
+            A_end = _end_operator(m, base.thickness_axis)
+            if A_end is not None:
+                u_end = ksolve(np.asarray(A_end.T.todense()))
+                blocks["static"].append(u_end)
+                u1 = foundation_shapes(np.asarray(K @ u_end))
+                blocks["static_clamp"] += u1 + foundation_shapes(np.asarray(K @ np.column_stack(u1)))
         finally:
             fac.release()
         # union basis, block by block in the order of BLOCKS: each block is made orthogonal (in the
@@ -805,6 +827,7 @@ class ReducedModal:
         self._term_cache: dict[str, np.ndarray] = {}
         self._path_xi = np.linspace(0.0, 1.0, 101)
         self._path_ops: np.ndarray | None = None
+        self.end_op = None if A_end is None else np.asarray(A_end @ P).ravel()  # (r,) face-mean deflection
         self.build_s = time.perf_counter() - t0
 
     # -- block sub-bases ----------------------------------------------------------------------
@@ -821,8 +844,8 @@ class ReducedModal:
             need.append("prestress")
         if s.crystal:
             need.append("crystal")
-        if s.terms:  # a cause's own matrix: all shapes
-            need = list(ReducedModal.BLOCKS)
+        if s.terms:  # a cause's own matrix: all shapes (but the static load's, which is for static_stiffness)
+            need = [b for b in ReducedModal.BLOCKS if not b.startswith("static")]
         return tuple(need)
 
     def _subspace(self, blocks: tuple[str, ...]) -> "_Sub":
@@ -894,6 +917,27 @@ class ReducedModal:
             hit = self.Phi.T @ (A @ self.Phi)
             self._term_cache[t.key] = hit
         return hit
+
+    def static_stiffness(self, s: ModalState) -> float:
+        """The static spring constant [N/m] of state ``s`` at the free end (:func:`end_stiffness`'s
+        definition) on the Ritz basis of the state's blocks plus the baseline's static end-load
+        response; ``nan`` for a probe without a ``free_end`` face. Exact for the baseline and for
+        states that change the mass only (their stiffness is the baseline's); otherwise a Ritz
+        (upper-bound) stiffness, checked against :func:`full_static_stiffness` in the tests."""
+        if self.end_op is None:
+            return math.nan
+        need = set(self.blocks_for(s)) | {"static"}
+        if "clamp" in need:
+            need.add("static_clamp")
+        blocks = tuple(b for b in self.BLOCKS if b in need)
+        sub = self._subspace(blocks)
+        K, _ = sub.matrices(s, penalty="clamp" in blocks)
+        a = sub.T.T @ self.end_op
+        try:
+            c = float(a @ np.linalg.solve(K, a))
+        except (np.linalg.LinAlgError, ValueError):
+            return math.nan  # beyond buckling: no static equilibrium
+        return 1.0 / c if c > 0 else math.nan
 
     def solve(self, s: ModalState, needed: list[tuple[str, int]]) -> tuple[np.ndarray, np.ndarray]:
         """Frequencies [Hz] and quality factors of the ``(family, order)`` modes in state ``s``."""
@@ -1151,17 +1195,11 @@ def _scaled_material(mat: Material, e: float, r: float, a: float = 0.0, R=None) 
                                                             else "") + f", rho x {r:.6g}")
 
 
-def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], n_modes: int | None = None
-               ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """Frequencies and Q of the measured ``(family, order)`` modes from the full FEM of state ``s``.
-
-    The mesh is stretched by ``s.scale`` (the geometry the stretch represents), materials
-    scaled, point masses attached at their coordinates, the clamp replaced by the elastic
-    foundation when it is compliant, prestress and cause terms added as global matrices; the
-    fluid loading is applied per flapwise mode with the FEM mode shape (Rayleigh quotient,
-    iterated to the loaded frequency).
-    """
-    t0 = time.perf_counter()
+def extended_model(base: FEMBaseline, s: ModalState) -> ElasticModel:
+    """The full FEM of state ``s``: the mesh stretched by ``s.scale`` (the geometry the stretch
+    represents), materials scaled, point masses attached at their coordinates, the clamp replaced
+    by the elastic foundation when it is compliant, prestress and cause terms added as global
+    matrices (the fluid is not in it: :func:`full_solve` applies it per mode)."""
     m0 = base.model
     sc = np.asarray(s.scale, float)
     regions = {name: (_scaled_material(mat, s.E_factor, s.rho_factor, s.crystal, R), R)
@@ -1192,6 +1230,54 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
         else:
             extra_M = A if extra_M is None else extra_M + A
     model._extra_K, model._extra_M = extra_K, extra_M
+    return model
+
+
+def _end_operator(model: ElasticModel, axis: int) -> sp.csr_matrix | None:
+    """(1, N) operator: the mean displacement of the ``free_end`` face along ``axis`` (the
+    work-conjugate of a uniform traction on it); None when the probe has no such face."""
+    if "free_end" not in (model.mesh.boundaries or {}):
+        return None
+    return model.attachment("free_end")[axis]
+
+
+def end_stiffness(model: ElasticModel, axis: int) -> float:
+    """The static spring constant [N/m] at the free end: a force F spread as a uniform traction over
+    the ``free_end`` face along ``axis`` (the lever's thickness) over the face-mean deflection it
+    causes -- the end load of beam theory (``3 E I / L^3`` for a slender Euler-Bernoulli lever),
+    which converges under mesh refinement where a point load's deflection does not. The model's
+    own clamp, or (with no clamp) its global matrices' support (an elastic foundation), holds it;
+    ``nan`` without a ``free_end`` face."""
+    A = _end_operator(model, axis)
+    if A is None:
+        return math.nan
+    K, _ = model.assemble()
+    free = model.free_dofs
+    fac = factorize(K[free][:, free].tocsc(), spd=True)
+    try:
+        u = fac.solve(np.ascontiguousarray(np.asarray(A.T.todense())[free]))
+    finally:
+        fac.release()
+    c = float((A[:, free] @ u).ravel()[0])
+    if not (math.isfinite(c) and c > 0):
+        raise SolverError(f"static end stiffness: non-positive compliance {c:g} m/N (a state beyond buckling?)")
+    return 1.0 / c
+
+
+def full_static_stiffness(base: FEMBaseline, s: ModalState) -> float:
+    """:func:`end_stiffness` of the full FEM of state ``s`` (:func:`extended_model`)."""
+    return end_stiffness(extended_model(base, s), base.thickness_axis)
+
+
+def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], n_modes: int | None = None
+               ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """Frequencies and Q of the measured ``(family, order)`` modes from the full FEM of state ``s``
+    (:func:`extended_model`); the fluid loading is applied per flapwise mode with the FEM mode
+    shape (Rayleigh quotient, iterated to the loaded frequency).
+    """
+    t0 = time.perf_counter()
+    sc = np.asarray(s.scale, float)
+    model = extended_model(base, s)
     n = n_modes or len(base.families) + 4
     res = model.modes(n, sigma=None if not model.clamp else 0.0)
     fams = [md.family for md in res.modes]

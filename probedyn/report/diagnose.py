@@ -35,8 +35,12 @@ def _p(p: float) -> str:
 
 
 def _val(v: float, unit: str) -> str:
-    """A predicted value with its unit (frequencies through fmt_hz)."""
-    return fmt_hz(v) if unit == "Hz" else f"{v:.5g} {unit}"
+    """A predicted value with its unit (frequencies through fmt_hz, lengths in µm)."""
+    if unit == "Hz":
+        return fmt_hz(v)
+    if unit == "m":
+        return f"{v * 1e6:.5g} µm"
+    return f"{v:.5g} {unit}"
 
 
 def _fmt_param(name: str, p: dict[str, Any]) -> str:
@@ -57,6 +61,11 @@ def summary(res: dict[str, Any]) -> str:
     b = res["baseline"]
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
+    st = (b.get("structure") or {}).get("static")
+    if st:
+        lines.append(f"static spring constant: measured {st['k_meas_N_per_m']:.5g} ± {st['sigma_N_per_m']:.2g} N/m "
+                     f"(1 sigma, the FEM's discretisation {st['fem_discretisation_N_per_m']:.2g} N/m included); baseline residual "
+                     f"{st['residual_sigma']:+.2f} sigma ({100 * st['residual_rel']:+.2f} %)")
     nz = res["method"].get("noise") or {}
     if str(nz.get("estimator", "")).startswith("declared"):
         lines.append(f"noise: {'AR(1) rho = ' + format(nz['rho'], '.2f') if nz['model'] == 'AR(1)' else 'white'} as "
@@ -133,7 +142,7 @@ def summary(res: dict[str, Any]) -> str:
             f"{n} ({e:.1f})" for n, e in zip(c["causes"], c["evidence"])))
         for m in c["separating_measurements"]:
             pv = ", ".join(f"{k} {_val(v, m['unit'])}" for k, v in m["predictions"].items())
-            lines.append(f"  to separate them, measure {m['measure']} [{m['unit']}]: {pv} (noise {m['sigma']:.2g})")
+            lines.append(f"  to separate them, measure {m['measure']}: {pv} (noise {_val(m['sigma'], m['unit'])})")
         if c["pairs_left_unseparated"]:
             lines.append("  still indistinguishable: " + "; ".join(" vs ".join(p) for p in c["pairs_left_unseparated"]))
     fin = res["final"]
