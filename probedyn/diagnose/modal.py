@@ -77,6 +77,13 @@ MF_UNIFORM = 0.005  # prior sigma of the uniform relative frequency shift of a p
 #: Q_int only within a factor of 2 per mode (a blind generator's spectra, Q_int drawn per mode: 3 of its first 8
 #: nulls 'unexplained' with every frequency within its noise, docs 9.17)
 Q_INT_SCATTER = math.log(2.0)
+#: the hydrodynamic model's accuracy on a fluid-damped Q, per unit width-to-length ratio: Sader's function is the
+#: two-dimensional flow across an infinitely long plate; the three-dimensional flow about the free end, over a
+#: length of about one width, is left out, and the flapwise modes move most there. Taken as 0.25 w / L (1 sigma
+#: of ln Q; 2.5 % on a 300 x 30 um lever, 10 % on 100 x 40 um) -- an assumption of this order, not a measured
+#: coefficient (no 3D hydrodynamic reference here). Held constant for every model that has a fluid (declared or
+#: fitted): a sigma that followed the fluid's share of the damping would let a fit widen its own error bars
+HYDRO_Q_ASPECT = 0.25
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 #: the model-form amplitude's prior, in units of the probe's own 1D-3D gap (module docstring): the real root
 #: lies between the beam (anticlastic curvature and warping free, -1) and the FEM's rigid clamp (both
@@ -202,6 +209,9 @@ class ModalProblem:
         if self.static is not None:
             self.group_labels.append("static spring constant")
         base: list[CauseParam] = []
+        b0 = self.reference_baseline
+        self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
+        self.q_flap = np.asarray(d.family)[self.q_idx] == "flapwise" if len(self.q_idx) else np.zeros(0, bool)
         if len(self.q_idx):
             q0 = float(np.median(d.Q[self.q_idx]))
             base.append(CauseParam("Q_int", "1", 1.0, 1e9, q0, "intrinsic quality factor (one loss factor for all modes)",
@@ -375,7 +385,7 @@ class ModalProblem:
             Q[self.rows_of[L]] = qq
         return f, Q
 
-    def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None) -> np.ndarray:
+    def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None, fluid: bool = False) -> np.ndarray:
         d = self.data
         r = (d.freq - f * (1.0 + self.mf_offset)) / self.sigma_f
         B = self.mf_dirs * (f / self.sigma_f)[:, None]
@@ -403,6 +413,9 @@ class ModalProblem:
                 # the intrinsic loss is not one number for every mode (Q_INT_SCATTER): a model whose damping
                 # is intrinsic only holds each Q to its one Q_int within that scatter
                 sig = np.sqrt(sig**2 + Q_INT_SCATTER**2)
+            elif fluid:
+                # a fluid in the model damps its flapwise modes by Sader's 2D function, accurate to HYDRO_Q_ASPECT w/L
+                sig = np.where(self.q_flap, np.sqrt(sig**2 + self.hydro_q**2), sig)
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
         return np.where(np.isfinite(r), r, 1e6)
@@ -435,14 +448,16 @@ class ModalProblem:
 
     def residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes) if self.static is not None else None
-        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes), k)
+        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes), k,
+                            self._fluid(values, causes))
         if self.defect is not None:
             r = r + self.defect
         return r
 
     def full_residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes, full=True) if self.static is not None else None
-        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes), k)
+        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes), k,
+                               self._fluid(values, causes))
 
     def _intrinsic_only(self, values, causes) -> bool:
         """Whether the model's damping is intrinsic only (a Q_int, no fluid: its Q residuals carry the intrinsic
@@ -451,6 +466,13 @@ class ModalProblem:
         error bars."""
         return (self.q_int_scatter and "Q_int" in values
                 and self.state(values, causes, self.lengths[0]).medium[0] == 0.0)
+
+    def _fluid(self, values, causes) -> bool:
+        """Whether the model's flapwise modes are damped by a fluid (declared or a cause's)."""
+        if not len(self.q_idx):
+            return False
+        s = self.state(values, causes, self.lengths[0])
+        return s.medium[0] > 0 and s.fluid_factor > 0
 
     def physical_rms(self, r: np.ndarray) -> float:
         """RMS relative frequency error of the frequency part of a whitened residual."""
