@@ -212,3 +212,22 @@ def test_a_declared_liquid_carries_the_hydrodynamic_models_uncertainty(tmp_path,
     monkeypatch.setattr(ModalProblem, "_hydro_setup", lambda self: None)
     bare = diagnose(ModalProblem(read_measurement(path)))
     assert bare["findings"]  # the test can fail: without the directions the null is not one
+
+
+def test_a_spectrum_carries_a_declared_static_spring_constant(tmp_path):
+    """Spectra and time series are diagnosed as modal problems of their identified peaks: a [static] table in their
+    sidecar becomes the same held-out row (here on a noise-only thermal spectrum of lever C: the measured k is the
+    truth FEM's end stiffness, and the baseline holds it within 3 sigma)."""
+    from diagnose_truth_spectra import make_spectrum_case
+
+    from probedyn.diagnose.spectrum import spectrum_problem
+
+    path, _ = make_spectrum_case(tmp_path, 7002, None, "C", truth_kind="fem", declared_medium="vacuum")
+    k = static_truth("C", None, {})
+    path.write_text(path.read_text() + f"\n[static]\nspring_constant = {k!r}\nsigma = {0.01 * k!r}\n")
+    meas = read_measurement(path)
+    assert meas.static == (pytest.approx(k), pytest.approx(0.01 * k))
+    prob = spectrum_problem(meas)
+    assert prob.static is not None and prob.group_labels[-1] == "static spring constant"
+    r = prob.residuals({"Q_int": float(np.median(prob.data.Q[prob.q_idx]))} if len(prob.q_idx) else {})
+    assert abs(r[prob.n]) < 3

@@ -37,7 +37,7 @@ Tables:
   declared instead of estimated (:mod:`probedyn.diagnose.noise`).
 * ``[baseline]``: ``free`` = quantities calibrated by the baseline fit (thickness, width,
   length, modulus, density; friction: nothing else).
-* modal: ``[static]`` ``spring_constant`` [N/m] = a measured static spring constant of the lever at the
+* modal, spectrum, timeseries: ``[static]`` ``spring_constant`` [N/m] = a measured static spring constant of the lever at the
   probe's declared length, for a load at its free end along the thickness (a reference lever, a force
   standard; not a thermal tune, which infers it from mode 1), ``sigma`` [N/m] its 1-sigma uncertainty
   (default :data:`STATIC_K_REL_DEFAULT` = 5 % of it).
@@ -89,12 +89,12 @@ TABLES: dict[str, dict[str, tuple[str, ...]]] = {
     "lever": {"friction": ("k_x", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
     "sample": {"friction": ("lattice",), "force": ("E", "nu")},
     "tip": {"force": ("radius", "E", "nu")},
-    "static": {"modal": ("spring_constant", "sigma")},
+    "static": {"*": ("spring_constant", "sigma")},
 }
 KIND_TABLES = {
     "modal": ("measurement", "probe", "medium", "noise", "baseline", "static"),
-    "spectrum": ("measurement", "probe", "medium", "noise", "baseline"),
-    "timeseries": ("measurement", "probe", "medium", "noise", "baseline"),
+    "spectrum": ("measurement", "probe", "medium", "noise", "baseline", "static"),
+    "timeseries": ("measurement", "probe", "medium", "noise", "baseline", "static"),
     "friction": ("measurement", "lever", "sample", "medium", "noise", "baseline", "scans"),
     "force": ("measurement", "lever", "tip", "sample", "medium", "noise", "baseline"),
 }
@@ -216,6 +216,7 @@ class SpectrumData(Measurement):
     families: tuple[str, ...] = ()
     freq_rel: float = 1e-6
     known_mass: tuple[float, float] | None = None
+    static: tuple[float, float] | None = None  # as ModalData.static
 
 
 @dataclass
@@ -520,15 +521,9 @@ def _read_modal(side: Path, csv: Path, meta: dict, common: dict) -> ModalData:
         if key in seen:
             raise col_error(d, "order", k, f"mode {key[0]} {key[1]} appears twice (first on line {d['_lines'][seen[key]]})")
         seen[key] = k
-    static = None
-    if "static" in meta:
-        k = _num(meta, "static", "spring_constant", side, positive=True, lo=1e-6, hi=1e7, unit="N/m")
-        ks = _num(meta, "static", "sigma", side, positive=True, lo=1e-3 * k, hi=k, unit="N/m",
-                  default=STATIC_K_REL_DEFAULT * k) if "sigma" in meta["static"] else STATIC_K_REL_DEFAULT * k
-        static = (k, ks)
     return ModalData(**common, probe=probe, probe_values=values, family=fam, order=d["order"].astype(int), freq=f,
                      freq_sigma=sig, Q=Q, Q_sigma_rel=qsr, length=L, known=known, known_mass=known_mass,
-                     static=static, noise_stated=stated or has_sig, csv=d)
+                     static=_static(meta, side), noise_stated=stated or has_sig, csv=d)
 
 
 def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -> SpectrumData:
@@ -588,4 +583,16 @@ def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -
         fam.append(ff)
     rel, _ = _noise(meta, side, "frequency_rel", 1e-6, 1e-12, 0.5)
     return SpectrumData(**common, probe=probe, probe_values=values, freq=f, value=v, quantity=quantity,
-                        averages=averages, families=tuple(fam), known=known, known_mass=known_mass, freq_rel=rel)
+                        averages=averages, families=tuple(fam), known=known, known_mass=known_mass, freq_rel=rel,
+                        static=_static(meta, side))
+
+
+def _static(meta: dict, side: Path) -> tuple[float, float] | None:
+    """``[static]``: a measured static spring constant [N/m] and its 1-sigma uncertainty (default
+    :data:`STATIC_K_REL_DEFAULT` of it), or None."""
+    if "static" not in meta:
+        return None
+    k = _num(meta, "static", "spring_constant", side, positive=True, lo=1e-6, hi=1e7, unit="N/m")
+    if "sigma" not in meta["static"]:
+        return k, STATIC_K_REL_DEFAULT * k
+    return k, _num(meta, "static", "sigma", side, positive=True, lo=1e-3 * k, hi=k, unit="N/m")

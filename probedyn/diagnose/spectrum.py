@@ -1064,7 +1064,7 @@ def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) 
                    medium_name=meas.medium_name, temperature=meas.temperature, known=meas.known, free=meas.free,
                    probe=meas.probe, probe_values=meas.probe_values, family=fam, order=order, freq=f, freq_sigma=sig,
                    Q=Q, Q_sigma_rel=qrel, length=np.full(len(f), meas.probe_values.get("length", np.nan)),
-                   known_mass=meas.known_mass, noise_stated=True)
+                   known_mass=meas.known_mass, static=meas.static, noise_stated=True)
     return ModalProblem(md, bases={L: base})
 
 
