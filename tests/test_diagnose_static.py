@@ -131,6 +131,9 @@ def test_static_spring_constant_breaks_the_clamp_tip_mass_duality(tmp_path):
     # less what the model-form prior absorbs), the final model (re-solved with the FEM) holds it to its noise
     assert res["baseline"]["structure"]["static"]["residual_sigma"] < -3
     assert abs(res["final"]["residuals"][prob.n]) < 3
+    # one label per residual for the report's figure (modes, the static row, Q, the model-form prior)
+    labels = res["data"]["residual_labels"]
+    assert len(labels) == len(res["final"]["residuals"]) and labels[prob.n] == "static spring constant"
 
 
 def test_separating_measurements_name_the_static_stiffness_and_the_geometry(tmp_path):

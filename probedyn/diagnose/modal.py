@@ -635,7 +635,9 @@ class ModalProblem:
                 "noise_stated": d.noise_stated, "medium": self.medium_name or "not declared",
                 "known": sorted(self.data.known), "calibrated": list(d.free),
                 "static_spring_constant_N_per_m": None if self.static is None else list(self.static),
-                "probe": b.probe.name, "probe_mass_kg": self.probe_mass, "group_labels": list(self.group_labels)}
+                "probe": b.probe.name, "probe_mass_kg": self.probe_mass, "group_labels": list(self.group_labels),
+                "residual_labels": (list(self.group_labels[: self.n_f]) + [f"Q {self.group_labels[i]}" for i in self.q_idx]
+                                    + [f"prior: {nm}" for nm in self.mf_names])}
 
     def model_description(self) -> dict[str, Any]:
         out = []

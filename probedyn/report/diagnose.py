@@ -169,12 +169,15 @@ def plot_residuals(res: dict[str, Any], path: Path, labels: list[str] | None = N
         w = 0.4
         ax.bar(x - w / 2, before, w, label="baseline (probe FEM)", color="tab:red")
         ax.bar(x + w / 2, after, w, label=f"{name} (FEM re-solve)", color="tab:blue")
-        if labels:
+        rl = res.get("data", {}).get("residual_labels")
+        if rl and len(rl) == len(x):  # one label per residual (modes, static, Q, model-form priors)
+            ax.set_xticks(x, rl, rotation=45, ha="right", fontsize=7)
+        elif labels:
             ticks = list(labels) + ([f"Q {lb}" for lb in labels] if res.get("data", {}).get("with_Q") else [])
             # residuals beyond the measured ones: the modal noise model's model-form prior pseudo-residuals
             ticks += [f"model-form prior {i + 1}" for i in range(len(x) - len(ticks))]
             ax.set_xticks(x, ticks[: len(x)], rotation=45, ha="right", fontsize=7)
-        ax.set_xlabel("measured mode")
+        ax.set_xlabel("observable (mode frequencies, static spring constant, Q, model-form priors)" if rl else "measured mode")
     else:
         ax.plot(x, before, ".", ms=2, color="tab:red", label="baseline")
         ax.plot(x, after, ".", ms=2, color="tab:blue", label=name)
