@@ -177,7 +177,12 @@ def plot_residuals(res: dict[str, Any], path: Path, labels: list[str] | None = N
             # residuals beyond the measured ones: the modal noise model's model-form prior pseudo-residuals
             ticks += [f"model-form prior {i + 1}" for i in range(len(x) - len(ticks))]
             ax.set_xticks(x, ticks[: len(x)], rotation=45, ha="right", fontsize=7)
-        ax.set_xlabel("observable (mode frequencies, static spring constant, Q, model-form priors)" if rl else "measured mode")
+        if rl and len(rl) == len(x):
+            parts = ["mode frequencies"] + (["static spring constant"] if "static spring constant" in rl else []) \
+                + (["Q"] if any(lb.startswith("Q ") for lb in rl) else []) + ["model-form priors"]
+            ax.set_xlabel("observable (" + ", ".join(parts) + ")")
+        else:
+            ax.set_xlabel("measured mode")
     else:
         ax.plot(x, before, ".", ms=2, color="tab:red", label="baseline")
         ax.plot(x, after, ".", ms=2, color="tab:blue", label=name)
