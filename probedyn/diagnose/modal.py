@@ -66,7 +66,7 @@ from typing import Any
 
 import numpy as np
 
-from probedyn.core.errors import DataFormatError
+from probedyn.core.errors import DataFormatError, GeometryError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
 from probedyn.diagnose.modal_model import (FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve,
@@ -243,7 +243,15 @@ class ModalProblem:
         if what == "fluid":
             return b.has_top
         if what == "mass":
-            return True
+            # the point mass rides on the mass path (the line through the clamp face's centroid): a hollow
+            # section (a tube) has no material there to attach it to
+            if not hasattr(self, "_mass_path_ok"):
+                try:
+                    b.model.points_operator(b.mass_path(np.linspace(0.02, 1.0, 8)))
+                    self._mass_path_ok = True
+                except (GeometryError, ValueError):
+                    self._mass_path_ok = False
+            return self._mass_path_ok
         return True
 
     def _red(self, L) -> ReducedModal:
@@ -613,7 +621,8 @@ class ModalProblem:
         nominal = {"length": b.L, "width": b.w, "thickness": b.t}
         axis = {"length": b.length_axis, "width": b.width_axis, "thickness": b.thickness_axis}
         for q, rel in GEOMETRY_SEPARATING.items():
-            if q not in self.known:  # a known or calibrated dimension is no cause's to change
+            # a known or calibrated dimension is no cause's to change; a probe without it (a tube's width) has none
+            if q not in self.known and q in b.probe.params:
                 out.append({"measure": f"lever {q} (microscopy)", "value": nominal[q] * float(s.scale[axis[q]]),
                             "sigma": rel * nominal[q], "unit": "m"})
         if not cand:

@@ -340,6 +340,14 @@ class FEMBaseline:
         self.L = float(self.extent[self.axis])
         if not m.clamp:
             raise DataFormatError(f"probe '{probe.name}' has no clamp: the modal diagnosis needs a clamped probe")
+        lt = getattr(m, "lumped_tip", None)
+        if lt is not None:
+            # an AugmentedModel's tip is a mass on springs with degrees of freedom off the mesh: its modes are
+            # not the mesh's (the piezotube's lowest, 2250 Hz, are the tip bouncing on its holder spring), and
+            # the Ritz reduction, the causes' matrices and the re-solve act on the mesh only
+            raise DataFormatError(f"probe '{probe.name}' carries a lumped tip (a {lt.mass:.3g} kg mass on holder springs, "
+                                  "degrees of freedom off the mesh), which the modal diagnosis cannot reduce or re-solve: "
+                                  "set tip = \"none\" in [probe] to diagnose the probe without it")
         self.clamp_face = m.clamp[0]
         self.E_ref = _iso_E(m)
         # clamp-face geometry
