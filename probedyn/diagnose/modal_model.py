@@ -52,7 +52,9 @@ Extended model (:class:`ModalState`): what the causes change --
 
 Reduced model (:class:`ReducedModal`): the Ritz basis of the lowest FEM modes of the baseline,
 plus static correction shapes for the clamp-face support (the clamped modes' root reactions
-applied to the foundation-supported body) and for point masses on the mass path, M-orthonormalised.
+applied to the foundation-supported body) and for point masses on the mass path, M-orthonormalised;
+a smart probe's lumped tip (a mass on the holder springs, ``fem/augmented.py``) keeps its three
+coordinates beside the basis, and the static end stiffness (:func:`end_stiffness`) has its own shapes.
 A state is evaluated by projecting every term once (cached) and solving a small dense
 eigenproblem; measured modes are followed by their overlap with the baseline modes. The
 final extended model is re-solved with the full FEM (:func:`full_solve`).
@@ -81,6 +83,7 @@ from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.elasticity import assemble_mass as el_mass
 from probedyn.fem.materials import Material, get_material
+from probedyn.fem.augmented import AugmentedModel
 from probedyn.fem.model import ElasticModel, PointMass
 from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
 
@@ -244,6 +247,11 @@ def stretched(m0: ElasticModel, sc, cls=ElasticModel, tip_map=None, **kw) -> Ela
     args = dict(regions={name: (mat, R) for name, mat, R in zip(m0.region_names, m0.materials, m0.orientations)},
                 clamp=m0.clamp, point_masses=m0.point_masses, springs=m0.springs, tip=m0.tip,
                 beam_axis=m0.beam_axis, name=m0.name)
+    lt = getattr(m0, "lumped_tip", None)
+    if lt is not None:  # a smart probe's tip: a mass on the holder springs, off the mesh (fem/augmented.py)
+        if not issubclass(cls, AugmentedModel):
+            cls = AugmentedModel
+        args["lumped_tip"] = lt
     args.update(kw)
     return cls(bundle, **args)
 
@@ -340,14 +348,6 @@ class FEMBaseline:
         self.L = float(self.extent[self.axis])
         if not m.clamp:
             raise DataFormatError(f"probe '{probe.name}' has no clamp: the modal diagnosis needs a clamped probe")
-        lt = getattr(m, "lumped_tip", None)
-        if lt is not None:
-            # an AugmentedModel's tip is a mass on springs with degrees of freedom off the mesh: its modes are
-            # not the mesh's (the piezotube's lowest, 2250 Hz, are the tip bouncing on its holder spring), and
-            # the Ritz reduction, the causes' matrices and the re-solve act on the mesh only
-            raise DataFormatError(f"probe '{probe.name}' carries a lumped tip (a {lt.mass:.3g} kg mass on holder springs, "
-                                  "degrees of freedom off the mesh), which the modal diagnosis cannot reduce or re-solve: "
-                                  "set tip = \"none\" in [probe] to diagnose the probe without it")
         self.clamp_face = m.clamp[0]
         self.E_ref = _iso_E(m)
         # clamp-face geometry
@@ -394,7 +394,8 @@ class FEMBaseline:
         self.prism = None  # (L, w, t, E, nu, rho) of the beam, when the probe is a plain isotropic prism
         m = self.model
         mats = list(m.materials)
-        if m.point_masses or m.springs or not all(mt.is_isotropic(rtol=1e-6) for mt in mats):
+        if (m.point_masses or m.springs or getattr(m, "lumped_tip", None) is not None
+                or not all(mt.is_isotropic(rtol=1e-6) for mt in mats)):
             return None, None, "no beam model (not a plain isotropic prism)"
         consts = {(round(mt.isotropic_constants()[0], 3), round(mt.isotropic_constants()[1], 9), mt.density)
                   for mt in mats}
@@ -646,6 +647,10 @@ class ReducedModal:
     * ``prestress``: ``K^-1 G phi_i``;
     * ``crystal``: ``K^-1 dK phi_i`` with ``dK`` the stiffness of ``C_crystal - C_iso``
       (:func:`crystal_delta`; only when a region has a crystal);
+    * ``lumped``: for a smart probe whose tip is a mass on the holder springs (``fem/augmented.py``, three
+      coordinates off the mesh), the static responses to unit forces at the springs' attachment; every state
+      of such a probe uses them, and its reduced matrices carry the tip's three coordinates
+      (:meth:`_Sub.augment`), as ``AugmentedModel.augmented`` does for the FEM;
     * ``static``: the static response to a uniform traction on the ``free_end`` face along the
       thickness axis (only for :meth:`static_stiffness`, never in an eigenproblem's basis): with it
       the reduced static compliance of the baseline is the FEM's to round-off; ``static_clamp``: the
@@ -661,7 +666,7 @@ class ReducedModal:
     written as quadratic forms on the basis.
     """
 
-    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal", "static", "static_clamp")
+    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal", "lumped", "static", "static_clamp")
 
     def __init__(self, base: FEMBaseline, n_modes: int | None = None, n_mass_corr: int = 4) -> None:
         t0 = time.perf_counter()
@@ -683,6 +688,7 @@ class ReducedModal:
 
         blocks: dict[str, list[np.ndarray]] = {b: [] for b in self.BLOCKS}
         A_end = None
+        A_lt = None
         try:
             sh = Phi0.reshape(m.n_nodes, 3, nm)
             blocks["modes"].append(Phi0)
@@ -749,6 +755,11 @@ class ReducedModal:
 
                 dK = el.assemble_stiffness(m.mesh, m.elem_region, parts, m.orientations, element=m.element, basis=m.basis)
                 blocks["crystal"].append(ksolve(dK @ Phi0))
+            # a lumped tip's attachment: unit forces there (the springs pull the mesh at it)
+            lt = getattr(m, "lumped_tip", None)
+            if lt is not None:
+                A_lt = m.attachment(lt.attach).tocsr()
+                blocks["lumped"].append(ksolve(np.asarray(A_lt.T.todense())))
             # the static end load (uniform traction on the free-end face, thickness direction)
             # and, for a compliant clamp, the foundation's face displacement under its root reaction
             A_end = _end_operator(m, base.thickness_axis)
@@ -836,6 +847,8 @@ class ReducedModal:
         self._path_xi = np.linspace(0.0, 1.0, 101)
         self._path_ops: np.ndarray | None = None
         self.end_op = None if A_end is None else np.asarray(A_end @ P).ravel()  # (r,) face-mean deflection
+        self.lumped_tip = getattr(m, "lumped_tip", None)
+        self.A_lt_r = None if A_lt is None else np.asarray(A_lt @ P)  # (3, r) the lumped tip's attachment
         self.build_s = time.perf_counter() - t0
 
     # -- block sub-bases ----------------------------------------------------------------------
@@ -855,6 +868,13 @@ class ReducedModal:
         if s.terms:  # a cause's own matrix: all shapes (but the static load's, which is for static_stiffness)
             need = [b for b in ReducedModal.BLOCKS if not b.startswith("static")]
         return tuple(need)
+
+    def _blocks(self, s: ModalState) -> tuple[str, ...]:
+        """:meth:`blocks_for` plus, for a probe with a lumped tip, its attachment's shapes (every state)."""
+        b = self.blocks_for(s)
+        if self.lumped_tip is not None and "lumped" not in b:
+            b = tuple(x for x in self.BLOCKS if x in b or x == "lumped")
+        return b
 
     def _subspace(self, blocks: tuple[str, ...]) -> "_Sub":
         hit = self._sub.get(blocks)
@@ -934,7 +954,7 @@ class ReducedModal:
         (upper-bound) stiffness, checked against :func:`full_static_stiffness` in the tests."""
         if self.end_op is None:
             return math.nan
-        need = set(self.blocks_for(s)) | {"static"}
+        need = set(self._blocks(s)) | {"static"}
         if "clamp" in need:
             need.add("static_clamp")
         blocks = tuple(b for b in self.BLOCKS if b in need)
@@ -949,12 +969,15 @@ class ReducedModal:
 
     def solve(self, s: ModalState, needed: list[tuple[str, int]]) -> tuple[np.ndarray, np.ndarray]:
         """Frequencies [Hz] and quality factors of the ``(family, order)`` modes in state ``s``."""
-        blocks = self.blocks_for(s)
+        blocks = self._blocks(s)
         sub = self._subspace(blocks)
         K, M = sub.matrices(s, penalty="clamp" in blocks)
+        q = K.shape[0]
+        if self.lumped_tip is not None:
+            K, M = sub.augment(K, M)
         nlow = min(K.shape[0], max(2 * len(self.base.families), 12))
         lam, V = _lowest_pairs(K, M, nlow, self.shift)
-        fams = sub.families_of(V[:, :nlow])
+        fams = sub.families_of(V[:q, :nlow])
         vt = np.zeros((V.shape[0], len(needed)))
         lt = np.zeros(len(needed))
         for k, (fa, o) in enumerate(needed):
@@ -974,7 +997,7 @@ class ReducedModal:
                 if fa != "flapwise" or lt[k] <= 0:
                     continue
                 a = vt[:, k]
-                f[k], Q[k] = _fluid_mode(float(a @ K @ a), float(a @ M @ a), area * float(a @ sub.top @ a),
+                f[k], Q[k] = _fluid_mode(float(a @ K @ a), float(a @ M @ a), area * float(a[:q] @ sub.top @ a[:q]),
                                          math.sqrt(lt[k]), w, rho_f, eta_f, s.fluid_factor, s.Q_int)
         f[lt == 0] = np.nan
         return f, Q
@@ -996,6 +1019,7 @@ class _Sub:
         self.G = P(red.G_r)
         self.top = None if red.top_r is None else P(red.top_r)
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
+        self.A_lt = None if red.A_lt_r is None else red.A_lt_r @ T
         self._Ks = None
         self._Ks_tip = None
         self._Kc: dict[bool, np.ndarray | None] = {}
@@ -1090,6 +1114,24 @@ class _Sub:
                 M = M + f * self.term(t)
         return _sym(K), _sym(M)
 
+    def augment(self, K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``K``, ``M`` with the lumped tip's three coordinates (``AugmentedModel.augmented``): the tip mass m on
+        the diagonal springs K_t to the attachment A, ``[[K + A^T K_t A, -A^T K_t], [-K_t A, K_t]]`` and
+        ``diag(M, m I)``. The springs' attachment is a face average, which an affine stretch leaves unchanged."""
+        lt = self.red.lumped_tip
+        Kt = np.diag(np.asarray(lt.stiffness, float))
+        A = self.A_lt
+        q = K.shape[0]
+        Ka = np.zeros((q + 3, q + 3))
+        Ka[:q, :q] = K + A.T @ Kt @ A
+        Ka[:q, q:] = -A.T @ Kt
+        Ka[q:, :q] = -Kt @ A
+        Ka[q:, q:] = Kt
+        Ma = np.zeros((q + 3, q + 3))
+        Ma[:q, :q] = M
+        Ma[q:, q:] = lt.mass * np.eye(3)
+        return Ka, Ma
+
     def families_of(self, V: np.ndarray) -> list[str]:
         q = (V[None, :, :] * (self.forms @ V)).sum(axis=1)  # (5, k)
         shares = q[:-1] / q[-1]
@@ -1171,7 +1213,7 @@ def _family_forms(model: ElasticModel, P: np.ndarray, n_slices: int = 24) -> dic
 # ------------------------------------------------------------------------------------------
 
 
-class _ExtendedModel(ElasticModel):
+class _ExtendedModel(AugmentedModel):
     """An :class:`ElasticModel` with extra global matrices (clamp foundation, prestress, cause terms)."""
 
     def __init__(self, *args, extra_K=None, extra_M=None, **kw) -> None:
