@@ -311,7 +311,9 @@ class ModalProblem:
             rho_t = float(m.materials[0].density) * b.t
             for k, (i, (fa, o)) in enumerate(zip(self.rows_of[L], need)):
                 load[i] = -0.5 * share[k] * self.hydro_q
-                if fa != "flapwise" or share[k] <= 0:
+                # the top face's share of the modal mass needs the section's one density and thickness: a plain
+                # prism only (a smart probe's layers: the load's size alone)
+                if fa != "flapwise" or share[k] <= 0 or getattr(b, "prism", None) is None:
                     continue
                 a = b.shapes[:, b.index(fa, o)]
                 r = min(rho_t * float(a @ (S @ a)) / float(a @ (M @ a)), 1.0)

@@ -749,8 +749,8 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     # peak (the tip-motion example: two unresolved flapwise lines, labelled "not a mode" by a hypothesis
     # 44 % stiffer, whose empty fit scored 0 against the nominal labels' few chi-square units)
     placed = [o for o in options if any(t["accepted"] for t in o[1])]
-    if placed and len(placed) < len(options):
-        options = placed if any(o is options[0] for o in placed) else [options[0], *placed]
+    if placed:
+        options = placed
     from probedyn.diagnose.engine import EVIDENCE_MARGIN
 
     scores: list[tuple[float, str | None, dict]] = []
