@@ -288,8 +288,6 @@ class ModalProblem:
         d = self.data
         if d.medium is None or d.medium[0] <= 0 or not self.reference_baseline.has_top:
             return
-        from probedyn.diagnose.fem_terms import directional, face_mass_scalar
-
         load = np.zeros(self.n)
         gap = np.zeros(self.n)
         for L in self.lengths:
@@ -303,20 +301,13 @@ class ModalProblem:
             ok = np.isfinite(f_f) & np.isfinite(f_v) & (f_v > 0)
             share = np.clip(np.where(ok, 1.0 - (f_f / np.where(ok, f_v, 1.0)) ** 2, 0.0), 0.0, 0.999)
             b = self.bases[L]
-            m = b.model
-            _, M = m.assemble()
-            e = np.zeros(3)
-            e[b.thickness_axis] = 1.0
-            S = directional(face_mass_scalar(m, "top"), np.outer(e, e))
-            rho_t = float(m.materials[0].density) * b.t
             for k, (i, (fa, o)) in enumerate(zip(self.rows_of[L], need)):
                 load[i] = -0.5 * share[k] * self.hydro_q
                 # the top face's share of the modal mass needs the section's one density and thickness: a plain
                 # prism only (a smart probe's layers: the load's size alone)
                 if fa != "flapwise" or share[k] <= 0 or getattr(b, "prism", None) is None:
                     continue
-                a = b.shapes[:, b.index(fa, o)]
-                r = min(rho_t * float(a @ (S @ a)) / float(a @ (M @ a)), 1.0)
+                r = _top_share(b, fa, o)
                 x = share[k] / (1.0 - share[k])
                 gap[i] = -0.5 * math.log((1.0 + x / r) / (1.0 + x))
         floor = 0.1 * float(np.median(self.sigma_f / d.freq))
@@ -662,6 +653,26 @@ class ModalProblem:
         return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' ({elem})",
                 "fits": "Ritz reduction of the FEM (modes, stretch sensitivities, clamp-support, mass and prestress "
                         "shapes); final model re-solved with the FEM", "fems": out}
+
+
+def _top_share(b: FEMBaseline, fa: str, o: int) -> float:
+    """The top face's share ``rho t int_top phi_z^2 dA / phi^T M phi`` of FEM mode (fa, o)'s modal mass (1 for a
+    uniform Euler-Bernoulli beam; less where the section's rotation carries kinetic energy), kept with the
+    baseline (the spectra's labellings build many problems on one)."""
+    cache = b.__dict__.setdefault("_top_share", {})
+    if (fa, o) not in cache:
+        from probedyn.diagnose.fem_terms import directional, face_mass_scalar
+
+        m = b.model
+        _, M = m.assemble()
+        if "top_zz" not in cache:
+            e = np.zeros(3)
+            e[b.thickness_axis] = 1.0
+            cache["top_zz"] = directional(face_mass_scalar(m, "top"), np.outer(e, e))
+        S = cache["top_zz"]
+        a = b.shapes[:, b.index(fa, o)]
+        cache[(fa, o)] = min(float(m.materials[0].density) * b.t * float(a @ (S @ a)) / float(a @ (M @ a)), 1.0)
+    return cache[(fa, o)]
 
 
 def _probe_overrides(probe, values: dict) -> dict:
