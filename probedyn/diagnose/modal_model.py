@@ -719,15 +719,18 @@ class ReducedModal:
             cd = m.clamped_dofs
             Sface = face_mass_scalar(m, base.clamp_face)
             nn = np.outer(base.clamp_normal, base.clamp_normal)
-            Sd = directional(Sface, np.eye(3))[cd][:, cd].tocsc()
+            # the face mass factorised once, its normal and tangential projections built once (every
+            # foundation shape below solves with them)
+            Sd_lu = sp.linalg.splu(directional(Sface, np.eye(3))[cd][:, cd].tocsc())
+            Dparts = [sp.kron(sp.identity(m.n_nodes), sp.csr_matrix(D), format="csr")[cd][:, cd]
+                      for D in (nn, np.eye(3) - nn)]
 
             def foundation_shapes(R: np.ndarray) -> list[np.ndarray]:
                 """The body's static extension of the face displacement a Winkler foundation takes
                 under the root reactions ``R`` (columns), normal and tangential parts."""
                 out = []
-                for D in (nn, np.eye(3) - nn):
-                    Dfull = sp.kron(sp.identity(m.n_nodes), sp.csr_matrix(D), format="csr")[cd][:, cd]
-                    uf = np.asarray(sp.linalg.spsolve(Sd, Dfull @ R[cd])).reshape(len(cd), -1)
+                for Dfull in Dparts:
+                    uf = np.asarray(Sd_lu.solve(np.asarray(Dfull @ R[cd]))).reshape(len(cd), -1)
                     u = np.zeros((N, R.shape[1]))
                     u[cd] = uf
                     # static extension into the body with the face held at uf: K_ff u_f = -K_fc u_c

@@ -174,20 +174,28 @@ def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float, averages: 
     bg = np.concatenate([pw[:max(3, len(pw) // 10)], pw[-max(3, len(pw) // 10):]])
     B0 = max(float(np.median(bg)), 1e-300)
     A0 = max(p0 / Q0**2, 1e-300)
+    u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B0) - 3])
+    lo = [fw[0], math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[3] - 10]
+    hi = [fw[-1], math.log10(Q0) + 4, u0[2] + 8, u0[3] + 4, u0[3] + 4]
+    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm, 0.3, 0.3, 0.3, 0.3], s_log, averages)
+    return _line_result(r, fw, df, (fw[0], fw[-1]))
+
+
+def _sho_fit(fw, pw, u0, lo, hi, x_scale, s_log: float, averages: int | None, tails=0.0):
+    """One SHO line ``u = (f0, log10 Q, log10 A, log10 white, log10 1/f at fw[0])`` on a white + 1/f background
+    (plus fixed ``tails``) fitted to the periodogram ``pw`` at ``fw``: Gamma deviance with the number of averages,
+    else log-space least squares with the scatter ``s_log``."""
+    wf0 = fw[0]
 
     def model(u):
-        return sho_psd(fw, u[0], 10 ** u[1], 10 ** u[2]) + 10 ** u[3] + 10 ** u[4] * (fw[0] / fw)
+        return sho_psd(fw, u[0], 10 ** u[1], 10 ** u[2]) + 10 ** u[3] + 10 ** u[4] * (wf0 / fw) + tails
 
     def res(u):
         if averages:
             return gamma_deviance_residuals(pw, model(u), averages)
         return (np.log(model(u)) - np.log(np.maximum(pw, 1e-300))) / s_log
 
-    u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B0) - 3])
-    lo = [fw[0], math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[3] - 10]
-    hi = [fw[-1], math.log10(Q0) + 4, u0[2] + 8, u0[3] + 4, u0[3] + 4]
-    r = least_squares(res, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=[fwhm, 0.3, 0.3, 0.3, 0.3])
-    return _line_result(r, fw, df, (fw[0], fw[-1]))
+    return least_squares(res, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=x_scale)
 
 
 def _refit_line(freq, psd, first: dict, s_log: float, averages: int | None, others: list[dict], df: float) -> dict:
@@ -213,20 +221,10 @@ def _refit_line(freq, psd, first: dict, s_log: float, averages: int | None, othe
     fw, pw, tails = fw[keep], pw[keep], tails[keep]
     A0 = first["area_m2"] * 2 / (math.pi * f0 * Q0)
     B0, B1 = first["white_floor"], max(first["one_over_f_at_window_start"], 1e-300)
-    wf0 = fw[0]
-
-    def model(u):
-        return sho_psd(fw, u[0], 10 ** u[1], 10 ** u[2]) + 10 ** u[3] + 10 ** u[4] * (wf0 / fw) + tails
-
-    def res(u):
-        if averages:
-            return gamma_deviance_residuals(pw, model(u), averages)
-        return (np.log(model(u)) - np.log(np.maximum(pw, 1e-300))) / s_log
-
     u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B1)])
     lo = [f0 - 2 * fwhm, math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[4] - 8]
     hi = [f0 + 2 * fwhm, u0[1] + 4, u0[2] + 8, u0[3] + 4, u0[4] + 4]
-    r = least_squares(res, np.clip(u0, lo, hi), bounds=(lo, hi), x_scale=[fwhm / 4, 0.3, 0.3, 0.3, 0.3])
+    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm / 4, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails)
     return _line_result(r, fw, df, first["window_Hz"], others_masked=True)
 
 
