@@ -13,8 +13,6 @@ error. Session 14's predictive score claimed such second causes on single-effect
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -80,32 +78,3 @@ def test_the_first_cause_and_non_predictive_problems_keep_their_score():
     d = {"cause": B, "fit": _fit((A, B), chi2=20.0, **EXT), "k": 1, "dchi2": 30.0}
     _evidence(d, ref, _cv(False), True)
     assert d["evidence"] == pytest.approx(10.0) and "evidence_plain" not in d
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="known since before session 33 (failing on b215658 too): a second cause (thickness "
-                   "error, or a point mass) absorbs the difference between the truth's uniform-beam fluid loading and the "
-                   "diagnosis' 3D Rayleigh loading of lever B's higher flapwise modes, which a declared fluid carries as "
-                   "model form (session 33) but a fitted one does not; docs/diagnose.md section 8")
-def test_a_fluid_loaded_lever_is_fluid_loading_alone():
-    """Seed 1015 of the modal rate study (lever B, 100 x 40 x 10 um, in ethanol, medium not declared;
-    truth: probedyn's FEM on a finer mesh plus the test module's own uniform-beam Sader relation). The
-    fluid model here (Rayleigh quotient with the FEM mode shape) and the truth's differ by ~1 % of the
-    fluid shift (residual chi^2 48 for 10 dof after the fluid cause); a thickness error then took
-    Delta chi^2 30 by trading against the fluid density (rho_f 805 -> 1046 kg/m^3, truth 789) and its
-    predictive held-out evidence was +22 nats, the plain held-out -50: it is no longer a finding."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    import tempfile
-
-    from diagnose_truth import make_modal_case
-
-    from probedyn.diagnose.engine import diagnose
-    from probedyn.diagnose.formats import read_measurement
-    from probedyn.diagnose.modal import ModalProblem
-
-    with tempfile.TemporaryDirectory() as tmp:
-        path, truth = make_modal_case(Path(tmp), 1015, "fluid-loading", "B", truth_kind="fem", declared_medium=None)
-        res = diagnose(ModalProblem(read_measurement(path)))
-    assert [f["cause"] for f in res["findings"]] == ["fluid-loading"]
-    rho = res["findings"][0]["parameters"]["rho_f"]
-    assert abs(rho["value"] - truth["params"]["rho_f"]) < 0.05 * truth["params"]["rho_f"]  # ethanol, 789 kg/m^3

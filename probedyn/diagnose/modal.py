@@ -35,7 +35,9 @@ crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 
 **A declared fluid** (water, ethanol; not air on a silicon lever, where it is below a tenth of the noise) adds two
 directions of the same kind (:meth:`ModalProblem._hydro_setup`): the size of Sader's 2D load
 (:data:`HYDRO_Q_ASPECT` w / L) and whether it loads the 3D mode's transverse motion or, as the uniform-beam form
-does, its whole modal mass; a fluid model's flapwise Q carries the first as a floor. **A measured static spring
+does, its whole modal mass; a fluid model's flapwise Q carries the first as a floor. The second follows the
+model's own fluid, evaluated with every solve (its added-mass ratio and top-face share per mode): a fitted fluid
+(no medium declared) carries it too. **A measured static spring
 constant** (``[static]``) is one more row of the same profile (:meth:`ModalProblem._static_setup`).
 
 The amplitude enters linearly and is profiled in closed form in every residual evaluation
@@ -69,6 +71,7 @@ import numpy as np
 from probedyn.core.errors import DataFormatError, GeometryError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
+from probedyn.diagnose.hydrodynamics import MEDIA
 from probedyn.diagnose.modal_model import (FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve,
                                            full_static_stiffness)
 
@@ -209,6 +212,7 @@ class ModalProblem:
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
         b0 = self.reference_baseline
         self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
+        self.gap_col = None  # the column of the fluid's 3D-mode vs uniform-beam direction, if any
         self._hydro_setup()
         self._static_setup()
         # groups: modes, the static spring constant, the modes' Q, and the model-form prior (-1: never held out)
@@ -284,40 +288,50 @@ class ModalProblem:
         In water a few % of load error moves flapwise frequencies by percents, far beyond their noise: without
         these every declared liquid would read as an excess load or a mass. Each is added only where it can
         matter (its largest shift at least a tenth of the median relative frequency noise: not for air on a
-        silicon lever, ~1e-5)."""
+        silicon lever, ~1e-5). The load's size is a declared medium's only (a fitted fluid's density is that
+        size). The gap follows the model's own fluid -- the declared one, a fitted liquid (no medium declared:
+        sized for water here), an excess load -- and is evaluated with each solve (:meth:`predict`'s ``gap``): a
+        model without a fluid has none, and its prior pseudo-residual is then zero."""
         d = self.data
-        if d.medium is None or d.medium[0] <= 0 or not self.reference_baseline.has_top:
+        self.gap_col = None
+        if not self.reference_baseline.has_top:
             return
+        declared = d.medium is not None and d.medium[0] > 0
+        # the largest fluid a model of this problem can carry: the declared one; undeclared, a liquid (the
+        # fluid-loading cause fits density and viscosity); a declared vacuum, its residual gas (air, 1.2 bar)
+        probe_fluid = (d.medium if declared else MEDIA["water"] if d.medium is None
+                       else (1.2 * MEDIA["air"][0], MEDIA["air"][1]))
         load = np.zeros(self.n)
         gap = np.zeros(self.n)
         for L in self.lengths:
-            need = self.need_of[L]
             s_f = self.state({}, (), L)
-            s_v = s_f.copy()
-            s_v.medium = (0.0, s_f.medium[1])
-            red = self._red(L)
-            f_f, _ = red.solve(s_f, need)
-            f_v, _ = red.solve(s_v, need)
-            ok = np.isfinite(f_f) & np.isfinite(f_v) & (f_v > 0)
-            share = np.clip(np.where(ok, 1.0 - (f_f / np.where(ok, f_v, 1.0)) ** 2, 0.0), 0.0, 0.999)
-            b = self.bases[L]
-            for k, (i, (fa, o)) in enumerate(zip(self.rows_of[L], need)):
-                load[i] = -0.5 * share[k] * self.hydro_q
-                # the top face's share of the modal mass needs the section's one density and thickness: a plain
-                # prism only (a smart probe's layers: the load's size alone)
-                if fa != "flapwise" or share[k] <= 0 or getattr(b, "prism", None) is None:
-                    continue
-                r = _top_share(b, fa, o)
-                x = share[k] / (1.0 - share[k])
-                gap[i] = -0.5 * math.log((1.0 + x / r) / (1.0 + x))
+            s_f.medium = tuple(probe_fluid)
+            h: dict = {}
+            self._red(L).solve(s_f, self.need_of[L], hydro=h)
+            x = np.nan_to_num(h.get("x", np.zeros(len(self.need_of[L]))))
+            load[self.rows_of[L]] = -0.5 * x / (1.0 + x) * self.hydro_q
+            gap[self.rows_of[L]] = self._gap(self.bases[L], x, h.get("r"))
         floor = 0.1 * float(np.median(self.sigma_f / d.freq))
-        if np.max(np.abs(load)) >= floor:
+        if declared and np.max(np.abs(load)) >= floor:
             self.mf_dirs = np.column_stack([self.mf_dirs, load])
             self.mf_names = self.mf_names + ("hydrodynamic load (Sader 2D)",)
         if np.max(np.abs(gap)) >= floor:
-            self.mf_offset = self.mf_offset - MF_CENTRE * gap
-            self.mf_dirs = np.column_stack([self.mf_dirs, MF_SCALE * gap])
+            # its size follows the model's own fluid (declared or fitted): filled in each evaluation
+            self.gap_col = self.mf_dirs.shape[1]
+            self.mf_dirs = np.column_stack([self.mf_dirs, np.zeros(self.n)])
             self.mf_names = self.mf_names + ("fluid on the 3D mode or the uniform beam",)
+
+    @staticmethod
+    def _gap(b, x: np.ndarray, r: np.ndarray | None) -> np.ndarray:
+        """``g_i = ln(f_uniform,i / f_3D,i) = -ln((1 + x_i / r_i) / (1 + x_i)) / 2`` per mode (``x_i`` the fluid's
+        added-mass ratio, ``r_i`` the top face's share of the modal mass; :meth:`_hydro_setup`); 0 where there is no
+        fluid load or the probe is not a plain prism (the share needs the section's one density and thickness)."""
+        g = np.zeros(len(x))
+        if r is None or getattr(b, "prism", None) is None:
+            return g
+        ok = np.isfinite(x) & (x > 0) & np.isfinite(r) & (r > 0)
+        g[ok] = -0.5 * np.log((1.0 + x[ok] / r[ok]) / (1.0 + x[ok]))
+        return g
 
     def _static_setup(self) -> None:
         """A measured static spring constant (``[static]``; :func:`~probedyn.diagnose.modal_model.end_stiffness`'s
@@ -441,23 +455,39 @@ class ModalProblem:
             c.effect(values, s)
         return s
 
-    def predict(self, values, causes=(), full: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    def predict(self, values, causes=(), full: bool = False, gap: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Frequencies and Q of the measured rows; ``gap`` (an array of n, filled when given): the model's own
+        fluid's 3D-mode vs uniform-beam gap per row (:meth:`_gap`)."""
         f = np.full(self.n, np.nan)
         Q = np.full(self.n, np.nan)
         for L in self.lengths:
             s = self.state(values, causes, L)
+            h: dict = {}
             if full:
-                ff, qq, _ = full_solve(self.bases[L], s, self.need_of[L])
+                ff, qq, info = full_solve(self.bases[L], s, self.need_of[L])
+                h = info["hydro"]
             else:
-                ff, qq = self._red(L).solve(s, self.need_of[L])
+                ff, qq = self._red(L).solve(s, self.need_of[L], hydro=h if gap is not None else None)
             f[self.rows_of[L]] = ff
             Q[self.rows_of[L]] = qq
+            if gap is not None:
+                gap[self.rows_of[L]] = self._gap(self.bases[L], np.asarray(h.get("x", np.full(len(ff), np.nan))),
+                                                 h.get("r"))
         return f, Q
 
-    def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None, fluid: bool = False) -> np.ndarray:
+    def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None, fluid: bool = False,
+                   gap: np.ndarray | None = None) -> np.ndarray:
         d = self.data
-        r = (d.freq - f * (1.0 + self.mf_offset)) / self.sigma_f
-        B = self.mf_dirs * (f / self.sigma_f)[:, None]
+        offset, dirs = self.mf_offset, self.mf_dirs
+        if self.gap_col is not None and gap is not None:
+            # the fluid's 3D-mode vs uniform-beam gap of this model's own fluid: prior N(MF_CENTRE, MF_SCALE^2)
+            # with the sign turned (0: the 3D load, 1: the uniform beam's)
+            offset = offset - MF_CENTRE * gap
+            dirs = dirs.copy()
+            dirs[:, self.gap_col] = MF_SCALE * gap
+        r = (d.freq - f * (1.0 + offset)) / self.sigma_f
+        B = dirs * (f / self.sigma_f)[:, None]
         if self.static is not None:  # the static spring constant: one more row of the same linear profile
             r = np.append(r, (self.static[0] - k * (1.0 + self.static_offset)) / self.static_sigma)
             row = np.zeros((1, B.shape[1]))
@@ -519,16 +549,18 @@ class ModalProblem:
 
     def residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes) if self.static is not None else None
-        r = self._residuals(*self.predict(values, causes), self._intrinsic_only(values, causes), k,
-                            self._fluid(values, causes))
+        gap = np.zeros(self.n) if self.gap_col is not None else None
+        r = self._residuals(*self.predict(values, causes, gap=gap), self._intrinsic_only(values, causes), k,
+                            self._fluid(values, causes), gap)
         if self.defect is not None:
             r = r + self.defect
         return r
 
     def full_residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes, full=True) if self.static is not None else None
-        return self._residuals(*self.predict(values, causes, full=True), self._intrinsic_only(values, causes), k,
-                               self._fluid(values, causes))
+        gap = np.zeros(self.n) if self.gap_col is not None else None
+        return self._residuals(*self.predict(values, causes, full=True, gap=gap), self._intrinsic_only(values, causes),
+                               k, self._fluid(values, causes), gap)
 
     def _intrinsic_only(self, values, causes) -> bool:
         """Whether the model's damping is intrinsic only (a Q_int, no fluid: its Q residuals carry the intrinsic
@@ -653,26 +685,6 @@ class ModalProblem:
         return {"baseline": f"3D FEM of probe '{self.reference_baseline.probe.name}' ({elem})",
                 "fits": "Ritz reduction of the FEM (modes, stretch sensitivities, clamp-support, mass and prestress "
                         "shapes); final model re-solved with the FEM", "fems": out}
-
-
-def _top_share(b: FEMBaseline, fa: str, o: int) -> float:
-    """The top face's share ``rho t int_top phi_z^2 dA / phi^T M phi`` of FEM mode (fa, o)'s modal mass (1 for a
-    uniform Euler-Bernoulli beam; less where the section's rotation carries kinetic energy), kept with the
-    baseline (the spectra's labellings build many problems on one)."""
-    cache = b.__dict__.setdefault("_top_share", {})
-    if (fa, o) not in cache:
-        from probedyn.diagnose.fem_terms import directional, face_mass_scalar
-
-        m = b.model
-        _, M = m.assemble()
-        if "top_zz" not in cache:
-            e = np.zeros(3)
-            e[b.thickness_axis] = 1.0
-            cache["top_zz"] = directional(face_mass_scalar(m, "top"), np.outer(e, e))
-        S = cache["top_zz"]
-        a = b.shapes[:, b.index(fa, o)]
-        cache[(fa, o)] = min(float(m.materials[0].density) * b.t * float(a @ (S @ a)) / float(a @ (M @ a)), 1.0)
-    return cache[(fa, o)]
 
 
 def _probe_overrides(probe, values: dict) -> dict:

@@ -73,7 +73,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg  # noqa: F401  (sp.linalg)
-from scipy.optimize import brentq, linear_sum_assignment
+from scipy.optimize import brentq
 
 from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, SolverError
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
@@ -970,8 +970,11 @@ class ReducedModal:
             return math.nan  # beyond buckling: no static equilibrium
         return 1.0 / c if c > 0 else math.nan
 
-    def solve(self, s: ModalState, needed: list[tuple[str, int]]) -> tuple[np.ndarray, np.ndarray]:
-        """Frequencies [Hz] and quality factors of the ``(family, order)`` modes in state ``s``."""
+    def solve(self, s: ModalState, needed: list[tuple[str, int]], hydro: dict | None = None
+              ) -> tuple[np.ndarray, np.ndarray]:
+        """Frequencies [Hz] and quality factors of the ``(family, order)`` modes in state ``s``; ``hydro`` (a
+        dict, filled when given): per mode the fluid's added-mass ratio ``x`` and the top face's share ``r``
+        of the vacuum mode's modal mass (:func:`top_share`; NaN where there is no fluid load)."""
         blocks = self._blocks(s)
         sub = self._subspace(blocks)
         K, M = sub.matrices(s, penalty="clamp" in blocks)
@@ -996,12 +999,17 @@ class ReducedModal:
             sc = np.asarray(s.scale, float)
             w = self.base.w * sc[self.base.width_axis]
             area = float(np.prod([sc[i] for i in range(3) if i != self.base.thickness_axis]))
+            rho_t = self.base.model.materials[0].density * s.rho_factor * self.base.t * sc[self.base.thickness_axis]
             for k, (fa, _) in enumerate(needed):
                 if fa != "flapwise" or lt[k] <= 0:
                     continue
                 a = vt[:, k]
-                f[k], Q[k] = _fluid_mode(float(a @ K @ a), float(a @ M @ a), area * float(a[:q] @ sub.top @ a[:q]),
-                                         math.sqrt(lt[k]), w, rho_f, eta_f, s.fluid_factor, s.Q_int)
+                mq, sq = float(a @ M @ a), area * float(a[:q] @ sub.top @ a[:q])
+                f[k], Q[k], x = _fluid_mode(float(a @ K @ a), mq, sq, math.sqrt(lt[k]), w, rho_f, eta_f,
+                                            s.fluid_factor, s.Q_int)
+                if hydro is not None:
+                    hydro.setdefault("x", np.full(len(needed), np.nan))[k] = x
+                    hydro.setdefault("r", np.full(len(needed), np.nan))[k] = min(rho_t * sq / mq, 1.0)
         f[lt == 0] = np.nan
         return f, Q
 
@@ -1170,9 +1178,9 @@ def _lowest_pairs(K: np.ndarray, M: np.ndarray, n: int, shift: float) -> tuple[n
 
 
 def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):
-    """Loaded frequency [Hz] and Q of one flapwise mode (Rayleigh quotient with its shape):
-    added mass ``(pi/4) rho_f w Gamma_r`` per unit area of the top face, damping from Gamma_i,
-    iterated to the loaded frequency."""
+    """Loaded frequency [Hz], Q and added-mass ratio ``x`` (the fluid's added modal mass over the mode's own) of
+    one flapwise mode (Rayleigh quotient with its shape): added mass ``(pi/4) rho_f w Gamma_r`` per unit area
+    of the top face, damping from Gamma_i, iterated to the loaded frequency."""
     ma0 = factor * 0.25 * math.pi * rho_f * w * sq
     for _ in range(60):
         g = complex(sader_gamma(om, w, rho_f, eta_f))
@@ -1183,7 +1191,7 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):
             break
     g = complex(sader_gamma(om, w, rho_f, eta_f))
     qf = (mq + ma0 * g.real) / (ma0 * g.imag) if g.imag > 0 else math.inf
-    return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf)
+    return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 
 
 def _family_forms(model: ElasticModel, P: np.ndarray, n_slices: int = 24) -> dict[str, np.ndarray]:
@@ -1338,6 +1346,9 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     Q = np.full(len(needed), s.Q_int)
     K, M = model.assemble()
     Stop = None
+    x_added = np.full(len(needed), np.nan)
+    r_top = np.full(len(needed), np.nan)
+    rho_t = model.materials[0].density * base.t * sc[base.thickness_axis]
     rho_f, eta_f = s.medium
     if rho_f > 0 and s.fluid_factor > 0 and "top" in (model.mesh.boundaries or {}):
         e = np.zeros(3)
@@ -1353,8 +1364,10 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
         f[k] = md.frequency_hz
         if Stop is not None and fa == "flapwise":
             a = md.shape
-            f[k], Q[k] = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, w,
-                                     rho_f, eta_f, s.fluid_factor, s.Q_int)
+            mq, sq = float(a @ (M @ a)), float(a @ (Stop @ a))
+            f[k], Q[k], x_added[k] = _fluid_mode(float(a @ (K @ a)), mq, sq, md.omega, w, rho_f, eta_f,
+                                                 s.fluid_factor, s.Q_int)
+            r_top[k] = min(rho_t * sq / mq, 1.0)
     info = {"dofs": model.dofs, "seconds": time.perf_counter() - t0, "families": fams,
-            "frequencies_hz": res.frequencies_hz.tolist()}
+            "frequencies_hz": res.frequencies_hz.tolist(), "hydro": {"x": x_added, "r": r_top}}
     return f, Q, info

@@ -481,8 +481,8 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
             e[base.thickness_axis] = 1.0
             Stop = directional(face_mass_scalar(base.model, "top"), np.outer(e, e))
             a = md.shape
-            f, Q = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
-                               rho_f, eta_f, 1.0, math.inf)
+            f, Q, _ = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
+                                  rho_f, eta_f, 1.0, math.inf)
             item.update(f_Hz=f, Q_fluid=Q)
         if temperature:
             k = item["k_eff_z"]
