@@ -170,3 +170,42 @@ def test_force_curve_piezo_axis_pointing_away_from_the_sample_is_refused(tmp_pat
     (tmp_path / "c.csv").write_text(_hertz_curve(-1.0, with_segment))  # a height column exported as is
     with pytest.raises(DataFormatError, match="z_m must increase towards the sample"):
         read_measurement(tmp_path / "c.toml")
+
+
+def _with_time(curve: str, times) -> str:
+    lines = curve.strip().split("\n")
+    return "\n".join([lines[0] + ",time_s"] + [f"{x},{t:.9g}" for x, t in zip(lines[1:], times)]) + "\n"
+
+
+@pytest.mark.parametrize("clock, expect", [
+    ("continuous", None),
+    ("turnaround", None),  # the turning sample recorded in both segments, at one instant
+    ("restart", None),  # a clock per segment (JPK's segment time)
+    ("backwards", "times must increase within a segment"),
+    ("nan", r"line 9, column 4 \(time_s\): value 'nan' is not finite"),
+])
+def test_force_curve_clock(tmp_path, clock, expect):
+    import numpy as np
+
+    dt = 1e-3
+    t = np.arange(200) * dt
+    if clock == "turnaround":
+        t[100:] -= dt
+    elif clock == "restart":
+        t[100:] = np.arange(100) * dt
+    elif clock == "backwards":
+        t[150], t[151] = t[151], t[150]
+    elif clock == "nan":
+        t[7] = np.nan
+    (tmp_path / "c.toml").write_text('[measurement]\nkind = "force"\ndata = "c.csv"\n[lever]\nk = 1.0\n'
+                                     '[noise]\nforce = 1e-10\n')
+    (tmp_path / "c.csv").write_text(_with_time(_hertz_curve(+1.0, True), t))
+    if expect:
+        with pytest.raises(DataFormatError, match=expect):
+            read_measurement(tmp_path / "c.toml")
+        return
+    m = read_measurement(tmp_path / "c.toml")
+    # one clock: non-decreasing through the file, strictly increasing within each segment, the retract's steps kept
+    assert np.all(np.diff(m.time) >= 0) and np.all(np.diff(m.time[:100]) > 0) and np.all(np.diff(m.time[100:]) > 0)
+    assert np.allclose(np.diff(m.time[100:]), dt)
+    assert m.time[100] - m.time[99] == pytest.approx({"continuous": dt, "turnaround": 0.0, "restart": dt}[clock])

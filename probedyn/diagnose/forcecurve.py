@@ -111,14 +111,27 @@ def read_force(side: Path, csv: Path, meta: dict, common: dict) -> ForceData:
     if Es is not None:
         known.add("modulus")
     common = dict(common, known=frozenset(known))
-    t = None
-    if "time_s" in d:
-        t = d["time_s"]
-        if np.any(np.isnan(t)) or np.any(np.diff(t) <= 0):
-            bad = int(np.nonzero(np.isnan(t[1:]) | ~(np.diff(t) > 0))[0][0]) + 1
-            raise col_error(d, "time_s", bad, "times must be given on every row and increase")
+    t = _one_clock(d, seg) if "time_s" in d else None
     return ForceData(**common, z=z, force=F, segment=seg, k=k, sensitivity=sens, tip_radius=R, E_tip=Et, nu_tip=nut,
                      E_sample=Es, nu_sample=nus, sigma_force=sig, noise_stated=stated, time=t)
+
+
+def _one_clock(d, seg: np.ndarray) -> np.ndarray:
+    """The record's times on one clock. Times increase within each segment (a run of rows with one
+    ``segment`` value); at a segment boundary the clock may stand (the turnaround sample recorded in both
+    segments, as instruments export it) or restart (a clock per segment, e.g. JPK's segment time): a restarted
+    segment is taken to follow the previous one without a pause, its first step the median of its own
+    (a dwell at the turnaround is not recorded in such an export and is not modelled)."""
+    t = np.array(d["time_s"], float)  # finite: the CSV reader refuses NaN and inf
+    starts = np.concatenate([[0], np.nonzero(np.diff(seg) != 0)[0] + 1, [len(t)]])
+    for a, b in zip(starts[:-1], starts[1:]):
+        steps = np.diff(t[a:b])
+        if np.any(steps <= 0):
+            raise col_error(d, "time_s", a + 1 + int(np.nonzero(steps <= 0)[0][0]),
+                            "times must increase within a segment")
+        if a > 0 and t[a] < t[a - 1]:  # a clock that restarts with the segment
+            t[a:b] += t[a - 1] - t[a] + (float(np.median(steps)) if len(steps) else 0.0)
+    return t
 
 
 def _check_towards_sample(csv: Path, z: np.ndarray, F: np.ndarray, k: float) -> None:
@@ -202,8 +215,8 @@ def _build_interaction(st: ForceState, E_t, nu_t):
     """(P_loading, P_unloading, registry model or None). The model is evaluated through its
     normalised curve (parametrised by the contact radius) in :func:`registry_polylines`."""
     adhesive = st.contact is not None and st.W > 0
-    # a cone narrower than the registry's smallest half-angle leaves its cap only beyond R cot^2(alpha)
-    # = 1e8 R: the sphere (Hertz) exactly at any depth a force curve reaches
+    # the null half-angle: the baseline's Hertz sphere (the registry's cone narrower than its smallest half-angle
+    # is Sneddon's exact sphere at every depth, Hertz's while delta << R)
     if not adhesive and st.alpha < ALPHA_MIN:
         f = lambda d: hertz(d, st.E_star, st.R)  # noqa: E731
         return f, f, None
