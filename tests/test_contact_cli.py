@@ -92,8 +92,8 @@ def test_model_help_lists_every_registry_law():
 @pytest.mark.parametrize("model", ["cone", "pyramid"])
 def test_non_adhesive_law_prints_only_what_it_defines(model, capsys, tmp_path):
     """A law without attraction has no W, lambda, pull-off, jump-out or Maugis units: the command prints none
-    of them; the load at the cap edge depth R cot^2(alpha) is Hertz's there (the cap is a paraboloid of the
-    tip radius up to its edge; Briscoe et al.), an independent check of the number printed."""
+    of them; the load at the cap edge (contact radius R cos alpha) is Sneddon's rigid sphere's there (the cap is
+    the sphere of the tip radius up to its edge; Briscoe et al.), an independent check of the number printed."""
     from probedyn.schemes.contact import CONTACT_MODELS
 
     adhesive = {c.key: c.adhesive for c in CONTACT_MODELS}
@@ -105,8 +105,10 @@ def test_non_adhesive_law_prints_only_what_it_defines(model, capsys, tmp_path):
         assert key not in res
     p = res["parameters"]
     E, R, d = p["E_star_pa"], p["R_m"], p["cap_edge_depth_m"]
-    assert d == pytest.approx(R / math.tan(p["equivalent_cone_half_angle_rad"]) ** 2, rel=1e-12)
-    assert res["cap_edge_load_n"] == pytest.approx(4.0 / 3.0 * E * math.sqrt(R) * d**1.5, rel=1e-9)
+    a = R * math.cos(p["equivalent_cone_half_angle_rad"])  # the cap's edge
+    L = math.log((R + a) / (R - a))
+    assert d == pytest.approx(a / 2 * L, rel=1e-12)  # the sphere's penetration at that contact radius
+    assert res["cap_edge_load_n"] == pytest.approx(E * ((R * R + a * a) * L / 2 - a * R), rel=1e-6)
     assert main(["contact", "--model", model, "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out.lower()
     assert "pull-off force" not in out and "lambda" not in out and "jump-out:" not in out

@@ -1,13 +1,15 @@
 """The tip is a cone or pyramid, not a sphere: deep indentations follow delta^2, not delta^1.5.
 
 The contact registry's ``cone`` law (:mod:`probedyn.schemes.contact.cone`: Sneddon's cone blunted by
-a paraboloid cap of the declared tip radius R, tangent at the contact radius ``b = R cot(alpha)``)
-replaces the baseline's Hertz sphere. Nested: for ``alpha -> 0`` the cap never ends (``b -> infinity``)
-and the law *is* Hertz at every depth, so the null value is ``alpha = 0``; the cone shows once the
-contact radius passes b, i.e. beyond the depth ``R cot^2(alpha)`` (for R = 20 nm and alpha = 25 deg:
-92 nm), so the cause is identifiable on deep indentations of soft samples only. With the sample
-modulus free, a sharp cone fixes only ``E* tan(alpha)``; alpha itself is read from where the
-branch turns from delta^1.5 to delta^2 and needs the tip radius.
+a spherical cap of the declared tip radius R, tangent at the contact radius ``b = R cos(alpha)``, as a real
+rounded apex and Briscoe et al. 1994) replaces the baseline's Hertz sphere. Nested: the null value
+``alpha = 0`` is the baseline's Hertz sphere itself; a small half-angle is Sneddon's exact sphere to about the
+depth R, which Hertz equals while ``delta << R``. The cone shows once the contact radius passes b, beyond the
+penetration ``(b / 2) ln((R + b) / (R - b))`` (R = 20 nm, alpha = 25 deg: 27 nm; 18 deg: 35 nm), so the cause
+is identifiable on deep indentations of soft samples. With the sample modulus free, a sharp cone fixes only
+``E* tan(alpha)``; alpha itself is read from where the branch turns from delta^1.5 to delta^2 and needs the
+tip radius. Until session 34 the cap was a paraboloid tangent at ``R cot(alpha)`` (a cap 3 R wide at 18 deg):
+an independent generator's sphere-capped tip read as a smaller sphere (blind force curve c03).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ class TipShape(Cause):
               "a paraboloid cap of the tip radius (Briscoe et al. 1994); Bilodeau (1992) pyramid as the equivalent cone")
     description = ("The contact branch of a deep indentation grows as delta^2 (cone or pyramid flanks) instead of "
                    "Hertz's delta^1.5 once the contact radius exceeds the rounded apex, R cot(alpha).")
-    needs = "an indentation deeper than R cot^2(alpha) (soft samples, large loads)"
+    needs = "an indentation deeper than the tip's rounded apex, ~R (soft samples, large loads)"
     changes = ("tip_shape",)
     params = (CauseParam("alpha", "deg", 0.0, 80.0, 0.0, "cone half-angle (axis to flank)", starts=(15.0, 30.0, 50.0)),)
 
@@ -40,5 +42,6 @@ class TipShape(Cause):
         from probedyn.schemes.contact.cone import BluntedPyramid
 
         R = problem.data.tip_radius
+        b = R * math.cos(a)
         return {"pyramid_face_half_angle_deg": math.degrees(math.atan(math.tan(a) / BluntedPyramid.cone_factor)),
-                "cap_edge_depth_m": R / math.tan(a) ** 2, "cap_edge_radius_m": R / math.tan(a)}
+                "cap_edge_depth_m": 0.5 * b * math.log((R + b) / (R - b)), "cap_edge_radius_m": b}
