@@ -87,6 +87,23 @@ def fluid_loaded(f_vac, w, t, rho, rho_f, eta_f):
     return om / (2 * math.pi), (1 / T + gr) / gi
 
 
+def lateral_fluid_loaded(f_vac, t, rho, rho_f, eta_f):
+    """Uniform-beam loading of one lateral (in-plane) mode by the Stokes layers of its two faces: added mass
+    ``w rho_f delta`` per length against the beam's ``rho w t``, ``x = rho_f delta / (rho t)``, ``delta =
+    sqrt(2 eta_f / (rho_f omega))`` at the loaded frequency (iterated), ``Q = (1 + x) / x`` (Stokes's second
+    problem: damping omega times the added mass)."""
+    om_v = 2 * math.pi * f_vac
+    om = om_v
+    for _ in range(200):
+        x = rho_f * math.sqrt(2 * eta_f / (rho_f * om)) / (rho * t)
+        new = om_v / math.sqrt(1 + x)
+        if abs(new - om) < 1e-14 * om:
+            break
+        om = new
+    x = rho_f * math.sqrt(2 * eta_f / (rho_f * om)) / (rho * t)
+    return om / (2 * math.pi), (1 + x) / x
+
+
 # ------------------------------------------------------------------------------------------
 # FEM truths with the effect built in
 # ------------------------------------------------------------------------------------------
@@ -393,6 +410,9 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
         for k, (fa, _) in enumerate(modes):
             if fa == "flapwise":
                 f[k], qf = fluid_loaded(f[k], g["width"], g["thickness"], RHO_SI, rho_f, eta_f)
+                Q[k] = 1 / (1 / Q_int + 1 / qf)
+            elif fa == "lateral":
+                f[k], qf = lateral_fluid_loaded(f[k], g["thickness"], RHO_SI, rho_f, eta_f)
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
     if with_Q is None:
         with_Q = bool(rng.uniform() < 0.5) or effect == "fluid-loading"

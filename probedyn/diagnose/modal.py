@@ -161,7 +161,8 @@ class ModalProblem:
         self.medium_name = d.medium_name
         # a baseline whose damping is intrinsic only (vacuum declared, or no medium declared) holds each
         # mode's Q to one intrinsic Q within its mode-to-mode scatter (Q_INT_SCATTER); in a declared fluid
-        # the fluid's computed damping dominates and Q is held to the measurement's sigma
+        # the fluid's computed damping dominates the flapwise modes' Q, held to the measurement's sigma (and
+        # the hydrodynamic model's accuracy), the other families' within the intrinsic scatter
         self.q_int_scatter = d.medium is None or d.medium[0] == 0.0
         self.n = len(d.freq)
         if self.n == 0:
@@ -222,7 +223,9 @@ class ModalProblem:
         if self.static is not None:
             self.group_labels.append("static spring constant")
         base: list[CauseParam] = []
-        self.q_flap = np.asarray(d.family)[self.q_idx] == "flapwise" if len(self.q_idx) else np.zeros(0, bool)
+        # the Q rows a fluid model damps (flapwise: Sader; lateral: the faces' Stokes layers; torsion: not modelled)
+        self.q_fluid = (np.isin(np.asarray(d.family)[self.q_idx], ("flapwise", "lateral")) if len(self.q_idx)
+                       else np.zeros(0, bool))
         if len(self.q_idx):
             q0 = float(np.median(d.Q[self.q_idx]))
             base.append(CauseParam("Q_int", "1", 1.0, 1e9, q0, "intrinsic quality factor (one loss factor for all modes)",
@@ -515,8 +518,11 @@ class ModalProblem:
                 # is intrinsic only holds each Q to its one Q_int within that scatter
                 sig = np.sqrt(sig**2 + Q_INT_SCATTER**2)
             elif fluid:
-                # a fluid in the model damps its flapwise modes by Sader's 2D function, accurate to HYDRO_Q_ASPECT w/L
-                sig = np.where(self.q_flap, np.sqrt(sig**2 + self.hydro_q**2), sig)
+                # a fluid in the model damps its flapwise modes by Sader's 2D function, accurate to HYDRO_Q_ASPECT
+                # w/L, and its lateral ones by the faces' Stokes layers (held alike); torsion's damping is the one
+                # Q_int in the model (the fluid's share is not modelled), held within the intrinsic scatter as in
+                # a vacuum
+                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2), np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
         return np.where(np.isfinite(r), r, 1e6)

@@ -78,7 +78,7 @@ from scipy.optimize import brentq
 from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, SolverError
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
                                          reduced_stiffness_split, stretch_sensitivity)
-from probedyn.diagnose.hydrodynamics import sader_gamma
+from probedyn.diagnose.hydrodynamics import sader_gamma, stokes_layer_mass
 from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.elasticity import assemble_mass as el_mass
@@ -836,11 +836,15 @@ class ReducedModal:
         self.Sn_r = P.T @ (directional(Sface, nn) @ P)
         self.St_r = P.T @ (directional(Sface, np.eye(3) - nn) @ P)
         self.G_r = P.T @ (self.Gfull @ P)
-        self.top_r = None
+        self.top_r = self.top_w_r = None
         if base.has_top:
+            St = face_mass_scalar(m, "top")
             e = np.zeros(3)
             e[base.thickness_axis] = 1.0
-            self.top_r = P.T @ (directional(face_mass_scalar(m, "top"), np.outer(e, e)) @ P)
+            self.top_r = P.T @ (directional(St, np.outer(e, e)) @ P)
+            e = np.zeros(3)
+            e[base.width_axis] = 1.0
+            self.top_w_r = P.T @ (directional(St, np.outer(e, e)) @ P)  # in-plane, across the width
         self._fam_forms = _family_forms(m, P)
         self._Ks = None  # stretch split (lazy: only geometric causes need it)
         self._Ks_tip = None  # the meshed tip's part of it
@@ -1001,6 +1005,11 @@ class ReducedModal:
             area = float(np.prod([sc[i] for i in range(3) if i != self.base.thickness_axis]))
             rho_t = self.base.model.materials[0].density * s.rho_factor * self.base.t * sc[self.base.thickness_axis]
             for k, (fa, _) in enumerate(needed):
+                if fa == "lateral" and lt[k] > 0:
+                    a = vt[:, k]
+                    sw = area * float(a[:q] @ sub.top_w @ a[:q])
+                    f[k], Q[k] = _stokes_mode(float(a @ K @ a), float(a @ M @ a), sw, math.sqrt(lt[k]), rho_f, eta_f,
+                                              s.fluid_factor, s.Q_int)
                 if fa != "flapwise" or lt[k] <= 0:
                     continue
                 a = vt[:, k]
@@ -1029,6 +1038,7 @@ class _Sub:
         self.St = P(red.St_r)
         self.G = P(red.G_r)
         self.top = None if red.top_r is None else P(red.top_r)
+        self.top_w = None if red.top_w_r is None else P(red.top_w_r)
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
         self.A_lt = None if red.A_lt_r is None else red.A_lt_r @ T
         self._Ks = None
@@ -1194,6 +1204,23 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 
 
+def _stokes_mode(kq, mq, sq_w, om, rho_f, eta_f, factor, Q_int):
+    """Loaded frequency [Hz] and Q of one lateral mode: the Stokes layers of the top and bottom faces
+    (:func:`~probedyn.diagnose.hydrodynamics.stokes_layer_mass` per face; the bottom face moves across the
+    width as the top one in lateral bending), ``sq_w`` the top face's in-plane mass form ``int u_w^2 dA`` of
+    the mode, iterated to the loaded frequency."""
+    for _ in range(60):
+        ma = factor * 2.0 * float(stokes_layer_mass(om, rho_f, eta_f)) * sq_w
+        om_new = math.sqrt(kq / (mq + ma))
+        done = abs(om_new - om) <= 1e-14 * om
+        om = om_new
+        if done:
+            break
+    ma = factor * 2.0 * float(stokes_layer_mass(om, rho_f, eta_f)) * sq_w
+    qf = (mq + ma) / ma if ma > 0 else math.inf
+    return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf)
+
+
 def _family_forms(model: ElasticModel, P: np.ndarray, n_slices: int = 24) -> dict[str, np.ndarray]:
     """Quadratic forms on the basis ``P`` of the family energy shares of
     :func:`probedyn.fem.modes.classify_shapes` (same slices, weights and rigid-section fit)."""
@@ -1345,7 +1372,7 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     f = np.empty(len(needed))
     Q = np.full(len(needed), s.Q_int)
     K, M = model.assemble()
-    Stop = None
+    Stop = Stop_w = None
     x_added = np.full(len(needed), np.nan)
     r_top = np.full(len(needed), np.nan)
     rho_t = model.materials[0].density * base.t * sc[base.thickness_axis]
@@ -1353,7 +1380,11 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     if rho_f > 0 and s.fluid_factor > 0 and "top" in (model.mesh.boundaries or {}):
         e = np.zeros(3)
         e[base.thickness_axis] = 1.0
-        Stop = directional(face_mass_scalar(model, "top"), np.outer(e, e))
+        St = face_mass_scalar(model, "top")
+        Stop = directional(St, np.outer(e, e))
+        e = np.zeros(3)
+        e[base.width_axis] = 1.0
+        Stop_w = directional(St, np.outer(e, e))
     w = base.w * sc[base.width_axis]
     for k, (fa, o) in enumerate(needed):
         idx = [i for i, x in enumerate(fams) if x == fa]
@@ -1362,6 +1393,10 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
             continue
         md = res.modes[idx[o - 1]]
         f[k] = md.frequency_hz
+        if Stop_w is not None and fa == "lateral":
+            a = md.shape
+            f[k], Q[k] = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop_w @ a)), md.omega,
+                                      rho_f, eta_f, s.fluid_factor, s.Q_int)
         if Stop is not None and fa == "flapwise":
             a = md.shape
             mq, sq = float(a @ (M @ a)), float(a @ (Stop @ a))

@@ -61,7 +61,7 @@ from scipy.stats import gamma as gamma_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.diagnose.formats import ModalData, SpectrumData
 from probedyn.diagnose.modal import ModalProblem
-from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode
+from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode, _stokes_mode
 
 __all__ = ["spectrum_problem", "fit_line", "fit_doublet", "detect_peaks", "sho_psd"]
 
@@ -483,6 +483,17 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
             a = md.shape
             f, Q, _ = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
                                   rho_f, eta_f, 1.0, math.inf)
+            item.update(f_Hz=f, Q_fluid=Q)
+        if rho_f > 0 and fa == "lateral" and base.has_top:
+            from probedyn.diagnose.fem_terms import directional, face_mass_scalar
+
+            K, M = base.model.assemble()
+            e = np.zeros(3)
+            e[base.width_axis] = 1.0
+            Sw = directional(face_mass_scalar(base.model, "top"), np.outer(e, e))
+            a = md.shape
+            f, Q = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Sw @ a)), md.omega, rho_f, eta_f,
+                                1.0, math.inf)
             item.update(f_Hz=f, Q_fluid=Q)
         if temperature:
             k = item["k_eff_z"]
