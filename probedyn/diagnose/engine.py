@@ -182,6 +182,14 @@ class Fit:
         return float(chi2_dist.sf(self.chi2, self.dof))
 
 
+def _inactive_rows(problem, values, causes) -> int:
+    """Rows of the residual vector that are zero by construction in this model (a problem's
+    ``inactive_rows``: e.g. the prior pseudo-residual of a model-form direction the model does not have,
+    such as a fluid's in a model without one): neither data nor a fitted amplitude, so not counted in n."""
+    f = getattr(problem, "inactive_rows", None)
+    return int(f(values, causes)) if f is not None else 0
+
+
 class Fitter:
     """Least-squares fits of a problem's baseline and its nested extensions.
 
@@ -292,8 +300,8 @@ class Fitter:
             if not free:
                 r = self.residuals(vals0, causes, mask)
                 m = np.ones(len(r), bool) if mask is None else mask
-                f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)), int(m.sum()),
-                        np.zeros((int(m.sum()), 0)), 1, m)
+                f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)),
+                        int(m.sum()) - _inactive_rows(prob, vals0, causes), np.zeros((int(m.sum()), 0)), 1, m)
                 f.nuisance = prob.fixed_nuisance if has_nu else None
                 if has_nu:
                     prob.fixed_nuisance = None
@@ -334,7 +342,7 @@ class Fitter:
             if best is None or c2 < best.chi2 - 1e-12 * max(1.0, abs(c2)):
                 v = {p.name: _from_u(p, x) for p, x in zip(free, res.x)}
                 v.update(fixed)
-                n = len(res.fun)
+                n = len(res.fun) - _inactive_rows(prob, v, causes)
                 best = Fit(causes, free, res.x.copy(), v, None, c2, n, res.jac.copy(), res.nfev, mask,
                            start=str(si))
                 best.nuisance = prob.fixed_nuisance if has_nu else None
@@ -419,7 +427,8 @@ class Fitter:
             m = np.ones(len(r), bool) if mask is None else mask
             J = np.zeros((int(m.sum()), len(f.plist)))
             f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
-                    float(np.sum(r[m] ** 2)), int(m.sum()), J, f.nfev, m, start="null")
+                    float(np.sum(r[m] ** 2)), int(m.sum()) - _inactive_rows(self.problem, start0, causes), J, f.nfev,
+                    m, start="null")
             f.nuisance = ref.nuisance
         return f
 

@@ -568,6 +568,14 @@ class ModalProblem:
         return self._residuals(*self.predict(values, causes, full=True, gap=gap), self._intrinsic_only(values, causes),
                                k, self._fluid(values, causes), gap)
 
+    def inactive_rows(self, values, causes) -> int:
+        """The fluid-gap direction's prior pseudo-residual in a model without a fluid: its column and amplitude
+        are zero there (the engine leaves the row out of the count of data)."""
+        if self.gap_col is None:
+            return 0
+        s = self.state(values, causes, self.lengths[0])
+        return int(not (s.medium[0] > 0 and s.fluid_factor > 0))
+
     def _intrinsic_only(self, values, causes) -> bool:
         """Whether the model's damping is intrinsic only (a Q_int, no fluid: its Q residuals carry the intrinsic
         loss's mode-to-mode scatter). A fluid model's Q is the fluid's, computed, and is held to the measurement's
