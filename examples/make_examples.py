@@ -24,7 +24,7 @@ comments the diagnosis does not read, how the file was made and what is hidden:
 * ``thermal_psd_air`` -- thermal PSD of the default cantilever in air, declared (class 5 of issue 11: the
   air loading belongs to the baseline, the remaining shift is a hidden particle): the spectrum rate study's
   truth path (``tests/diagnose_truth_spectra.py``: FEM truth mesh with a point mass, the tilted detector
-  spot, equipartition areas, Sader's air loading, white + 1/f background, Gamma periodogram scatter); a
+  spot, equipartition areas, Sader's air loading (and the faces' Stokes layers on lateral 1, session 34), white + 1/f background, Gamma periodogram scatter); a
   12 um silica sphere (2.0 ng, 0.95 % of the lever's mass) near x/L = 0.95; all five lines in the band
   (flapwise 1-3, lateral 1, torsion 1). Why the default cantilever and not the old 200 x 30 x 2 um lever:
   the diagnosis' FEM of that thin lever (stretch 6.3, default 9k-DOF budget, not refined further) is off the

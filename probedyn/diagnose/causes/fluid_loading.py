@@ -23,9 +23,12 @@ class FluidLoading(Cause):
     key = "fluid-loading"
     kind = "modal"
     title = "Fluid loading (undeclared medium, or excess load on the declared one)"
-    source = "J. E. Sader, J. Appl. Phys. 84, 64 (1998), eqs 17, 20, 21, 25"
+    source = ("J. E. Sader, J. Appl. Phys. 84, 64 (1998), eqs 17, 20, 21, 25; lateral: Stokes's second problem "
+              "(Landau & Lifshitz, Fluid Mechanics, section 24)")
     description = ("Added mass (pi/4) rho_f w^2 Gamma_r per length and damping from Gamma_i on the flapwise modes: "
-                   "lowers them by 1/sqrt(1 + (pi rho_f w / 4 rho t) Gamma_r) and sets their Q.")
+                   "lowers them by 1/sqrt(1 + (pi rho_f w / 4 rho t) Gamma_r) and sets their Q; the lateral modes "
+                   "drag the fluid by their faces' Stokes layers (added mass rho_f delta / 2 per face area); torsion "
+                   "is not loaded.")
     needs = "Q values, or several flapwise modes plus another family (Gamma depends on frequency)"
     changes = ("medium",)
     params = (
