@@ -841,13 +841,9 @@ class ReducedModal:
         self.G_r = P.T @ (self.Gfull @ P)
         self.top_r = self.top_w_r = None
         if base.has_top:
-            St = face_mass_scalar(m, "top")
-            e = np.zeros(3)
-            e[base.thickness_axis] = 1.0
-            self.top_r = P.T @ (directional(St, np.outer(e, e)) @ P)
-            e = np.zeros(3)
-            e[base.width_axis] = 1.0
-            self.top_w_r = P.T @ (directional(St, np.outer(e, e)) @ P)  # in-plane, across the width
+            St, Sw = top_face_forms(m, base.thickness_axis, base.width_axis)
+            self.top_r = P.T @ (St @ P)
+            self.top_w_r = P.T @ (Sw @ P)  # in-plane, across the width
         self._fam_forms = _family_forms(m, P)
         self._Ks = None  # stretch split (lazy: only geometric causes need it)
         self._Ks_tip = None  # the meshed tip's part of it
@@ -1207,6 +1203,18 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 
 
+def top_face_forms(model: ElasticModel, thickness_axis: int, width_axis: int) -> tuple[sp.spmatrix, sp.spmatrix]:
+    """The top face's mass forms ``int u_t^2 dA`` (transverse: Sader's load on flapwise modes) and
+    ``int u_w^2 dA`` (in-plane across the width: the Stokes layers on lateral modes) of ``model``."""
+    St = face_mass_scalar(model, "top")
+    forms = []
+    for ax in (thickness_axis, width_axis):
+        e = np.zeros(3)
+        e[ax] = 1.0
+        forms.append(directional(St, np.outer(e, e)))
+    return forms[0], forms[1]
+
+
 def _stokes_mode(kq, mq, sq_w, om, rho_f, eta_f, factor, Q_int):
     """Loaded frequency [Hz] and Q of one lateral mode: the Stokes layers of the top and bottom faces
     (:func:`~probedyn.diagnose.hydrodynamics.stokes_layer_mass` per face; the bottom face moves across the
@@ -1381,13 +1389,7 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     rho_t = model.materials[0].density * base.t * sc[base.thickness_axis]
     rho_f, eta_f = s.medium
     if rho_f > 0 and s.fluid_factor > 0 and "top" in (model.mesh.boundaries or {}):
-        e = np.zeros(3)
-        e[base.thickness_axis] = 1.0
-        St = face_mass_scalar(model, "top")
-        Stop = directional(St, np.outer(e, e))
-        e = np.zeros(3)
-        e[base.width_axis] = 1.0
-        Stop_w = directional(St, np.outer(e, e))
+        Stop, Stop_w = top_face_forms(model, base.thickness_axis, base.width_axis)
     w = base.w * sc[base.width_axis]
     for k, (fa, o) in enumerate(needed):
         idx = [i for i, x in enumerate(fams) if x == fa]

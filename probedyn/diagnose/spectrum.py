@@ -61,7 +61,7 @@ from scipy.stats import gamma as gamma_dist
 from probedyn.core.errors import DataFormatError
 from probedyn.diagnose.formats import ModalData, SpectrumData
 from probedyn.diagnose.modal import ModalProblem
-from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode, _stokes_mode
+from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode, _stokes_mode, top_face_forms
 
 __all__ = ["spectrum_problem", "fit_line", "fit_doublet", "detect_peaks", "sho_psd"]
 
@@ -468,30 +468,21 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
     out = []
     cnt: dict[str, int] = {}
     rho_f, eta_f = medium if medium is not None else (0.0, 1.8e-5)
+    loaded = rho_f > 0 and base.has_top
+    if loaded:  # the fluid's load: Sader's on the flapwise modes, the faces' Stokes layers on the lateral ones
+        K, M = base.model.assemble()
+        Stop, Sw = top_face_forms(base.model, base.thickness_axis, base.width_axis)
     for md in base.result.modes:
         fa = md.family
         cnt[fa] = cnt.get(fa, 0) + 1
         item = {"family": fa, "order": cnt[fa], "f_Hz": md.frequency_hz, "Q_fluid": math.inf,
                 "k_eff_z": md.effective_stiffness_tip.get("z", math.inf)}
-        if rho_f > 0 and fa == "flapwise" and base.has_top:
-            from probedyn.diagnose.fem_terms import directional, face_mass_scalar
-
-            K, M = base.model.assemble()
-            e = np.zeros(3)
-            e[base.thickness_axis] = 1.0
-            Stop = directional(face_mass_scalar(base.model, "top"), np.outer(e, e))
-            a = md.shape
+        a = md.shape
+        if loaded and fa == "flapwise":
             f, Q, _ = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
                                   rho_f, eta_f, 1.0, math.inf)
             item.update(f_Hz=f, Q_fluid=Q)
-        if rho_f > 0 and fa == "lateral" and base.has_top:
-            from probedyn.diagnose.fem_terms import directional, face_mass_scalar
-
-            K, M = base.model.assemble()
-            e = np.zeros(3)
-            e[base.width_axis] = 1.0
-            Sw = directional(face_mass_scalar(base.model, "top"), np.outer(e, e))
-            a = md.shape
+        elif loaded and fa == "lateral":
             f, Q = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Sw @ a)), md.omega, rho_f, eta_f,
                                 1.0, math.inf)
             item.update(f_Hz=f, Q_fluid=Q)
