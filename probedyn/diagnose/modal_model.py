@@ -977,7 +977,7 @@ class ReducedModal:
               ) -> tuple[np.ndarray, np.ndarray]:
         """Frequencies [Hz] and quality factors of the ``(family, order)`` modes in state ``s``; ``hydro`` (a
         dict, filled when given): per mode the fluid's added-mass ratio ``x`` and the top face's share ``r``
-        of the vacuum mode's modal mass (:func:`top_share`; NaN where there is no fluid load)."""
+        of the vacuum mode's modal mass (used by :meth:`ModalProblem._gap`; NaN where there is no fluid load)."""
         blocks = self._blocks(s)
         sub = self._subspace(blocks)
         K, M = sub.matrices(s, penalty="clamp" in blocks)
