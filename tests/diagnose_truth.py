@@ -9,7 +9,8 @@ Every truth is produced by a path independent of the diagnosis:
   lumped nodal springs on the clamp-face nodes (the diagnosis uses a consistent face foundation
   and a Ritz reduction), a *re-meshed* thicker / wider / longer lever (the diagnosis stretches its
   mesh), another Young's modulus, a geometric stiffness assembled here, and fluid loading by this
-  module's own hydrodynamic function on the exact uniform-beam relation; plus a Timoshenko beam
+  module's own hydrodynamic function on the exact uniform-beam relation (torsion: Green & Sader's function solved
+  directly by the 2D Stokes FEM, not the diagnosis' table); plus a Timoshenko beam
   (``probedyn.lumped.beam``) for the bending families;
 * **friction** and **force curves**: see the later sections of this module.
 
@@ -102,6 +103,54 @@ def lateral_fluid_loaded(f_vac, t, rho, rho_f, eta_f):
         om = new
     x = rho_f * math.sqrt(2 * eta_f / (rho_f * om)) / (rho * t)
     return om / (2 * math.pi), (1 + x) / x
+
+
+_GAMMA_TOR_CACHE: dict = {}
+GAMMA_TOR_REFINE = 0.7  # the 2D Stokes mesh of the truths: 2e-3 of Sader's function (tests/test_stokes2d.py)
+
+
+def gamma_torsion_direct(re: float) -> complex:
+    """Green & Sader's torsional function at ``re`` solved directly by probedyn's 2D oscillatory-Stokes FEM
+    (:func:`probedyn.fem.stokes2d.zero_thickness_gamma`: three thicknesses extrapolated to zero) -- not the
+    diagnosis' interpolated table; memoised on Re to 4 digits."""
+    from probedyn.fem.stokes2d import zero_thickness_gamma
+
+    key = float(f"{re:.4g}")
+    if key not in _GAMMA_TOR_CACHE:
+        g = complex(zero_thickness_gamma(key, "rotate", refine=GAMMA_TOR_REFINE))
+        _GAMMA_TOR_CACHE[key] = complex(g.real, abs(g.imag))
+    return _GAMMA_TOR_CACHE[key]
+
+
+def torsion_fluid_loaded(f_vac, w, t, rho, rho_f, eta_f):
+    """Uniform-beam loading of one torsion mode (Green & Sader 2002): added moment of inertia ``(pi/128) rho_f w^4
+    Gamma_tor,r`` per length against the section's polar one ``rho w t (w^2 + t^2) / 12``, ``T = (3 pi / 32)
+    (rho_f / rho) w^3 / (t (w^2 + t^2))``; ``omega_f = omega_v / sqrt(1 + T Gamma_r(omega_f))``,
+    ``Q = (1/T + Gamma_r) / Gamma_i``. Gamma is solved directly at the vacuum frequency's Re and at the first
+    iterate's; the fixed point (a contraction: Gamma moves slowly with Re) is iterated on the line through the two
+    in ln Re (two 2D solves per mode)."""
+    if not math.isfinite(f_vac):
+        return f_vac, math.inf  # a mode the truth does not hold
+    T = 3 * math.pi / 32 * rho_f / rho * w**3 / (t * (w * w + t * t))
+    om_v = 2 * math.pi * f_vac
+    re_of = rho_f * w * w / (4 * eta_f)
+    x0, g0 = math.log(re_of * om_v), gamma_torsion_direct(re_of * om_v)
+    om1 = om_v / math.sqrt(1 + T * g0.real)
+    x1, g1 = math.log(re_of * om1), gamma_torsion_direct(re_of * om1)
+
+    def gamma(om):
+        if abs(x1 - x0) < 1e-12:
+            return g1
+        return g0 + (g1 - g0) * (math.log(re_of * om) - x0) / (x1 - x0)
+
+    om = om1
+    for _ in range(100):
+        new = om_v / math.sqrt(1 + T * gamma(om).real)
+        if abs(new - om) < 1e-13 * om:
+            break
+        om = new
+    g = gamma(om)
+    return om / (2 * math.pi), (1 / T + g.real) / g.imag
 
 
 # ------------------------------------------------------------------------------------------
@@ -413,6 +462,9 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
             elif fa == "lateral":
                 f[k], qf = lateral_fluid_loaded(f[k], g["thickness"], RHO_SI, rho_f, eta_f)
+                Q[k] = 1 / (1 / Q_int + 1 / qf)
+            elif fa == "torsion":
+                f[k], qf = torsion_fluid_loaded(f[k], g["width"], g["thickness"], RHO_SI, rho_f, eta_f)
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
     if with_Q is None:
         with_Q = bool(rng.uniform() < 0.5) or effect == "fluid-loading"

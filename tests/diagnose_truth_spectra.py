@@ -36,7 +36,8 @@ from pathlib import Path
 import numpy as np
 
 import diagnose_truth as dt
-from diagnose_truth import LEVERS, MODES, RHO_SI, draw_modal_effect, fem_truth, fluid_loaded, lateral_fluid_loaded
+from diagnose_truth import (LEVERS, MODES, RHO_SI, draw_modal_effect, fem_truth, fluid_loaded, lateral_fluid_loaded,
+                            torsion_fluid_loaded)
 from diagnose_truth_curves import K_B
 SPECTRUM_EFFECTS = ["point-mass", "clamp-compliance", "thickness-error", "width-error", "length-error",
                     "modulus-error", "axial-prestress", "fluid-loading"]
@@ -151,6 +152,9 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
             elif fa == "lateral":
                 f[k], qf = lateral_fluid_loaded(f[k], g["thickness"], RHO_SI, rho_f, eta_f)
+                Q[k] = 1 / (1 / Q_int + 1 / qf)
+            elif fa == "torsion":
+                f[k], qf = torsion_fluid_loaded(f[k], g["width"], g["thickness"], RHO_SI, rho_f, eta_f)
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
     ok = np.isfinite(f) & np.isfinite(d)
     # the band: up to 1.2 x the highest of flapwise 3, lateral 1, torsion 1 (a detector bandwidth)

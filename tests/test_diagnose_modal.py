@@ -147,9 +147,9 @@ def _example_modes(tmp_path, medium: str) -> Path:
 def test_a_vacuum_q_carries_the_intrinsic_scatter_and_a_residual_gas_is_air_at_its_pressure(tmp_path):
     """In vacuum the intrinsic loss differs from mode to mode (Q_INT_SCATTER, a factor 2 per mode): the
     intrinsic-only baseline holds each ln Q to its one Q_int within sqrt(sigma_meas^2 + ln(2)^2), a model with
-    a fluid holds the modes it damps (flapwise: Sader; lateral: the faces' Stokes layers) to the measurement's sigma
-    plus the hydrodynamic model's accuracy, and torsion (not fluid-damped in the model) within the intrinsic
-    scatter. A declared vacuum
+    a fluid holds the modes it damps (flapwise: Sader; torsion: Green & Sader; lateral: the faces' Stokes layers) to
+    the measurement's sigma plus the hydrodynamic model's accuracy, an axial mode (not fluid-damped in the model)
+    within the intrinsic scatter. A declared vacuum
     offers the residual gas (air at pressure p):
     at one atmosphere its prediction is the declared-air baseline's, frequencies and Q, to round-off."""
     import math
@@ -171,7 +171,7 @@ def test_a_vacuum_q_carries_the_intrinsic_scatter_and_a_residual_gas_is_air_at_i
     want = np.log(d.Q[i] / q_int) / np.sqrt(d.Q_sigma_rel[i] ** 2 + math.log(2.0) ** 2)
     assert np.allclose(r[n_f: n_f + len(i)], want, rtol=1e-9, atol=1e-12)
     # with a residual gas the fluid's Q is held to the measurement's sigma, on the modes the gas damps (flapwise,
-    # lateral) with the hydrodynamic models' accuracy HYDRO_Q_ASPECT w / L added (0.025 on this lever)
+    # torsion, lateral) with the hydrodynamic models' accuracy HYDRO_Q_ASPECT w / L added (0.025 on this lever)
     from probedyn.diagnose.modal import HYDRO_Q_ASPECT
 
     b = pv.reference_baseline
@@ -179,11 +179,16 @@ def test_a_vacuum_q_carries_the_intrinsic_scatter_and_a_residual_gas_is_air_at_i
     vals = {"Q_int": q_int, "p_gas": P_ATM}
     f_gas, Q_gas = pv.predict(vals, tuple(gas))
     r = pv.residuals(vals, tuple(gas))
-    flap_q = np.array([fa.startswith(("flap", "lat")) for fa in d.family[i]])
-    sig = np.where(flap_q, np.sqrt(d.Q_sigma_rel[i] ** 2 + pv.hydro_q**2),
-                   np.sqrt(d.Q_sigma_rel[i] ** 2 + Q_INT_SCATTER**2))
-    assert flap_q.sum() >= 4 and (~flap_q).sum() >= 1
-    assert np.all(Q_gas[i][flap_q] < q_int) and np.all(Q_gas[i][~flap_q] == q_int)  # torsion: Q_int alone
+    flap_q = np.array([fa.startswith(("flap", "lat", "tors")) for fa in d.family[i]])
+    # torsion's damping also within the torsional function's zero-thickness error, HYDRO_Q_TORSION_THICKNESS t / w
+    from probedyn.diagnose.modal import HYDRO_Q_TORSION_THICKNESS
+
+    tors = d.family[i] == "torsion"
+    assert pv.hydro_q_torsion == pytest.approx(math.hypot(pv.hydro_q, HYDRO_Q_TORSION_THICKNESS * b.t / b.w))
+    hq = np.where(tors, pv.hydro_q_torsion, pv.hydro_q)
+    sig = np.where(flap_q, np.sqrt(d.Q_sigma_rel[i] ** 2 + hq**2), np.sqrt(d.Q_sigma_rel[i] ** 2 + Q_INT_SCATTER**2))
+    assert flap_q.sum() >= 5 and tors.any()
+    assert np.all(Q_gas[i][flap_q] < q_int) and np.all(Q_gas[i][~flap_q] == q_int)  # axial: Q_int alone
     assert np.allclose(r[n_f: n_f + len(i)], np.log(d.Q[i] / Q_gas[i]) / sig, rtol=1e-9, atol=1e-12)
     # ... and at one atmosphere it is the declared air
     (tmp_path / "a").mkdir()

@@ -8,8 +8,16 @@ force per unit length ``F = (pi/4) rho_f w^2 omega^2 Gamma(omega) W`` with
 rational correction ``Omega(Re)`` (eq 21), ``Re = rho_f omega w^2 / (4 eta_f)``.
 
 Assumptions (Sader's): ``L >> w`` (two-dimensional flow across the width), the fluid is
-incompressible, the amplitude is small, the beam is far from any surface. Torsion is not loaded (it
-needs the torsional function of Green & Sader); the diagnosis states this where it applies the function.
+incompressible, the amplitude is small, the beam is far from any surface.
+
+**Torsion** (Green & Sader, J. Appl. Phys. 92, 6262 (2002)): a section rotating about its centre line with
+angle theta feels a torque per unit length ``T = (pi/128) rho_f w^4 omega^2 Gamma_tor(omega) theta``: the
+inviscid added moment of inertia of a flat plate, ``(pi/8) rho_f (w/2)^4``, times the torsional function,
+``Gamma_tor -> 1`` for Re -> infinity (same Re). Green & Sader computed it by a boundary-integral method; the
+values here (:func:`torsion_gamma`) are probedyn's own, from the two-dimensional oscillatory Stokes flow about a
+thin section solved by finite elements (:mod:`probedyn.fem.stokes2d`, ``benchmarks/torsional_gamma_table.py``),
+whose flexural solution reproduces Sader's ``Gamma_rect`` (``tests/test_stokes2d.py``). Written with the
+prefactor ``(pi/8) rho_f omega^2 w^4`` the same function is this one divided by 16.
 
 **Lateral (in-plane) motion** drags the fluid by its two large faces: Stokes's second problem (a plane
 oscillating in its own plane; Landau & Lifshitz, Fluid Mechanics, section 24) gives a shear stress
@@ -20,15 +28,18 @@ depth, i.e. an added mass ``rho_f delta / 2`` per unit face area and a damping `
 air, ~10 % for a 2 um lever in water).
 
 Used by the modal diagnosis (:mod:`probedyn.diagnose.modal_model`): the declared medium loads
-the baseline's flapwise modes, and the fluid cause fits an unknown medium.
+the baseline's flapwise, torsion and lateral modes, and the fluid cause fits an unknown medium.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from scipy.interpolate import CubicSpline
 from scipy.special import kve
 
-__all__ = ["sader_gamma", "stokes_layer_mass", "MEDIA"]
+__all__ = ["sader_gamma", "torsion_gamma", "stokes_layer_mass", "MEDIA"]
 
 #: media a sidecar may name: (density kg/m^3, dynamic viscosity Pa s) at about 20-25 C
 MEDIA = {"vacuum": (0.0, 1.8e-5), "air": (1.18, 1.85e-5), "nitrogen": (1.14, 1.76e-5),
@@ -69,6 +80,70 @@ def sader_gamma(omega, width: float, rho_f: float, eta_f: float, circular: bool 
     return g.real + 1j * np.abs(g.imag)
 
 
+#: Green & Sader's torsional function of a thin plate, computed by probedyn's 2D oscillatory-Stokes FEM
+#: (``benchmarks/torsional_gamma_table.py`` -> ``benchmarks/results/torsional_gamma_table.json``; zero-thickness
+#: limit, estimated error <= 1.2e-4 relative): (Gamma_tor,r, Gamma_tor,i) at log10 Re = -1, -0.75, ..., 4
+_TORSION_LOG10_RE = np.arange(-1.0, 4.0 + 1e-9, 0.25)
+_TORSION_TABLE = np.array([
+    (10.3867, 163.906),
+    (8.96185, 93.6144),
+    (7.64864, 53.9256),
+    (6.46677, 31.4349),
+    (5.43049, 18.6155),
+    (4.54498, 11.2436),
+    (3.80613, 6.95115),
+    (3.20203, 4.41055),
+    (2.71625, 2.87569),
+    (2.33102, 1.9256),
+    (2.02918, 1.32164),
+    (1.79484, 0.927349),
+    (1.6138, 0.663365),
+    (1.47415, 0.482406),
+    (1.36649, 0.355689),
+    (1.28343, 0.265247),
+    (1.21927, 0.199613),
+    (1.16967, 0.151307),
+    (1.13127, 0.115347),
+    (1.10154, 0.0882988),
+    (1.07852, 0.0678124),
+])
+#: above Re = 1e4 (``benchmarks/torsional_gamma_table.py``'s ``fit_asymptote``): the boundary layer of a plate whose
+#: slip velocity is singular at the edges, ``Gamma - 1 = (sqrt 2 / pi) (1 + i) ln(Re) / sqrt(Re) + c1 / sqrt(Re) +
+#: c2 / Re + c3 ln(Re) / Re`` (the log coefficient from the slip ``Omega (x^2 - a^2/2) / sqrt(a^2 - x^2)``; c
+#: fitted to the table on [10^2.5, 10^4], residual <= 3e-5): (c1, c2, c3) of the real and the imaginary part
+_TORSION_LOG_COEF = math.sqrt(2.0) / math.pi
+_TORSION_ASYMPTOTE = ((3.62289, 0.446726, 0.858414), (2.27907, 9.19856, 2.8956))
+
+
+def torsion_gamma(omega, width: float, rho_f: float, eta_f: float) -> np.ndarray:
+    """Green & Sader's torsional function ``Gamma_tor,r + 1j * Gamma_tor,i`` (``Gamma_i > 0`` dissipative) at
+    angular frequency omega, ``Re = rho_f omega w^2 / (4 eta_f)`` (module docstring).
+
+    Interpolated in log Re (cubic, on ``ln Gamma_r`` and ``ln Gamma_i``) in the table's range [0.1, 1e4];
+    above it the fitted boundary-layer asymptote (:data:`_TORSION_ASYMPTOTE`); below it clipped to Re = 0.1 (a
+    lever far below that is not an AFM lever in a fluid). Limits (``tests/test_stokes2d.py``): ``Gamma_r -> 1``
+    as Re -> infinity (the inviscid plate), ``Re Gamma_i -> 16`` as Re -> 0 (the steady Stokes torque
+    ``2 pi eta a^2 Omega`` of a rotating flat plate of half-width a)."""
+    omega = np.asarray(omega, dtype=float)
+    re = rho_f * omega * width**2 / (4.0 * eta_f)
+    lo, hi = 10.0 ** _TORSION_LOG10_RE[0], 10.0 ** _TORSION_LOG10_RE[-1]
+    x = np.log10(np.clip(re, lo, hi))
+    g = np.exp(_TORSION_SPLINES[0](x)) + 1j * np.exp(_TORSION_SPLINES[1](x))
+    big = re > hi
+    if np.any(big):
+        r = np.asarray(re, float)[big] if np.ndim(re) else float(re)
+        terms = np.array([1.0 / np.sqrt(r), 1.0 / r, np.log(r) / r])
+        (cr, ci) = (np.asarray(c) for c in _TORSION_ASYMPTOTE)
+        ga = (1.0 + (1.0 + 1j) * _TORSION_LOG_COEF * np.log(r) / np.sqrt(r)
+              + np.tensordot(cr, terms, 1) + 1j * np.tensordot(ci, terms, 1))
+        if np.ndim(re):
+            g = np.array(g, complex)
+            g[big] = ga
+        else:
+            g = ga
+    return g
+
+
 def stokes_layer_mass(omega, rho_f: float, eta_f: float):
     """Added mass per unit area of one face of a plate oscillating in its own plane at angular frequency
     omega: ``rho_f delta / 2`` with ``delta = sqrt(2 eta_f / (rho_f omega))`` (module docstring); the
@@ -76,3 +151,7 @@ def stokes_layer_mass(omega, rho_f: float, eta_f: float):
     ``Q = (m + m_a) / m_a``."""
     omega = np.asarray(omega, dtype=float)
     return 0.5 * rho_f * np.sqrt(2.0 * eta_f / (rho_f * omega))
+
+
+_TORSION_SPLINES = tuple(CubicSpline(_TORSION_LOG10_RE, np.log(np.maximum(_TORSION_TABLE[:, j], 1e-300)))
+                         for j in (0, 1))

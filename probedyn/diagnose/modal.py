@@ -33,7 +33,7 @@ over the families. Probes without a beam model (a meshed tip, several materials,
 crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 %.
 
 **A declared fluid** (water, ethanol; not air on a silicon lever, where it is below a tenth of the noise) adds two
-directions of the same kind (:meth:`ModalProblem._hydro_setup`): the size of Sader's 2D load
+directions of the same kind (:meth:`ModalProblem._hydro_setup`): the size of the 2D load (Sader's, Green & Sader's)
 (:data:`HYDRO_Q_ASPECT` w / L) and whether it loads the 3D mode's transverse motion or, as the uniform-beam form
 does, its whole modal mass; a fluid model's flapwise Q carries the first as a floor. The second follows the
 model's own fluid, evaluated with every solve (its added-mass ratio and top-face share per mode): a fitted fluid
@@ -93,6 +93,12 @@ Q_INT_SCATTER = math.log(2.0)
 #: coefficient (no 3D hydrodynamic reference here). Held constant for every model that has a fluid (declared or
 #: fitted): a sigma that followed the fluid's share of the damping would let a fit widen its own error bars
 HYDRO_Q_ASPECT = 0.25
+#: the torsional function's zero-thickness limit against a section of thickness ratio t / w, per unit t / w (1 sigma
+#: of a torsion mode's ln Q in a fluid model): probedyn's 2D Stokes solver (docs/diagnose.md 9.21) moves
+#: Gamma_tor,i by +12 % (t/w = 0.1) and +27 % (0.2) at Re = 10, +10 % and +25 % at Re = 75, +4 % and +17 % at
+#: Re = 1000 -- at most 1.35 t / w. Green & Sader's function, as Sader's flexural one, is the zero-thickness limit
+#: that the diagnosis, like the usual generators, uses; the torsional damping is held to it within this much
+HYDRO_Q_TORSION_THICKNESS = 1.35
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 #: the model-form amplitude's prior, in units of the probe's own 1D-3D gap (module docstring): the real root
 #: lies between the beam (anticlastic curvature and warping free, -1) and the FEM's rigid clamp (both
@@ -147,6 +153,10 @@ class ModalProblem:
     #: thickness error (chi2 36.7), whose torsion prediction the bending modes fix. The spectra's modal
     #: problems inherit it.
     heldout_predictive = True
+    #: the likelihood carries the model's own error (the FEM's discretisation estimate in sigma, the 1D-3D and
+    #: hydrodynamic model-form directions profiled with their priors): under the baseline the residuals are
+    #: N(0, I), and a catalog cause's likelihood-ratio test alone may open a discrepancy (engine, step 2)
+    model_error_in_likelihood = True
 
     def __init__(self, data: ModalData, *, bases: dict | None = None) -> None:
         self.data = data
@@ -161,8 +171,8 @@ class ModalProblem:
         self.medium_name = d.medium_name
         # a baseline whose damping is intrinsic only (vacuum declared, or no medium declared) holds each
         # mode's Q to one intrinsic Q within its mode-to-mode scatter (Q_INT_SCATTER); in a declared fluid
-        # the fluid's computed damping dominates the flapwise modes' Q, held to the measurement's sigma (and
-        # the hydrodynamic model's accuracy), the other families' within the intrinsic scatter
+        # the fluid's computed damping dominates the flapwise, torsion and lateral modes' Q, held to the
+        # measurement's sigma (and the hydrodynamic model's accuracy), an axial mode's within the intrinsic scatter
         self.q_int_scatter = d.medium is None or d.medium[0] == 0.0
         self.n = len(d.freq)
         if self.n == 0:
@@ -213,6 +223,7 @@ class ModalProblem:
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
         b0 = self.reference_baseline
         self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
+        self.hydro_q_torsion = math.hypot(self.hydro_q, HYDRO_Q_TORSION_THICKNESS * b0.t / b0.w if b0.w > 0 else 0.0)
         self.gap_col = None  # the column of the fluid's 3D-mode vs uniform-beam direction, if any
         self._hydro_setup()
         self._static_setup()
@@ -223,9 +234,10 @@ class ModalProblem:
         if self.static is not None:
             self.group_labels.append("static spring constant")
         base: list[CauseParam] = []
-        # the Q rows a fluid model damps (flapwise: Sader; lateral: the faces' Stokes layers; torsion: not modelled)
-        self.q_fluid = (np.isin(np.asarray(d.family)[self.q_idx], ("flapwise", "lateral")) if len(self.q_idx)
+        # the Q rows a fluid model damps (flapwise: Sader; torsion: Green & Sader; lateral: the faces' Stokes layers)
+        self.q_fluid = (np.isin(np.asarray(d.family)[self.q_idx], ("flapwise", "torsion", "lateral")) if len(self.q_idx)
                        else np.zeros(0, bool))
+        self.q_torsion = np.asarray(d.family)[self.q_idx] == "torsion" if len(self.q_idx) else np.zeros(0, bool)
         if len(self.q_idx):
             q0 = float(np.median(d.Q[self.q_idx]))
             base.append(CauseParam("Q_int", "1", 1.0, 1e9, q0, "intrinsic quality factor (one loss factor for all modes)",
@@ -519,10 +531,11 @@ class ModalProblem:
                 sig = np.sqrt(sig**2 + Q_INT_SCATTER**2)
             elif fluid:
                 # a fluid in the model damps its flapwise modes by Sader's 2D function, accurate to HYDRO_Q_ASPECT
-                # w/L, and its lateral ones by the faces' Stokes layers (held alike); torsion's damping is the one
-                # Q_int in the model (the fluid's share is not modelled), held within the intrinsic scatter as in
-                # a vacuum
-                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2), np.sqrt(sig**2 + Q_INT_SCATTER**2))
+                # w/L, its torsion modes by Green & Sader's (and the section's thickness, HYDRO_Q_TORSION_THICKNESS
+                # t/w) and its lateral ones by the faces' Stokes layers (held alike); an axial mode's damping is the
+                # one Q_int, held within the intrinsic scatter as in a vacuum
+                hq = np.where(self.q_torsion, self.hydro_q_torsion, self.hydro_q)
+                sig = np.where(self.q_fluid, np.sqrt(sig**2 + hq**2), np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
         return np.where(np.isfinite(r), r, 1e6)

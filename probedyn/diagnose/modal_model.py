@@ -78,7 +78,7 @@ from scipy.optimize import brentq
 from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, SolverError
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
                                          reduced_stiffness_split, stretch_sensitivity)
-from probedyn.diagnose.hydrodynamics import sader_gamma, stokes_layer_mass
+from probedyn.diagnose.hydrodynamics import sader_gamma, stokes_layer_mass, torsion_gamma
 from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
 from probedyn.fem.eigen import factorize
 from probedyn.fem.elasticity import assemble_mass as el_mass
@@ -1009,15 +1009,17 @@ class ReducedModal:
                     sw = area * float(a[:q] @ sub.top_w @ a[:q])
                     f[k], Q[k] = _stokes_mode(float(a @ K @ a), float(a @ M @ a), sw, math.sqrt(lt[k]), rho_f, eta_f,
                                               s.fluid_factor, s.Q_int)
-                if fa != "flapwise" or lt[k] <= 0:
+                if fa not in ("flapwise", "torsion") or lt[k] <= 0:
                     continue
                 a = vt[:, k]
                 mq, sq = float(a @ M @ a), area * float(a[:q] @ sub.top @ a[:q])
                 f[k], Q[k], x = _fluid_mode(float(a @ K @ a), mq, sq, math.sqrt(lt[k]), w, rho_f, eta_f,
-                                            s.fluid_factor, s.Q_int)
+                                            s.fluid_factor, s.Q_int, torsion=fa == "torsion")
                 if hydro is not None:
                     hydro.setdefault("x", np.full(len(needed), np.nan))[k] = x
-                    hydro.setdefault("r", np.full(len(needed), np.nan))[k] = min(rho_t * sq / mq, 1.0)
+                    # the top face's share: flapwise only (torsion's load is the uniform beam's exactly)
+                    hydro.setdefault("r", np.full(len(needed), np.nan))[k] = (
+                        min(rho_t * sq / mq, 1.0) if fa == "flapwise" else np.nan)
         f[lt == 0] = np.nan
         return f, Q
 
@@ -1186,19 +1188,25 @@ def _lowest_pairs(K: np.ndarray, M: np.ndarray, n: int, shift: float) -> tuple[n
     return lam, V / mn[None, :]
 
 
-def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int):
+def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = False):
     """Loaded frequency [Hz], Q and added-mass ratio ``x`` (the fluid's added modal mass over the mode's own) of
     one flapwise mode (Rayleigh quotient with its shape): added mass ``(pi/4) rho_f w Gamma_r`` per unit area
-    of the top face, damping from Gamma_i, iterated to the loaded frequency."""
-    ma0 = factor * 0.25 * math.pi * rho_f * w * sq
+    of the top face's transverse motion, damping from Gamma_i, iterated to the loaded frequency.
+
+    ``torsion``: a torsion mode, ``(3 pi / 32) rho_f w Gamma_tor,r`` per unit area of the top face's transverse
+    motion: for a section rotating by theta (``u_t = theta y``, ``int u_t^2 dy = theta^2 w^3 / 12``) this is the
+    added moment of inertia ``(pi/128) rho_f w^4 Gamma_tor,r`` per length of Green & Sader (2002), i.e. their
+    uniform-beam loading exactly for a rigid section rotation (:func:`~probedyn.diagnose.hydrodynamics.torsion_gamma`)."""
+    gamma = torsion_gamma if torsion else sader_gamma
+    ma0 = factor * (3.0 * math.pi / 32.0 if torsion else 0.25 * math.pi) * rho_f * w * sq
     for _ in range(60):
-        g = complex(sader_gamma(om, w, rho_f, eta_f))
+        g = complex(gamma(om, w, rho_f, eta_f))
         om_new = math.sqrt(kq / (mq + ma0 * g.real))
         done = abs(om_new - om) <= 1e-14 * om
         om = om_new
         if done:
             break
-    g = complex(sader_gamma(om, w, rho_f, eta_f))
+    g = complex(gamma(om, w, rho_f, eta_f))
     qf = (mq + ma0 * g.real) / (ma0 * g.imag) if g.imag > 0 else math.inf
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 
@@ -1402,12 +1410,13 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
             a = md.shape
             f[k], Q[k] = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop_w @ a)), md.omega,
                                       rho_f, eta_f, s.fluid_factor, s.Q_int)
-        if Stop is not None and fa == "flapwise":
+        if Stop is not None and fa in ("flapwise", "torsion"):
             a = md.shape
             mq, sq = float(a @ (M @ a)), float(a @ (Stop @ a))
             f[k], Q[k], x_added[k] = _fluid_mode(float(a @ (K @ a)), mq, sq, md.omega, w, rho_f, eta_f,
-                                                 s.fluid_factor, s.Q_int)
-            r_top[k] = min(rho_t * sq / mq, 1.0)
+                                                 s.fluid_factor, s.Q_int, torsion=fa == "torsion")
+            if fa == "flapwise":
+                r_top[k] = min(rho_t * sq / mq, 1.0)
     info = {"dofs": model.dofs, "seconds": time.perf_counter() - t0, "families": fams,
             "frequencies_hz": res.frequencies_hz.tolist(), "hydro": {"x": x_added, "r": r_top}}
     return f, Q, info

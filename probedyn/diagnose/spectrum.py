@@ -469,7 +469,7 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
     cnt: dict[str, int] = {}
     rho_f, eta_f = medium if medium is not None else (0.0, 1.8e-5)
     loaded = rho_f > 0 and base.has_top
-    if loaded:  # the fluid's load: Sader's on the flapwise modes, the faces' Stokes layers on the lateral ones
+    if loaded:  # the fluid's load: Sader's on the flapwise modes, Green & Sader's on torsion, the Stokes layers on lateral
         K, M = base.model.assemble()
         Stop, Sw = top_face_forms(base.model, base.thickness_axis, base.width_axis)
     for md in base.result.modes:
@@ -478,9 +478,9 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
         item = {"family": fa, "order": cnt[fa], "f_Hz": md.frequency_hz, "Q_fluid": math.inf,
                 "k_eff_z": md.effective_stiffness_tip.get("z", math.inf)}
         a = md.shape
-        if loaded and fa == "flapwise":
+        if loaded and fa in ("flapwise", "torsion"):
             f, Q, _ = _fluid_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop @ a)), md.omega, base.w,
-                                  rho_f, eta_f, 1.0, math.inf)
+                                  rho_f, eta_f, 1.0, math.inf, torsion=fa == "torsion")
             item.update(f_Hz=f, Q_fluid=Q)
         elif loaded and fa == "lateral":
             f, Q = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Sw @ a)), md.omega, rho_f, eta_f,
