@@ -43,7 +43,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # complex SuperLU is ~100x s
 
 import numpy as np  # noqa: E402
 
-from probedyn.diagnose.hydrodynamics import sader_gamma  # noqa: E402
+from probedyn.diagnose.hydrodynamics import TORSION_LOG_COEF, sader_gamma  # noqa: E402
 from probedyn.fem.stokes2d import (MOTIONS, build_section_system, stress_integral, thin_limit,  # noqa: E402
                                    thin_thicknesses)
 
@@ -82,7 +82,7 @@ def point(re: float, refines) -> dict:
 #: flat plate makes the integral logarithmic, cut off at ~delta: Gamma - 1 = k (1 + i) sqrt(2) / (2 pi) ln(Re) /
 #: sqrt(Re) + O(1/sqrt(Re)), k = 1 for translation (u_s = U x / sqrt(a^2 - x^2)), k = 2 for rotation
 #: (u_s = Omega (x^2 - a^2/2) / sqrt(a^2 - x^2))
-LOG_COEF = {"flex": math.sqrt(2.0) / (2.0 * math.pi), "tor": math.sqrt(2.0) / math.pi}
+LOG_COEF = {"flex": TORSION_LOG_COEF / 2.0, "tor": TORSION_LOG_COEF}
 FORMS = {  # name: (columns of the fitted terms, whether the theoretical log term is subtracted first)
     "theory_log": (lambda re: [1 / np.sqrt(re), 1 / re, np.log(re) / re], True),
     "free_log": (lambda re: [1 / np.sqrt(re), np.log(re) / np.sqrt(re), 1 / re], False),

@@ -111,7 +111,8 @@ _TORSION_TABLE = np.array([
 #: slip velocity is singular at the edges, ``Gamma - 1 = (sqrt 2 / pi) (1 + i) ln(Re) / sqrt(Re) + c1 / sqrt(Re) +
 #: c2 / Re + c3 ln(Re) / Re`` (the log coefficient from the slip ``Omega (x^2 - a^2/2) / sqrt(a^2 - x^2)``; c
 #: fitted to the table on [10^2.5, 10^4], residual <= 3e-5): (c1, c2, c3) of the real and the imaginary part
-_TORSION_LOG_COEF = math.sqrt(2.0) / math.pi
+#: the log term's coefficient (per unit 1 + i) for rotation; translation's is half (its slip U x / sqrt(a^2 - x^2))
+TORSION_LOG_COEF = math.sqrt(2.0) / math.pi
 _TORSION_ASYMPTOTE = ((3.62289, 0.446726, 0.858414), (2.27907, 9.19856, 2.8956))
 
 
@@ -134,7 +135,7 @@ def torsion_gamma(omega, width: float, rho_f: float, eta_f: float) -> np.ndarray
         r = np.asarray(re, float)[big] if np.ndim(re) else float(re)
         terms = np.array([1.0 / np.sqrt(r), 1.0 / r, np.log(r) / r])
         (cr, ci) = (np.asarray(c) for c in _TORSION_ASYMPTOTE)
-        ga = (1.0 + (1.0 + 1j) * _TORSION_LOG_COEF * np.log(r) / np.sqrt(r)
+        ga = (1.0 + (1.0 + 1j) * TORSION_LOG_COEF * np.log(r) / np.sqrt(r)
               + np.tensordot(cr, terms, 1) + 1j * np.tensordot(ci, terms, 1))
         if np.ndim(re):
             g = np.array(g, complex)
