@@ -22,6 +22,20 @@ would build).
 Reported: correct cause first (the first finding), the false-discovery rate on the nulls (any
 finding) by truth kind, the median |fit - truth| / |truth - null| of the effect's main parameter
 when the cause is right, every miss with its class, run times (wall and CPU).
+
+Detectability (the criterion of every data kind, as ``diagnose_rates_curves.signal_chi2``): the
+effect's *signal* is the chi-square the diagnosis' baseline leaves on the **noise-free** record (the
+same case without its noise draws, the same stated noise), against the omnibus test's threshold
+``chi2_dof(1 - alpha) - dof`` (the signal at which the noisy test fires with even odds); a modal
+problem also has the targeted route (a cause's likelihood-ratio test at alpha / N), so the expected
+cause's noise-free gain ``chi2_base - chi2_cause`` against ``chi2_k(1 - alpha / N) - k`` counts too. A case
+below both is reported *below detectability* (with its signals) and left out of the correct-first
+rate over the detectable cases; the rate over all cases is reported beside it. Identifiability (as
+``diagnose_rates_curves.identifiability``): every catalog cause is fitted, nested in the baseline, to
+the noise-free record; if a rival's chi-square is within twice the evidence margin (2 ln 10 = 4.6) of
+the expected cause's, no amount of such data can name the expected cause rather than that rival (the
+diagnosis should say *confounded*): the correct-first rate is also given over the identifiable cases.
+``python benchmarks/diagnose_rates.py detect OUT.json`` adds the criterion to rows computed without it.
 """
 
 from __future__ import annotations
@@ -74,11 +88,59 @@ def run_case(folder, case):
     t0, c0 = time.perf_counter(), time.process_time()
     res = diagnose(_problem(path, lever))
     dt, dc = time.perf_counter() - t0, time.process_time() - c0
+    det = detectability(folder, case) if effect else None
     row = {"code": CODE, "seed": seed, "effect": effect, "lever": lever, "truth_kind": truth_kind, "truth": truth["params"],
+           "detectability": det,
            "declared_medium": case.get("declared_medium"), "static_rel": static, "verdict": res["verdict"],
            "findings": [f["cause"] for f in res["findings"]], "runtime_s": dt, "cpu_s": dc,
            "truth_runtime_s": t_truth, "truth_cpu_s": c_truth, "baseline_p": res["baseline"]["p_value"]}
     return add_outcome(row, res, effect, truth)
+
+
+def detectability(folder, case: dict) -> dict:
+    """The effect's noise-free signals and thresholds (module docstring, *Detectability*)."""
+    seed, effect, lever = case["seed"], case["effect"], case["lever"]
+    static = case.get("static_rel", STATIC_REL if case["truth_kind"] == "fem" else None)
+    path, _ = make_modal_case(Path(folder), seed, effect, lever, truth_kind=case["truth_kind"],
+                              declared_medium=case.get("declared_medium", "vacuum"), static_rel=static,
+                              noise_free=True, name=f"clean_{seed}")
+    return signals(_problem(path, lever), effect)
+
+
+def signals(prob, effect: str) -> dict:
+    """The baseline's chi-square on a noise-free problem ``prob`` against the omnibus threshold, and the
+    expected cause's gain against the targeted test's (where the problem has that route)."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter
+
+    F = Fitter(prob)
+    try:
+        base = F.baseline()
+        out = {"signal_chi2": float(base.chi2), "threshold": float(chi2_dist.ppf(1 - ALPHA, base.dof)) - base.dof}
+        det = out["signal_chi2"] >= out["threshold"]
+        cause = [c for c in prob.causes if c.key == effect]
+        if not cause:
+            out["detectable"] = bool(det)
+            return out
+        # every catalog cause nested in the baseline on the noise-free record, as the diagnosis fits them
+        chi = {c.key: float(f.chi2) for c, f in zip(prob.causes, F.map_nested([(base, (c,), None) for c in prob.causes]))}
+        if getattr(prob, "model_error_in_likelihood", False):
+            k = len(cause[0].params)
+            out["targeted_signal"] = float(base.chi2) - chi[effect]
+            out["targeted_threshold"] = float(chi2_dist.ppf(1 - ALPHA / len(prob.causes), k)) - k
+            det = det or out["targeted_signal"] >= out["targeted_threshold"]
+        out["detectable"] = bool(det)
+        # identifiability (as diagnose_rates_curves.identifiability): a rival whose noise-free chi-square is
+        # within twice the evidence margin of the expected cause's cannot be told from it by such data
+        rivals = {k: v for k, v in chi.items() if k != effect}
+        if rivals:
+            rival = min(rivals, key=rivals.get)
+            out.update(rival=rival, rival_gap_chi2=rivals[rival] - chi[effect],
+                       identifiable=bool(rivals[rival] - chi[effect] >= 2 * EVIDENCE_MARGIN))
+        return out
+    finally:
+        F.close_pool()
 
 
 def add_outcome(row: dict, res: dict, effect: str | None, truth: dict) -> dict:
@@ -99,8 +161,28 @@ def add_outcome(row: dict, res: dict, effect: str | None, truth: dict) -> dict:
     return row
 
 
+def detectable(r: dict) -> bool:
+    """A row without the criterion counts as detectable."""
+    return not r.get("detectability") or r["detectability"]["detectable"]
+
+
+def identifiable(r: dict) -> bool:
+    """A detectable row whose expected cause no rival matches on the noise-free record (without the criterion: yes)."""
+    return detectable(r) and (not r.get("detectability") or r["detectability"].get("identifiable", True))
+
+
 def miss_class(r) -> str:
-    """The class of a miss: no discrepancy found, a cause claimed but confounded, or another cause first."""
+    """The class of a miss: below detectability, no discrepancy found, a cause claimed but confounded, or
+    another cause first."""
+    if not detectable(r):
+        d = r["detectability"]
+        return (f"below detectability (noise-free signal chi2 {d['signal_chi2']:.3g} < {d['threshold']:.3g}"
+                + (f", targeted {d['targeted_signal']:.3g} < {d['targeted_threshold']:.3g}" if "targeted_signal" in d
+                   else "") + ")")
+    if not identifiable(r):
+        d = r["detectability"]
+        return (f"not identifiable (rival {d['rival']} within {d['rival_gap_chi2']:.2g} of chi2 on the noise-free "
+                f"record): " + (f"{r['findings'][0]} first" if r["findings"] else r["verdict"]))
     if not r["findings"]:
         return "not detected (" + r["verdict"] + ")"
     if r.get("correct_in_group"):
@@ -114,9 +196,18 @@ def summarize(rows):
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
     misses = [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings", "group")},
                "class": miss_class(r)} for r in eff if not r.get("correct_first")]
+    det = [r for r in eff if detectable(r)]
     return {
         "n_effect": len(eff), "n_null": len(nul),
         "correct_first": float(np.mean([bool(r.get("correct_first")) for r in eff])) if eff else None,
+        "n_detectable": len(det) if all(r.get("detectability") for r in eff) else None,
+        "correct_first_of_detectable": float(np.mean([bool(r.get("correct_first")) for r in det]))
+        if det and all(r.get("detectability") for r in eff) else None,
+        "below_detectability": [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings")},
+                                 **r["detectability"]} for r in eff if not detectable(r)],
+        "n_identifiable": sum(identifiable(r) for r in det) if all(r.get("detectability") for r in eff) else None,
+        "correct_first_of_identifiable": float(np.mean([bool(r.get("correct_first")) for r in det if identifiable(r)]))
+        if any(identifiable(r) for r in det) and all(r.get("detectability") for r in eff) else None,
         "correct_in_confounded_group": float(np.mean([bool(r.get("correct_in_group")) for r in eff])) if eff else None,
         "false_discovery_fem_nulls": float(np.mean([bool(r["findings"]) for r in nul if r["truth_kind"] == "fem"]))
         if any(r["truth_kind"] == "fem" for r in nul) else None,
@@ -166,8 +257,27 @@ def run_cases(mixed: list, rows: list, outp: Path, run, keys: tuple) -> dict:
     return summarize(rows)
 
 
+def add_detectability(out: str) -> dict:
+    """The detectability and identifiability criteria added to the hidden-effect rows of ``out`` that lack them
+    (atomically)."""
+    outp = Path(out)
+    rows = json.loads(outp.read_text())["rows"]
+    with tempfile.TemporaryDirectory() as d:
+        for r in rows:
+            if r["effect"] and "identifiable" not in (r.get("detectability") or {}):
+                r["detectability"] = detectability(d, {**r, "static_rel": r.get("static_rel")})
+                print(json.dumps({"seed": r["seed"], "effect": r["effect"], **r["detectability"]}), flush=True)
+    tmp = outp.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
+    os.replace(tmp, outp)
+    return summarize(rows)
+
+
 if __name__ == "__main__":
     args = list(sys.argv[1:])
+    if args and args[0] == "detect":
+        print(json.dumps(add_detectability(args[1]), indent=1, default=float))
+        sys.exit(0)
     if "--static" in args:
         i = args.index("--static")
         STATIC_REL = float(args[i + 1])

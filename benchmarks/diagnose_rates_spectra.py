@@ -18,6 +18,14 @@ modal study's builders), equipartition areas at an off-axis detector spot, Sader
 internal loss factor (Q 200-1000), white + 1/f background, 0-2 spurs, Gamma periodogram scatter.
 Diagnosis: ``spectrum_problem`` (peaks identified against the nominal FEM) then the modal engine.
 
+Detectability (the criterion of every data kind, ``diagnose_rates.detectability``): the baseline's
+chi-square on the **noise-free** spectrum's identified peaks (the expected PSD, no periodogram scatter,
+the same declared averages) against the omnibus threshold, and the expected cause's noise-free gain
+against the targeted test's; a case below both is reported below detectability, and the correct-first
+rate is given over all cases, over the detectable ones and over the identifiable ones (no rival cause
+within twice the evidence margin of the expected one's noise-free chi-square). ``python benchmarks/diagnose_rates_spectra.py
+detect OUT.json`` adds the criterion to rows computed without it.
+
 Reported: correct cause first (the first finding), correct within the reported confounded group,
 false discoveries on the nulls (any finding) by truth kind, the median |fit - truth| / |truth - null|
 of the effect's main parameter when the cause is right, the peaks identified, every miss with its
@@ -40,7 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from diagnose_rates import MAIN, miss_class  # noqa: E402
+from diagnose_rates import MAIN, detectable, identifiable, miss_class, signals  # noqa: E402
 from diagnose_truth_spectra import make_spectrum_case, spectrum_cases, spectrum_fem_truth  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose  # noqa: E402
@@ -62,8 +70,10 @@ def run_case(folder, case: dict) -> dict:
     path, truth = make_spectrum_case(Path(folder), seed, effect, lever, truth_kind=case["truth_kind"],
                                      declared_medium=case["declared_medium"])
     t_truth, c_truth = time.perf_counter() - t0, time.process_time() - c0
+    det = detectability(folder, case) if effect else None
     t0, c0 = time.perf_counter(), time.process_time()
     row = {"code": CODE, "seed": seed, "effect": effect, "lever": lever, "truth_kind": case["truth_kind"],
+           "detectability": det,
            "declared_medium": case["declared_medium"], "truth": truth["params"],
            "truth_modes": [(m["family"], m["order"], m["f"]) for m in truth["modes"]], "spurs_Hz": truth["spurs_Hz"],
            "averages": truth["averages"], "Q_int": truth["Q_int"], "truth_cpu_s": c_truth}
@@ -85,6 +95,17 @@ def run_case(folder, case: dict) -> dict:
         row.update(first=f0["cause"], group=[f0["cause"], *f0.get("confounded_with", [])],
                    fitted={k: v.get("value") for k, v in f0["parameters"].items()})
     return _score(row, effect, truth)
+
+
+def detectability(folder, case: dict) -> dict:
+    """The effect's noise-free signals and thresholds (module docstring)."""
+    path, _ = make_spectrum_case(Path(folder), case["seed"], case["effect"], case["lever"], truth_kind=case["truth_kind"],
+                                 declared_medium=case["declared_medium"], noise_free=True, name=f"clean_{case['seed']}")
+    try:
+        prob = spectrum_problem(read_measurement(path), base=_BASES.get(case["lever"]))
+    except Exception as e:  # noqa: BLE001 -- no peak identified on the noise-free record: nothing to detect
+        return {"detectable": False, "signal_chi2": 0.0, "threshold": 0.0, "error": str(e)}
+    return signals(prob, case["effect"])
 
 
 def _score(row: dict, effect, truth) -> dict:
@@ -110,9 +131,19 @@ def summarize(rows: list[dict]) -> dict:
         rr = [r for r in nul if r["truth_kind"] == kind]
         return {"n": len(rr), "false": sum(bool(r["findings"]) for r in rr)} if rr else None
 
+    det = [r for r in eff if detectable(r)]
+    all_det = bool(eff) and all(r.get("detectability") for r in eff)
     return {
         "n_effect": len(eff), "n_null": len(nul),
         "correct_first": float(np.mean([bool(r.get("correct_first")) for r in eff])) if eff else None,
+        "n_detectable": len(det) if all_det else None,
+        "correct_first_of_detectable": float(np.mean([bool(r.get("correct_first")) for r in det]))
+        if det and all_det else None,
+        "below_detectability": [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings")},
+                                 **r["detectability"]} for r in eff if not detectable(r)],
+        "n_identifiable": sum(identifiable(r) for r in det) if all_det else None,
+        "correct_first_of_identifiable": float(np.mean([bool(r.get("correct_first")) for r in det if identifiable(r)]))
+        if all_det and any(identifiable(r) for r in det) else None,
         "correct_in_confounded_group": float(np.mean([bool(r.get("correct_in_group")) for r in eff])) if eff else None,
         "false_discovery": float(np.mean([bool(r["findings"]) for r in nul])) if nul else None,
         "false_discovery_fem_nulls": fd("fem"), "false_discovery_timoshenko_nulls": fd("timoshenko"),
@@ -170,7 +201,25 @@ def truths_only(n_effect: int, n_null: int) -> None:
         print(c["seed"], c["effect"], c["lever"], f"{time.process_time() - t0:.1f} s cpu", flush=True)
 
 
+def add_detectability(out: Path) -> dict:
+    """The detectability and identifiability criteria added to the hidden-effect rows of ``out`` that lack them
+    (atomically)."""
+    rows = json.loads(out.read_text())["rows"]
+    with tempfile.TemporaryDirectory() as d:
+        for r in rows:
+            if r["effect"] and "identifiable" not in (r.get("detectability") or {}):
+                r["detectability"] = detectability(d, r)
+                print(json.dumps({"seed": r["seed"], "effect": r["effect"], **r["detectability"]}), flush=True)
+    tmp = out.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
+    os.replace(tmp, out)
+    return summarize(rows)
+
+
 if __name__ == "__main__":
+    if sys.argv[1:2] == ["detect"]:
+        print(json.dumps(add_detectability(Path(sys.argv[2])), indent=1, default=float))
+        sys.exit(0)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     n_eff = int(args[0]) if args else 50
     n_null = int(args[1]) if len(args) > 1 else 50

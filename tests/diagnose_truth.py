@@ -423,15 +423,16 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
 def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, noise: float = 1e-3,
                     q_noise: float = 0.05, with_Q: bool | None = None, declared_medium: str | None = "vacuum",
                     truth_kind: str = "fem", compute: bool = True, params: dict | None = None,
-                    name: str | None = None, tip: dict | None = None, static_rel: float | None = None
-                    ) -> tuple[Path, dict]:
+                    name: str | None = None, tip: dict | None = None, static_rel: float | None = None,
+                    noise_free: bool = False) -> tuple[Path, dict]:
     """Write a modal measurement of lever ``lever`` (a name of LEVERS or a geometry dict, whose truth is
     solved uncached) with a hidden ``effect`` (None: noise only); ``params``: the effect's parameters
     (default: drawn from ``seed``); ``name``: the file stem (default ``modal_<seed>``); ``tip``: the lever
     carries a meshed tip (:func:`tip_overrides`, FEM truths only), declared in the sidecar's [probe];
     ``static_rel``: also a measured static spring constant (:func:`cached_static_truth`, FEM truths of a
     named lever only) with that relative noise, declared in [static] (its own random stream: the
-    frequencies are those of the case without it)."""
+    frequencies are those of the case without it); ``noise_free``: the record without its noise (the
+    same draws are consumed and the same noise is stated: the detectability criterion's record)."""
     rng = np.random.default_rng(seed)
     if params is None:
         params = draw_modal_effect(effect, lever, rng) if effect else {}
@@ -468,8 +469,8 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
                 Q[k] = 1 / (1 / Q_int + 1 / qf)
     if with_Q is None:
         with_Q = bool(rng.uniform() < 0.5) or effect == "fluid-loading"
-    f_meas = f * (1 + noise * rng.standard_normal(len(f)))
-    Q_meas = Q * np.exp(q_noise * rng.standard_normal(len(f)))
+    f_meas = f * (1 + noise * rng.standard_normal(len(f)) * (not noise_free))
+    Q_meas = Q * np.exp(q_noise * rng.standard_normal(len(f)) * (not noise_free))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     name = name or f"modal_{seed}"
@@ -485,7 +486,7 @@ def make_modal_case(outdir: Path, seed: int, effect: str | None, lever: str = "A
         if truth_kind != "fem" or tip or not isinstance(lever, str):
             raise ValueError("a static spring constant is generated for untipped FEM truths of a named lever only")
         k_true = cached_static_truth(lever, effect, params)
-        k_meas = k_true * (1 + static_rel * np.random.default_rng(seed + 10**6).standard_normal())
+        k_meas = k_true * (1 + static_rel * np.random.default_rng(seed + 10**6).standard_normal() * (not noise_free))
         static = f"\n[static]\nspring_constant = {k_meas:.8g}\nsigma = {static_rel * k_meas:.6g}\n"
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "modal"\ndata = "{name}.csv"\n\n[probe]\nname = "cantilever"\n'

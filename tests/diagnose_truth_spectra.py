@@ -124,14 +124,17 @@ def thermal_lines(freq, f0s, Qs, areas) -> np.ndarray:
 
 def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str = "A", *, truth_kind: str = "fem",
                        declared_medium: str | None = "vacuum", T: float = 295.0, params: dict | None = None,
-                       name: str | None = None, f_max: float | None = None) -> tuple[Path, dict]:
+                       name: str | None = None, f_max: float | None = None,
+                       noise_free: bool = False) -> tuple[Path, dict]:
     """Write a thermal spectrum of lever ``lever`` with a hidden ``effect`` (None: noise only).
 
     ``effect = "fluid-loading"``: the lever is in water, ethanol or air and the medium is not declared. Otherwise the
     truth is in ``declared_medium`` (vacuum or air; in air Sader loading of the flapwise modes).
     ``params``: the effect's parameters (default: drawn from ``seed``; the seed's draws are consumed either
     way, so the instrument draws are the same); ``name``: the file stem (default ``spectrum_<seed>``);
-    ``f_max``: the detector's bandwidth [Hz] (default: 1.2 x the highest of flapwise 3, lateral 1, torsion 1)."""
+    ``f_max``: the detector's bandwidth [Hz] (default: 1.2 x the highest of flapwise 3, lateral 1, torsion 1);
+    ``noise_free``: the expected PSD without the periodogram's scatter (the same draws are consumed and the same
+    averages declared: the detectability criterion's record)."""
     rng = np.random.default_rng(seed)
     drawn = draw_modal_effect(effect, lever, rng) if effect else {}
     params = dict(drawn if params is None else params)
@@ -176,7 +179,8 @@ def make_spectrum_case(outdir: Path, seed: int, effect: str | None, lever: str =
         S[j] += 10 ** rng.uniform(1.0, 3.0) * white * (1 + fc / freq[j]) * 5.0
         spurs.append(float(freq[j]))
     averages = int(rng.choice([16, 32, 64]))
-    S = S * rng.gamma(averages, 1.0 / averages, size=len(S))
+    scatter = rng.gamma(averages, 1.0 / averages, size=len(S))
+    S = S if noise_free else S * scatter
     f_rel = float(rng.choice([1e-4, 3e-4, 1e-3]))
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)

@@ -205,11 +205,13 @@ def test_a_declared_liquid_carries_the_hydrodynamic_models_uncertainty(tmp_path,
     """A noise-only lever B in declared water (truth: the FEM's vacuum modes loaded by Sader's uniform-beam form,
     ``f_v / sqrt(1 + T Gamma_r)``, the form Sader's calibration method uses): the diagnosis loads the 3D mode's
     top face (Rayleigh quotient), which leaves the rotary inertia's 3-7 % of flapwise 2's and 3's modal mass
-    unloaded, and Sader's 2D function itself leaves out the flow about the free end. Both enter as model-form
-    directions (``ModalProblem._hydro_setup``); without them a point mass is claimed on this null."""
+    unloaded, and Sader's 2D function itself leaves out the flow about the free end and the section's thickness.
+    They enter as model-form directions (``ModalProblem._hydro_setup``); without them a point mass is claimed on
+    this null."""
     path, _ = make_modal_case(tmp_path, 5101, None, "B", declared_medium="water", with_Q=True)
     prob = ModalProblem(read_measurement(path))
-    assert prob.mf_names[1:] == ("hydrodynamic load (Sader 2D)", "fluid on the 3D mode or the uniform beam")
+    assert prob.mf_names[1:] == ("hydrodynamic load (Sader 2D)", "section thickness in the fluid load",
+                                 "fluid on the 3D mode or the uniform beam")
     res = diagnose(prob)
     assert not res["findings"], [f["cause"] for f in res["findings"]]
     monkeypatch.setattr(ModalProblem, "_hydro_setup", lambda self: None)

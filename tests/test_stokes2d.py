@@ -128,3 +128,20 @@ def test_reaction_agrees_with_stress_integral():
     for m in MOTIONS:
         flow = thinnest(10.0)[m]
         assert abs(stress_integral(flow) / flow.load - 1) < 1e-2, m
+
+
+@pytest.mark.parametrize("h, tol", [(0.1, 1.5e-3), (0.15, 6e-3)])
+def test_section_thickness_table_matches_a_fresh_solve(h, tol):
+    """``hydrodynamics.section_thickness_change`` (the diagnosis' table, ``benchmarks/section_thickness_table.py``)
+    against a fresh solve of the section at Re = 10 on the test mesh: on a table point (t/w = 0.1) within the mesh's
+    effect on the ratio (1.5e-3 of Gamma), between points (0.15) within the linear interpolation's own error in t/w
+    (the change is convex in t/w: 6e-3). A thicker section carries more fluid in both motions."""
+    from probedyn.diagnose.hydrodynamics import section_thickness_change
+
+    re = 10.0
+    sol = build_section_system(re, h, refine=REFINE).solve(re)
+    for motion, key in (("translate", "flexure"), ("rotate", "torsion")):
+        g, g0 = sol[motion].gamma, thin(re)[motion].gamma
+        dr, di = section_thickness_change(re, h, key)
+        assert abs(g.real / g0.real - 1 - dr) < tol and abs(g.imag / g0.imag - 1 - di) < tol, (motion, g / g0, dr, di)
+        assert dr > 0.0

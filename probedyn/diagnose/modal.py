@@ -32,10 +32,12 @@ the sensitivity there; a uniform modulus change is not absorbed, because the gap
 over the families. Probes without a beam model (a meshed tip, several materials, an anisotropic
 crystal) keep a uniform stiffness direction of prior sigma ``MF_UNIFORM`` = 0.5 %.
 
-**A declared fluid** (water, ethanol; not air on a silicon lever, where it is below a tenth of the noise) adds two
+**A declared fluid** (water, ethanol; not air on a silicon lever, where it is below a tenth of the noise) adds three
 directions of the same kind (:meth:`ModalProblem._hydro_setup`): the size of the 2D load (Sader's, Green & Sader's)
-(:data:`HYDRO_Q_ASPECT` w / L) and whether it loads the 3D mode's transverse motion or, as the uniform-beam form
-does, its whole modal mass; a fluid model's flapwise Q carries the first as a floor. The second follows the
+(:data:`HYDRO_Q_ASPECT` w / L), the section's thickness (both functions are thin-section limits; a real section of
+t/w = 0.1 carries 4-12 % more fluid, :func:`~probedyn.diagnose.hydrodynamics.section_thickness_change`), and whether
+the load acts on the 3D mode's transverse motion or, as the uniform-beam form does, on its whole modal mass; a
+fluid model's flapwise and torsion Q carry the first two as a floor. The second follows the
 model's own fluid, evaluated with every solve (its added-mass ratio and top-face share per mode): a fitted fluid
 (no medium declared) carries it too. **A measured static spring
 constant** (``[static]``) is one more row of the same profile (:meth:`ModalProblem._static_setup`).
@@ -71,7 +73,7 @@ import numpy as np
 from probedyn.core.errors import DataFormatError, GeometryError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import ModalData
-from probedyn.diagnose.hydrodynamics import MEDIA
+from probedyn.diagnose.hydrodynamics import MEDIA, section_thickness_change
 from probedyn.diagnose.modal_model import (FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve,
                                            full_static_stiffness)
 
@@ -93,12 +95,6 @@ Q_INT_SCATTER = math.log(2.0)
 #: coefficient (no 3D hydrodynamic reference here). Held constant for every model that has a fluid (declared or
 #: fitted): a sigma that followed the fluid's share of the damping would let a fit widen its own error bars
 HYDRO_Q_ASPECT = 0.25
-#: the torsional function's zero-thickness limit against a section of thickness ratio t / w, per unit t / w (1 sigma
-#: of a torsion mode's ln Q in a fluid model): probedyn's 2D Stokes solver (docs/diagnose.md 9.21) moves
-#: Gamma_tor,i by +12 % (t/w = 0.1) and +27 % (0.2) at Re = 10, +10 % and +25 % at Re = 75, +4 % and +17 % at
-#: Re = 1000 -- at most 1.35 t / w. Green & Sader's function, as Sader's flexural one, is the zero-thickness limit
-#: that the diagnosis, like the usual generators, uses; the torsional damping is held to it within this much
-HYDRO_Q_TORSION_THICKNESS = 1.35
 MF_BOUND = 3.0  # the priors are truncated at 3 sigma: model form is bounded, a larger discrepancy is not model form
 #: the model-form amplitude's prior, in units of the probe's own 1D-3D gap (module docstring): the real root
 #: lies between the beam (anticlastic curvature and warping free, -1) and the FEM's rigid clamp (both
@@ -223,7 +219,7 @@ class ModalProblem:
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
         b0 = self.reference_baseline
         self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
-        self.hydro_q_torsion = math.hypot(self.hydro_q, HYDRO_Q_TORSION_THICKNESS * b0.t / b0.w if b0.w > 0 else 0.0)
+        self.q_thickness = np.zeros(len(self.q_idx))  # the section's thickness in each fluid-damped Q (_hydro_setup)
         self.gap_col = None  # the column of the fluid's 3D-mode vs uniform-beam direction, if any
         self._hydro_setup()
         self._static_setup()
@@ -300,6 +296,14 @@ class ModalProblem:
           ratio, ``r_i`` the top face's share of the modal mass) is bracketed like the 1D-3D gap: prior
           N(MF_CENTRE, MF_SCALE^2) with the sign turned (between the 3D load, 0, and the uniform beam's, 1).
 
+        * *the section's thickness*: both functions are the zero-thickness limits; the real section (t/w of the probe)
+          changes Gamma_r by ``dGamma_r(Re_i, t/w)`` (:func:`~.hydrodynamics.section_thickness_change`, probedyn's
+          2D Stokes table at each mode's Re), moving ``ln f_i`` by ``-ln((1 + x_i (1 + dGamma_r)) / (1 + x_i)) / 2``
+          (:meth:`_thickness`): bracketed like the gap, N(MF_CENTRE, MF_SCALE^2) with the sign turned (0: the thin
+          section, 1: the real one). The damping's change (and the added mass's share of it) is the fluid-damped Q
+          rows' floor ``q_thickness`` beside ``HYDRO_Q_ASPECT w / L``, in every fluid model (declared or fitted;
+          evaluated once, in the largest fluid a model of the problem can carry, below).
+
         In water a few % of load error moves flapwise frequencies by percents, far beyond their noise: without
         these every declared liquid would read as an excess load or a mass. Each is added only where it can
         matter (its largest shift at least a tenth of the median relative frequency noise: not for air on a
@@ -318,23 +322,55 @@ class ModalProblem:
                        else (1.2 * MEDIA["air"][0], MEDIA["air"][1]))
         load = np.zeros(self.n)
         gap = np.zeros(self.n)
+        thick = np.zeros(self.n)
+        q_thick = np.zeros(self.n)
         for L in self.lengths:
             s_f = self.state({}, (), L)
             s_f.medium = tuple(probe_fluid)
             h: dict = {}
-            self._red(L).solve(s_f, self.need_of[L], hydro=h)
+            ff, _ = self._red(L).solve(s_f, self.need_of[L], hydro=h)
             x = np.nan_to_num(h.get("x", np.zeros(len(self.need_of[L]))))
             load[self.rows_of[L]] = -0.5 * x / (1.0 + x) * self.hydro_q
             gap[self.rows_of[L]] = self._gap(self.bases[L], x, h.get("r"))
+            thick[self.rows_of[L]], q_thick[self.rows_of[L]] = self._thickness(self.bases[L], self.need_of[L], ff, x,
+                                                                                probe_fluid)
+        self.q_thickness = q_thick[self.q_idx]
         floor = 0.1 * float(np.median(self.sigma_f / d.freq))
         if declared and np.max(np.abs(load)) >= floor:
             self.mf_dirs = np.column_stack([self.mf_dirs, load])
             self.mf_names = self.mf_names + ("hydrodynamic load (Sader 2D)",)
+        if declared and np.max(np.abs(thick)) >= floor:
+            # bracketed like the gap below: 0 the thin section (Sader's, Green & Sader's), 1 the real one
+            self.mf_offset = self.mf_offset - MF_CENTRE * thick
+            self.mf_dirs = np.column_stack([self.mf_dirs, MF_SCALE * thick])
+            self.mf_names = self.mf_names + ("section thickness in the fluid load",)
         if np.max(np.abs(gap)) >= floor:
             # its size follows the model's own fluid (declared or fitted): filled in each evaluation
             self.gap_col = self.mf_dirs.shape[1]
             self.mf_dirs = np.column_stack([self.mf_dirs, np.zeros(self.n)])
             self.mf_names = self.mf_names + ("fluid on the 3D mode or the uniform beam",)
+
+    @staticmethod
+    def _thickness(b, need, f: np.ndarray, x: np.ndarray, fluid) -> tuple[np.ndarray, np.ndarray]:
+        """What the section's thickness does to each mode in ``fluid`` (:func:`~.hydrodynamics.section_thickness_change`
+        at the mode's Re and the probe's t/w; flapwise: Sader's function, torsion: Green & Sader's; 0 for the
+        other families): the shift of ``ln f``, ``-ln((1 + x (1 + dGamma_r)) / (1 + x)) / 2`` (``x`` the fluid's
+        added-mass ratio of the thin-section load), and the relative change of the fluid's Q,
+        ``|(1 + dGamma_r x / (1 + x)) / (1 + dGamma_i) - 1|`` (``Q_fluid ~ (m + m_a) / (c / omega)``)."""
+        shift = np.zeros(len(need))
+        dq = np.zeros(len(need))
+        rho_f, eta_f = fluid
+        if b.w <= 0 or b.t <= 0 or rho_f <= 0 or eta_f <= 0:
+            return shift, dq
+        re = rho_f * 2.0 * math.pi * np.asarray(f, float) * b.w**2 / (4.0 * eta_f)
+        for motion, fam in (("flexure", "flapwise"), ("torsion", "torsion")):
+            m = np.array([fa == fam for fa, _ in need]) & np.isfinite(re) & (x > 0)
+            if not m.any():
+                continue
+            dr, di = section_thickness_change(re[m], b.t / b.w, motion)
+            shift[m] = -0.5 * np.log((1.0 + x[m] * (1.0 + dr)) / (1.0 + x[m]))
+            dq[m] = np.abs((1.0 + dr * x[m] / (1.0 + x[m])) / (1.0 + di) - 1.0)
+        return shift, dq
 
     @staticmethod
     def _gap(b, x: np.ndarray, r: np.ndarray | None) -> np.ndarray:
@@ -531,11 +567,11 @@ class ModalProblem:
                 sig = np.sqrt(sig**2 + Q_INT_SCATTER**2)
             elif fluid:
                 # a fluid in the model damps its flapwise modes by Sader's 2D function, accurate to HYDRO_Q_ASPECT
-                # w/L, its torsion modes by Green & Sader's (and the section's thickness, HYDRO_Q_TORSION_THICKNESS
-                # t/w) and its lateral ones by the faces' Stokes layers (held alike); an axial mode's damping is the
-                # one Q_int, held within the intrinsic scatter as in a vacuum
-                hq = np.where(self.q_torsion, self.hydro_q_torsion, self.hydro_q)
-                sig = np.where(self.q_fluid, np.sqrt(sig**2 + hq**2), np.sqrt(sig**2 + Q_INT_SCATTER**2))
+                # w/L, its torsion modes by Green & Sader's -- both thin-section limits, held also within the
+                # section's thickness (q_thickness, _hydro_setup) -- and its lateral ones by the faces' Stokes layers
+                # (held alike); an axial mode's damping is the one Q_int, held within the intrinsic scatter as in a vacuum
+                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2 + self.q_thickness**2),
+                               np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
         return np.where(np.isfinite(r), r, 1e6)

@@ -74,6 +74,7 @@ MAX_GRID_1D = 96  # values per parameter of a one-parameter cause's hypotheses (
 MAX_GRID_2D = 24  # per parameter of a two-parameter cause (a product grid)
 MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
 MAX_ASSIGNMENTS = 24  # one-to-one assignments of the peaks of a window holding several modes, per labelling
+NARROW_MAX_BINS = 6.0  # the widest a line found narrow (at most 3 bins at half its local prominence) is fitted
 DOUBLET_PLACES = 4  # independent centres of a second line within +- 1 width of a peak (resolved to ~1/2 width)
 CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
 
@@ -91,45 +92,96 @@ def log_scatter(psd: np.ndarray, averages: int | None) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2))
 
 
+def _gamma_ratio(m: float, n_windows: float) -> float:
+    """ln of the ratio of the upper to the lower quantile of a Gamma(m, 1/m) variable at 1 % / n_windows."""
+    a = 0.01 / max(n_windows, 1.0)
+    return math.log(gamma_dist.isf(a, m) / gamma_dist.ppf(a, m))
+
+
+def _averages(s_log: float, averages: int | None) -> float:
+    return averages if averages else max(1.0, 1.0 / max(s_log, 1e-6) ** 2)
+
+
+def _smoothing(n: int) -> int:
+    return max(1, min(n // 4000, 8))
+
+
+def narrow_lines(psd: np.ndarray, s_log: float, averages: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Narrow lines (at most 3 bins wide) standing out of their neighbourhood, and the spectrum with them notched.
+
+    A narrow line's prominence and width are measured in its neighbourhood (+- 2 k + 4 bins, k the
+    smoothing half-width of :func:`detect_peaks`), not down to the spectrum's far background: a spur
+    on a mode's flank is one bin above the flank, but as wide as the mode at half its prominence over
+    the background. The threshold is the ratio of the Gamma quantiles of one bin at 1 % over the
+    spectrum's bins (at least a factor 5). Returns the line indices, their prominences (ln) and the
+    PSD with each line's bins replaced by the median of its neighbourhood: the background and broad
+    lines beneath, on which the broad peaks are searched and fitted (smoothed, a spur on a mode's flank is a
+    maximum that the flank only rises into, and the mode beneath has no maximum of its own: a torsion
+    line of Q 32 in water 15 kHz below a spur was never fitted, its power then split flapwise 3 into
+    a phantom doublet, and the line fit started on the mode wandered onto the spur)."""
+    logp = np.log(np.maximum(psd, 1e-300))
+    k = _smoothing(len(psd))
+    idx, props = find_peaks(logp, prominence=max(_gamma_ratio(_averages(s_log, averages), len(psd)), math.log(5.0)),
+                            width=(None, 3), wlen=2 * (2 * k + 4) + 1)
+    clean = psd.copy()
+    for l, r in zip(props["left_ips"], props["right_ips"]):
+        a, b = int(math.floor(l)), int(math.ceil(r)) + 1
+        ring = np.r_[max(a - 2 * k - 4, 0):a, b:min(b + 2 * k + 4, len(psd))]
+        if len(ring):
+            clean[a:b] = np.median(psd[ring])
+    return idx, props["prominences"], clean
+
+
 def detect_peaks(freq: np.ndarray, psd: np.ndarray, s_log: float, max_peaks: int = 12,
                  averages: int | None = None) -> list[int]:
-    """Peaks of ln(PSD): broad ones on a lightly smoothed spectrum (prominence above 5 standard
-    deviations of the smoothed scatter) and narrow lines (single bins standing 8 standard
-    deviations above their neighbourhood), the most prominent first."""
+    """Peaks of ln(PSD) (:func:`find_lines`), by index."""
+    return [i for i, _ in find_lines(freq, psd, s_log, max_peaks, averages)]
+
+
+def find_lines(freq: np.ndarray, psd: np.ndarray, s_log: float, max_peaks: int = 12,
+               averages: int | None = None) -> list[tuple[int, str]]:
+    """Peaks of ln(PSD), by index and kind: broad ones on a lightly smoothed spectrum with the narrow
+    lines notched out (prominence above the Gamma scatter of the smoothed bins; ``"broad"``), narrow
+    lines (:func:`narrow_lines`; ``"narrow"``), and a narrow line at a broad one's top (``"both"``: a
+    sharp mode, or a spur on a mode's top); the most prominent ``max_peaks``, in frequency order."""
     logp = np.log(np.maximum(psd, 1e-300))
-    k = max(1, min(len(psd) // 4000, 8))
+    k = _smoothing(len(psd))
     # smoothing in the linear domain: a mean of m bins of an N-times averaged periodogram is
     # Gamma(m N, S / (m N)) where S is locally flat; a peak must stand above its base by more than
     # the ratio of the upper to the lower quantile of that distribution at alpha / (number of
     # windows) (the look-elsewhere effect: ~1 % chance of one false peak per spectrum). The log of
     # a Gamma variable is skewed (deep dips), so a threshold in standard deviations of ln S would
     # report noise as peaks where averages are few.
-    N = averages if averages else max(1.0, 1.0 / max(s_log, 1e-6) ** 2)
-    padded = np.pad(psd, k, mode="edge")  # zero padding would dent the ends and make edge 'peaks'
+    N = _averages(s_log, averages)
+    idx2, prom2, clean = narrow_lines(psd, s_log, averages)
+    logc = np.log(np.maximum(clean, 1e-300))
+    padded = np.pad(clean, k, mode="edge")  # zero padding would dent the ends and make edge 'peaks'
     sm = np.log(np.maximum(np.convolve(padded, np.ones(2 * k + 1) / (2 * k + 1), mode="valid"), 1e-300))
-
-    def _ratio(m: float, n_windows: float) -> float:
-        a = 0.01 / max(n_windows, 1.0)
-        return math.log(gamma_dist.isf(a, m) / gamma_dist.ppf(a, m))
-
-    thr_broad = max(_ratio((2 * k + 1) * N, len(psd) / (2 * k + 1)), math.log(2.0))
+    thr_broad = max(_gamma_ratio((2 * k + 1) * N, len(psd) / (2 * k + 1)), math.log(2.0))
     idx, props = find_peaks(sm, prominence=thr_broad)
-    cand = {int(i): float(p) for i, p in zip(idx, props["prominences"])}
-    idx2, props2 = find_peaks(logp, prominence=max(_ratio(N, len(psd)), math.log(5.0)), width=(None, 3))
-    for i, p in zip(idx2, props2["prominences"]):
-        if not any(abs(int(i) - j) <= 2 * k + 1 for j in cand):
-            cand[int(i)] = float(p)
-    # the smoothed search locates a one-bin line (a spur) up to k bins off: every candidate is moved
-    # to the largest raw value within the smoothing window, so the line fit is centred on it (a fit
-    # started beside a spur would take the background for the line and wander to another peak)
+    # the smoothed search locates a line up to k bins off: every broad candidate is moved to the
+    # largest value of the notched spectrum within the smoothing window, so the line fit is centred on it
     snapped: dict[int, float] = {}
-    for i in sorted(cand, key=lambda i: -cand[i]):
-        lo, hi = max(i - 2 * k - 1, 0), min(i + 2 * k + 2, len(logp))
-        j = lo + int(np.argmax(logp[lo:hi]))
+    kind: dict[int, str] = {}
+    for i, p in sorted(zip(idx, props["prominences"]), key=lambda x: -x[1]):
+        lo, hi = max(int(i) - 2 * k - 1, 0), min(int(i) + 2 * k + 2, len(logc))
+        j = lo + int(np.argmax(logc[lo:hi]))
         if j not in snapped:
-            snapped[j] = cand[i]
+            snapped[j], kind[j] = float(p), "broad"
+    # a narrow line within the smoothing window of a broad one is at its top (a sharp mode whose wings the
+    # broad search saw, or a spur on a mode's top: one line fit from the line's bin, as ever), else its own line
+    for i, p in zip(idx2, prom2):
+        lo, hi = max(int(i) - 2 * k - 1, 0), min(int(i) + 2 * k + 2, len(logp))
+        near = [j for j in snapped if lo <= j < hi and kind[j] != "narrow"]
+        if near:
+            for j in near:  # the line's bin, not the notched neighbourhood's
+                pj = snapped.pop(j)
+                kind.pop(j)
+                snapped[int(i)], kind[int(i)] = max(pj, float(p)), "both"
+        else:
+            snapped[int(i)], kind[int(i)] = float(p), "narrow"
     best = sorted(snapped, key=lambda i: -snapped[i])[:max_peaks]
-    return sorted(best)
+    return [(i, kind[i]) for i in sorted(best)]
 
 
 def gamma_deviance_residuals(y: np.ndarray, S: np.ndarray, averages: int) -> np.ndarray:
@@ -144,7 +196,8 @@ def gamma_deviance_residuals(y: np.ndarray, S: np.ndarray, averages: int) -> np.
 
 
 def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float, averages: int | None = None,
-             others: list[dict] | None = None, start: dict | None = None) -> dict[str, Any]:
+             others: list[dict] | None = None, start: dict | None = None,
+             narrow: bool = False, lines: np.ndarray | None = None) -> dict[str, Any]:
     """SHO line on a white + 1/f background around peak index i: maximum likelihood of the averaged
     periodogram (:func:`gamma_deviance_residuals`) when the number of averages is known, else
     log-space least squares with the scatter ``s_log``.
@@ -154,7 +207,11 @@ def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float, averages: 
     another mode's power, and fitted as this line's it broadens it (a fluid-damped flapwise 2 of Q 48
     beside a sharp lateral 1 7 % below it was read at Q 39, 19 % low, with a 2.7 % standard error).
     Their bins (+- 3 of their widths; a spur's +- 6 bins) are left out and their fitted tails are part of
-    the background, as in :func:`fit_doublet`. ``start``: this line's first fit (its window and start)."""
+    the background, as in :func:`fit_doublet`. ``start``: this line's first fit (its window and start).
+    ``narrow``: a line found narrow (:func:`narrow_lines`) is held to its bin (+- 2) and to at most
+    ``NARROW_MAX_BINS`` bins of width: on a broad mode's flank a free fit started on a spur wanders onto
+    the mode, which carries more of the window's deviance. ``lines``: other lines' PSD on ``freq`` (their
+    fits), part of this line's background."""
     f0 = float(freq[i])
     p0 = float(psd[i])
     df = float(np.median(np.diff(freq)))
@@ -177,7 +234,12 @@ def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float, averages: 
     u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B0) - 3])
     lo = [fw[0], math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[3] - 10]
     hi = [fw[-1], math.log10(Q0) + 4, u0[2] + 8, u0[3] + 4, u0[3] + 4]
-    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm, 0.3, 0.3, 0.3, 0.3], s_log, averages)
+    if narrow:
+        lo[0], hi[0] = max(f0 - 2 * df, fw[0]), min(f0 + 2 * df, fw[-1])
+        lo[1] = math.log10(f0 / (NARROW_MAX_BINS * df))
+        hi[1] = max(hi[1], lo[1] + 1)
+    tails = 0.0 if lines is None else lines[sel]
+    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails)
     return _line_result(r, fw, df, (fw[0], fw[-1]))
 
 
@@ -207,10 +269,11 @@ def _refit_line(freq, psd, first: dict, s_log: float, averages: int | None, othe
     tails = np.zeros(len(fw))
     near = False
     for o in others:
-        if o is first or abs(o["f0_Hz"] - f0) < fwhm or not (fw[0] <= o["f0_Hz"] <= fw[-1]):
+        wide = np.isfinite(o.get("Q", math.nan)) and o.get("fwhm_bins", 0.0) >= 2.0
+        # a resolved neighbour within this line's width is this line's own power; a spur is left out wherever it is
+        if o is first or (wide and abs(o["f0_Hz"] - f0) < fwhm) or not (fw[0] <= o["f0_Hz"] <= fw[-1]):
             continue
         near = True
-        wide = np.isfinite(o.get("Q", math.nan)) and o.get("fwhm_bins", 0.0) >= 2.0
         wo = 3 * o["f0_Hz"] / o["Q"] if wide else 6 * df
         keep &= np.abs(fw - o["f0_Hz"]) > max(wo, 3 * df)
         if wide:
@@ -247,6 +310,36 @@ def _line_result(r, fw: np.ndarray, df: float, window, others_masked: bool = Fal
     if others_masked:
         out["neighbours_masked"] = True
     return out
+
+
+def fit_lines(freq: np.ndarray, psd: np.ndarray, peaks: list[tuple[int, str]], s_log: float,
+              averages: int | None) -> list[dict]:
+    """The lines at the detected peaks (:func:`find_lines`), each first fitted alone (:func:`fit_line`):
+    a broad line on the spectrum with the narrow lines notched out (:func:`narrow_lines`: a fit started
+    on a mode with a spur on its flank would otherwise wander onto the spur), a narrow line on the data
+    held to its bin with the broad lines' fits in its background, a narrow line at a broad one's top on
+    the data; then every resolved line again on the data with its neighbours' bins left out and their
+    tails in the background (:func:`refit_with_neighbours`)."""
+    clean = narrow_lines(psd, s_log, averages)[2]
+    first: dict[int, dict] = {}
+    for i, kind in peaks:
+        if kind != "narrow":
+            try:
+                first[i] = fit_line(freq, clean if kind == "broad" else psd, i, s_log, averages)
+            except ValueError:
+                continue
+    lines = sum((sho_psd(freq, b["f0_Hz"], b["Q"], b["area_m2"] * 2 / (math.pi * b["f0_Hz"] * b["Q"]))
+                 for b in first.values() if np.isfinite(b["Q"])), np.zeros(len(freq)))
+    fits = []
+    for i, kind in peaks:
+        if kind == "narrow":
+            try:
+                fits.append(fit_line(freq, psd, i, s_log, averages, narrow=True, lines=lines))
+            except ValueError:
+                continue
+        elif i in first:
+            fits.append(first[i])
+    return refit_with_neighbours(freq, psd, fits, s_log, averages)
 
 
 def refit_with_neighbours(freq, psd, fits: list[dict], s_log: float, averages: int | None) -> list[dict]:
@@ -317,7 +410,8 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     # beyond 4 widths carries little of it, and far from the peak a neighbour's flank would dominate)
     keep = np.abs(fw - f0) <= 4 * fwhm
     for o in others or ():
-        if o is single or abs(o["f0_Hz"] - f0) < fwhm:
+        # a resolved line within the width is the pair's own; an unresolved one (a spur) is left out wherever it is
+        if o is single or (abs(o["f0_Hz"] - f0) < fwhm and o.get("fwhm_bins", 0.0) >= 2.0):
             continue
         wo = 3 * max(o["f0_Hz"] / o["Q"] if np.isfinite(o.get("Q", math.nan)) else 0.0, 2 * float(np.median(np.diff(freq))))
         keep &= np.abs(fw - o["f0_Hz"]) > wo
@@ -640,20 +734,13 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     freq, psd = meas.freq, meas.value
     s_log = log_scatter(psd, meas.averages)
     df = float(np.median(np.diff(freq)))
-    idx = detect_peaks(freq, psd, s_log, averages=meas.averages)
-    if not idx:
+    peaks = find_lines(freq, psd, s_log, averages=meas.averages)
+    if not peaks:
         raise DataFormatError(f"{meas.path}: no peak stands out of the spectrum's background by 5 standard deviations")
     if base is None:
         base = FEMBaseline(meas.probe, meas.probe_values, {"flapwise": 2})
     preds = _predictions(base, meas.medium, meas.temperature)
-    fits = []
-    for i in idx:
-        try:
-            fits.append(fit_line(freq, psd, i, s_log, meas.averages))
-        except ValueError:
-            continue
-    # each line again with its neighbours' bins left out and their tails in the background (fit_line)
-    fits = refit_with_neighbours(freq, psd, fits, s_log, meas.averages)
+    fits = fit_lines(freq, psd, peaks, s_log, meas.averages)
     hint = list(meas.families)
     fam_ok = (lambda fa: fa in hint) if hint else (lambda fa: fa == "flapwise")
     L = float(meas.probe_values["length"]) if "length" in meas.probe_values else None
