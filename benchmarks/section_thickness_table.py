@@ -28,11 +28,11 @@ from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # complex SuperLU is ~100x slower with OpenBLAS threads
 
+from probedyn.diagnose.hydrodynamics import THICKNESS_LOG10_RE, THICKNESS_RATIOS  # noqa: E402
 from probedyn.fem.stokes2d import build_section_system, thin_limit  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "results" / "section_thickness_table.json"
-LOG10_RE = (-1.0, 0.0, 1.0, 2.0, 3.0, 4.0)
-THICKNESS_RATIOS = (0.02, 0.05, 0.1, 0.2, 0.33, 0.5)
+LOG10_RE = tuple(float(x) for x in THICKNESS_LOG10_RE)  # the grid the diagnosis interpolates on
 #: inviscid added-mass coefficients of a rectangle (DNV-RP-C205, Table A-1) at a/b = t/w
 DNV_CA = {0.1: 1.14, 0.2: 1.21, 0.5: 1.36}
 
@@ -44,7 +44,7 @@ def main() -> dict:
         re = 10.0**k
         zero = thin_limit(re, ("translate", "rotate"))
         g0 = {m: zero[m].gamma for m in zero}
-        for h in THICKNESS_RATIOS:
+        for h in (float(x) for x in THICKNESS_RATIOS):
             sol = build_section_system(re, h).solve(re, ("translate", "rotate"))
             row = {"log10_Re": k, "t_over_w": h}
             for m, key in (("translate", "flex"), ("rotate", "tor")):

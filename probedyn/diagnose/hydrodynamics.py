@@ -152,8 +152,8 @@ def torsion_gamma(omega, width: float, rho_f: float, eta_f: float) -> np.ndarray
 #: t/w = 0.02, 0.05, 0.1, 0.2, 0.33, 0.5 (columns); 0 at t/w = 0. At Re = 1e4 the flexural added mass tends to the
 #: inviscid rectangle's (DNV-RP-C205 Table A-1: +14 %, +21 %, +36 % at t/w = 0.1, 0.2, 0.5; here +12.4 %, +19.7 %,
 #: +34.0 %, from below as the boundary layer thins)
-_THICKNESS_LOG10_RE = np.arange(-1.0, 4.0 + 1e-9, 1.0)
-_THICKNESS_RATIOS = np.array([0.0, 0.02, 0.05, 0.1, 0.2, 0.33, 0.5])
+THICKNESS_LOG10_RE = np.arange(-1.0, 4.0 + 1e-9, 1.0)
+THICKNESS_RATIOS = np.array([0.02, 0.05, 0.1, 0.2, 0.33, 0.5])
 _THICKNESS_CHANGE = {
     ("flexure", "r"): ((0.007799, 0.01957, 0.03918, 0.07811, 0.1276, 0.1906),
                        (0.007805, 0.02026, 0.04156, 0.08442, 0.1391, 0.2082),
@@ -190,13 +190,13 @@ def section_thickness_change(re, t_over_w: float, motion: str = "flexure") -> tu
     and, at large Re, less damping: its square edges cut the thin plate's singular edge flow."""
     if motion not in ("flexure", "torsion"):
         raise ValueError(f"motion must be 'flexure' or 'torsion', got {motion!r}")
-    x = np.clip(np.log10(np.maximum(np.asarray(re, float), 1e-300)), _THICKNESS_LOG10_RE[0], _THICKNESS_LOG10_RE[-1])
-    h = float(np.clip(t_over_w, 0.0, _THICKNESS_RATIOS[-1]))
+    x = np.clip(np.log10(np.maximum(np.asarray(re, float), 1e-300)), THICKNESS_LOG10_RE[0], THICKNESS_LOG10_RE[-1])
+    h = float(np.clip(t_over_w, 0.0, THICKNESS_RATIOS[-1]))
     out = []
     for part in ("r", "i"):
-        tab = np.column_stack([np.zeros(len(_THICKNESS_LOG10_RE)), np.array(_THICKNESS_CHANGE[(motion, part)])])
-        at_h = np.array([np.interp(h, _THICKNESS_RATIOS, row) for row in tab])
-        out.append(np.interp(x, _THICKNESS_LOG10_RE, at_h))
+        tab = np.column_stack([np.zeros(len(THICKNESS_LOG10_RE)), np.array(_THICKNESS_CHANGE[(motion, part)])])
+        at_h = np.array([np.interp(h, np.r_[0.0, THICKNESS_RATIOS], row) for row in tab])
+        out.append(np.interp(x, THICKNESS_LOG10_RE, at_h))
     return out[0], out[1]
 
 
