@@ -301,8 +301,9 @@ class ModalProblem:
           2D Stokes table at each mode's Re), moving ``ln f_i`` by ``-ln((1 + x_i (1 + dGamma_r)) / (1 + x_i)) / 2``
           (:meth:`_thickness`): bracketed like the gap, N(MF_CENTRE, MF_SCALE^2) with the sign turned (0: the thin
           section, 1: the real one). The damping's change (and the added mass's share of it) is the fluid-damped Q
-          rows' floor ``q_thickness`` beside ``HYDRO_Q_ASPECT w / L``, in every fluid model (declared or fitted;
-          evaluated once, in the largest fluid a model of the problem can carry, below).
+          rows' floor beside ``HYDRO_Q_ASPECT w / L``, in every fluid model, evaluated in the model's own fluid
+          (declared or fitted) with each solve (:meth:`predict`'s ``q_thickness``; ``self.q_thickness`` holds
+          its value in the largest fluid a model of the problem can carry, below).
 
         In water a few % of load error moves flapwise frequencies by percents, far beyond their noise: without
         these every declared liquid would read as an excess load or a mass. Each is added only where it can
@@ -506,29 +507,35 @@ class ModalProblem:
             c.effect(values, s)
         return s
 
-    def predict(self, values, causes=(), full: bool = False, gap: np.ndarray | None = None
-                ) -> tuple[np.ndarray, np.ndarray]:
+    def predict(self, values, causes=(), full: bool = False, gap: np.ndarray | None = None,
+                q_thickness: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Frequencies and Q of the measured rows; ``gap`` (an array of n, filled when given): the model's own
-        fluid's 3D-mode vs uniform-beam gap per row (:meth:`_gap`)."""
+        fluid's 3D-mode vs uniform-beam gap per row (:meth:`_gap`); ``q_thickness`` (likewise): the relative
+        change of the model's own fluid's Q by the section's thickness per row (:meth:`_thickness`)."""
         f = np.full(self.n, np.nan)
         Q = np.full(self.n, np.nan)
         for L in self.lengths:
             s = self.state(values, causes, L)
             h: dict = {}
+            want = gap is not None or q_thickness is not None
             if full:
                 ff, qq, info = full_solve(self.bases[L], s, self.need_of[L])
                 h = info["hydro"]
             else:
-                ff, qq = self._red(L).solve(s, self.need_of[L], hydro=h if gap is not None else None)
+                ff, qq = self._red(L).solve(s, self.need_of[L], hydro=h if want else None)
             f[self.rows_of[L]] = ff
             Q[self.rows_of[L]] = qq
+            x = np.asarray(h.get("x", np.full(len(ff), np.nan)), float) if want else None
             if gap is not None:
-                gap[self.rows_of[L]] = self._gap(self.bases[L], np.asarray(h.get("x", np.full(len(ff), np.nan))),
-                                                 h.get("r"))
+                gap[self.rows_of[L]] = self._gap(self.bases[L], x, h.get("r"))
+            if q_thickness is not None:
+                fluid = s.medium if s.fluid_factor > 0 else (0.0, 0.0)
+                q_thickness[self.rows_of[L]] = self._thickness(self.bases[L], self.need_of[L], ff, np.nan_to_num(x),
+                                                               fluid)[1]
         return f, Q
 
     def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None, fluid: bool = False,
-                   gap: np.ndarray | None = None) -> np.ndarray:
+                   gap: np.ndarray | None = None, q_thickness: np.ndarray | None = None) -> np.ndarray:
         d = self.data
         offset, dirs = self.mf_offset, self.mf_dirs
         if self.gap_col is not None and gap is not None:
@@ -570,7 +577,8 @@ class ModalProblem:
                 # w/L, its torsion modes by Green & Sader's -- both thin-section limits, held also within the
                 # section's thickness (q_thickness, _hydro_setup) -- and its lateral ones by the faces' Stokes layers
                 # (held alike); an axial mode's damping is the one Q_int, held within the intrinsic scatter as in a vacuum
-                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2 + self.q_thickness**2),
+                qt = self.q_thickness if q_thickness is None else q_thickness[i]
+                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2 + qt**2),
                                np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
@@ -605,8 +613,9 @@ class ModalProblem:
     def residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes) if self.static is not None else None
         gap = np.zeros(self.n) if self.gap_col is not None else None
-        r = self._residuals(*self.predict(values, causes, gap=gap), self._intrinsic_only(values, causes), k,
-                            self._fluid(values, causes), gap)
+        qt = np.zeros(self.n) if len(self.q_idx) else None
+        r = self._residuals(*self.predict(values, causes, gap=gap, q_thickness=qt), self._intrinsic_only(values, causes),
+                            k, self._fluid(values, causes), gap, qt)
         if self.defect is not None:
             r = r + self.defect
         return r
@@ -614,8 +623,9 @@ class ModalProblem:
     def full_residuals(self, values, causes=()) -> np.ndarray:
         k = self._static_model(values, causes, full=True) if self.static is not None else None
         gap = np.zeros(self.n) if self.gap_col is not None else None
-        return self._residuals(*self.predict(values, causes, full=True, gap=gap), self._intrinsic_only(values, causes),
-                               k, self._fluid(values, causes), gap)
+        qt = np.zeros(self.n) if len(self.q_idx) else None
+        return self._residuals(*self.predict(values, causes, full=True, gap=gap, q_thickness=qt),
+                               self._intrinsic_only(values, causes), k, self._fluid(values, causes), gap, qt)
 
     def inactive_rows(self, values, causes) -> int:
         """The fluid-gap direction's prior pseudo-residual in a model without a fluid: its column and amplitude
