@@ -37,9 +37,9 @@ directions of the same kind (:meth:`ModalProblem._hydro_setup`): the size of the
 (:data:`HYDRO_Q_ASPECT` w / L), the section's thickness (both functions are thin-section limits; a real section of
 t/w = 0.1 carries 4-12 % more fluid, :func:`~probedyn.diagnose.hydrodynamics.section_thickness_change`), and whether
 the load acts on the 3D mode's transverse motion or, as the uniform-beam form does, on its whole modal mass; a
-fluid model's flapwise and torsion Q carry the first two as a floor. The second follows the
-model's own fluid, evaluated with every solve (its added-mass ratio and top-face share per mode): a fitted fluid
-(no medium declared) carries it too. **A measured static spring
+fluid model's flapwise and torsion Q carry the first two as a floor. The third (and the thickness's Q floor)
+follows the model's own fluid, evaluated with every solve (its added-mass ratio and top-face share per mode): a
+fitted fluid (no medium declared) carries it too. **A measured static spring
 constant** (``[static]``) is one more row of the same profile (:meth:`ModalProblem._static_setup`).
 
 The amplitude enters linearly and is profiled in closed form in every residual evaluation
