@@ -171,6 +171,41 @@ def identifiable(r: dict) -> bool:
     return detectable(r) and (not r.get("detectability") or r["detectability"].get("identifiable", True))
 
 
+def detectability_summary(eff: list[dict]) -> dict:
+    """The correct-first rates over the detectable and the identifiable hidden-effect rows ``eff`` (None while a
+    row lacks the criterion) and the rows below detectability."""
+    det = [r for r in eff if detectable(r)]
+    ident = [r for r in det if identifiable(r)]
+    complete = bool(eff) and all(r.get("detectability") for r in eff)
+    return {
+        "n_detectable": len(det) if complete else None,
+        "correct_first_of_detectable": float(np.mean([bool(r.get("correct_first")) for r in det]))
+        if complete and det else None,
+        "below_detectability": [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings")},
+                                 **r["detectability"]} for r in eff if not detectable(r)],
+        "n_identifiable": len(ident) if complete else None,
+        "correct_first_of_identifiable": float(np.mean([bool(r.get("correct_first")) for r in ident]))
+        if complete and ident else None,
+    }
+
+
+def add_detectability(out, detect=None, summarize_rows=None) -> dict:
+    """The detectability and identifiability criteria added to the hidden-effect rows of ``out`` that lack them,
+    by ``detect(folder, row)`` (default: the modal study's), the summary by ``summarize_rows``; rewritten atomically."""
+    detect, summarize_rows = detect or detectability, summarize_rows or summarize
+    outp = Path(out)
+    rows = json.loads(outp.read_text())["rows"]
+    with tempfile.TemporaryDirectory() as d:
+        for r in rows:
+            if r["effect"] and "identifiable" not in (r.get("detectability") or {}):
+                r["detectability"] = detect(d, r)
+                print(json.dumps({"seed": r["seed"], "effect": r["effect"], **r["detectability"]}), flush=True)
+    tmp = outp.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"summary": summarize_rows(rows), "rows": rows}, indent=1, default=float))
+    os.replace(tmp, outp)
+    return summarize_rows(rows)
+
+
 def miss_class(r) -> str:
     """The class of a miss: below detectability, no discrepancy found, a cause claimed but confounded, or
     another cause first."""
@@ -196,18 +231,10 @@ def summarize(rows):
     rec = [r["recovery_error"] for r in eff if "recovery_error" in r]
     misses = [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings", "group")},
                "class": miss_class(r)} for r in eff if not r.get("correct_first")]
-    det = [r for r in eff if detectable(r)]
     return {
         "n_effect": len(eff), "n_null": len(nul),
         "correct_first": float(np.mean([bool(r.get("correct_first")) for r in eff])) if eff else None,
-        "n_detectable": len(det) if all(r.get("detectability") for r in eff) else None,
-        "correct_first_of_detectable": float(np.mean([bool(r.get("correct_first")) for r in det]))
-        if det and all(r.get("detectability") for r in eff) else None,
-        "below_detectability": [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings")},
-                                 **r["detectability"]} for r in eff if not detectable(r)],
-        "n_identifiable": sum(identifiable(r) for r in det) if all(r.get("detectability") for r in eff) else None,
-        "correct_first_of_identifiable": float(np.mean([bool(r.get("correct_first")) for r in det if identifiable(r)]))
-        if any(identifiable(r) for r in det) and all(r.get("detectability") for r in eff) else None,
+        **detectability_summary(eff),
         "correct_in_confounded_group": float(np.mean([bool(r.get("correct_in_group")) for r in eff])) if eff else None,
         "false_discovery_fem_nulls": float(np.mean([bool(r["findings"]) for r in nul if r["truth_kind"] == "fem"]))
         if any(r["truth_kind"] == "fem" for r in nul) else None,
@@ -254,22 +281,6 @@ def run_cases(mixed: list, rows: list, outp: Path, run, keys: tuple) -> dict:
             tmp = outp.with_suffix(".tmp")
             tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
             os.replace(tmp, outp)
-    return summarize(rows)
-
-
-def add_detectability(out: str) -> dict:
-    """The detectability and identifiability criteria added to the hidden-effect rows of ``out`` that lack them
-    (atomically)."""
-    outp = Path(out)
-    rows = json.loads(outp.read_text())["rows"]
-    with tempfile.TemporaryDirectory() as d:
-        for r in rows:
-            if r["effect"] and "identifiable" not in (r.get("detectability") or {}):
-                r["detectability"] = detectability(d, {**r, "static_rel": r.get("static_rel")})
-                print(json.dumps({"seed": r["seed"], "effect": r["effect"], **r["detectability"]}), flush=True)
-    tmp = outp.with_suffix(".tmp")
-    tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
-    os.replace(tmp, outp)
     return summarize(rows)
 
 

@@ -48,7 +48,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from diagnose_rates import MAIN, detectable, identifiable, miss_class, signals  # noqa: E402
+from diagnose_rates import MAIN, add_detectability, detectability_summary, miss_class, signals  # noqa: E402
 from diagnose_truth_spectra import make_spectrum_case, spectrum_cases, spectrum_fem_truth  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose  # noqa: E402
@@ -131,19 +131,10 @@ def summarize(rows: list[dict]) -> dict:
         rr = [r for r in nul if r["truth_kind"] == kind]
         return {"n": len(rr), "false": sum(bool(r["findings"]) for r in rr)} if rr else None
 
-    det = [r for r in eff if detectable(r)]
-    all_det = bool(eff) and all(r.get("detectability") for r in eff)
     return {
         "n_effect": len(eff), "n_null": len(nul),
         "correct_first": float(np.mean([bool(r.get("correct_first")) for r in eff])) if eff else None,
-        "n_detectable": len(det) if all_det else None,
-        "correct_first_of_detectable": float(np.mean([bool(r.get("correct_first")) for r in det]))
-        if det and all_det else None,
-        "below_detectability": [{**{k: r.get(k) for k in ("seed", "effect", "lever", "truth", "verdict", "findings")},
-                                 **r["detectability"]} for r in eff if not detectable(r)],
-        "n_identifiable": sum(identifiable(r) for r in det) if all_det else None,
-        "correct_first_of_identifiable": float(np.mean([bool(r.get("correct_first")) for r in det if identifiable(r)]))
-        if all_det and any(identifiable(r) for r in det) else None,
+        **detectability_summary(eff),
         "correct_in_confounded_group": float(np.mean([bool(r.get("correct_in_group")) for r in eff])) if eff else None,
         "false_discovery": float(np.mean([bool(r["findings"]) for r in nul])) if nul else None,
         "false_discovery_fem_nulls": fd("fem"), "false_discovery_timoshenko_nulls": fd("timoshenko"),
@@ -201,24 +192,9 @@ def truths_only(n_effect: int, n_null: int) -> None:
         print(c["seed"], c["effect"], c["lever"], f"{time.process_time() - t0:.1f} s cpu", flush=True)
 
 
-def add_detectability(out: Path) -> dict:
-    """The detectability and identifiability criteria added to the hidden-effect rows of ``out`` that lack them
-    (atomically)."""
-    rows = json.loads(out.read_text())["rows"]
-    with tempfile.TemporaryDirectory() as d:
-        for r in rows:
-            if r["effect"] and "identifiable" not in (r.get("detectability") or {}):
-                r["detectability"] = detectability(d, r)
-                print(json.dumps({"seed": r["seed"], "effect": r["effect"], **r["detectability"]}), flush=True)
-    tmp = out.with_suffix(".tmp")
-    tmp.write_text(json.dumps({"summary": summarize(rows), "rows": rows}, indent=1, default=float))
-    os.replace(tmp, out)
-    return summarize(rows)
-
-
 if __name__ == "__main__":
     if sys.argv[1:2] == ["detect"]:
-        print(json.dumps(add_detectability(Path(sys.argv[2])), indent=1, default=float))
+        print(json.dumps(add_detectability(Path(sys.argv[2]), detectability, summarize), indent=1, default=float))
         sys.exit(0)
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     n_eff = int(args[0]) if args else 50

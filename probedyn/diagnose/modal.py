@@ -219,7 +219,6 @@ class ModalProblem:
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
         b0 = self.reference_baseline
         self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
-        self.q_thickness = np.zeros(len(self.q_idx))  # the section's thickness in each fluid-damped Q (_hydro_setup)
         self.gap_col = None  # the column of the fluid's 3D-mode vs uniform-beam direction, if any
         self._hydro_setup()
         self._static_setup()
@@ -302,8 +301,7 @@ class ModalProblem:
           (:meth:`_thickness`): bracketed like the gap, N(MF_CENTRE, MF_SCALE^2) with the sign turned (0: the thin
           section, 1: the real one). The damping's change (and the added mass's share of it) is the fluid-damped Q
           rows' floor beside ``HYDRO_Q_ASPECT w / L``, in every fluid model, evaluated in the model's own fluid
-          (declared or fitted) with each solve (:meth:`predict`'s ``q_thickness``; ``self.q_thickness`` holds
-          its value in the largest fluid a model of the problem can carry, below).
+          (declared or fitted) with each solve (:meth:`predict`'s ``q_thickness``).
 
         In water a few % of load error moves flapwise frequencies by percents, far beyond their noise: without
         these every declared liquid would read as an excess load or a mass. Each is added only where it can
@@ -324,7 +322,6 @@ class ModalProblem:
         load = np.zeros(self.n)
         gap = np.zeros(self.n)
         thick = np.zeros(self.n)
-        q_thick = np.zeros(self.n)
         for L in self.lengths:
             s_f = self.state({}, (), L)
             s_f.medium = tuple(probe_fluid)
@@ -333,9 +330,7 @@ class ModalProblem:
             x = np.nan_to_num(h.get("x", np.zeros(len(self.need_of[L]))))
             load[self.rows_of[L]] = -0.5 * x / (1.0 + x) * self.hydro_q
             gap[self.rows_of[L]] = self._gap(self.bases[L], x, h.get("r"))
-            thick[self.rows_of[L]], q_thick[self.rows_of[L]] = self._thickness(self.bases[L], self.need_of[L], ff, x,
-                                                                                probe_fluid)
-        self.q_thickness = q_thick[self.q_idx]
+            thick[self.rows_of[L]] = self._thickness(self.bases[L], self.need_of[L], ff, x, probe_fluid)[0]
         floor = 0.1 * float(np.median(self.sigma_f / d.freq))
         if declared and np.max(np.abs(load)) >= floor:
             self.mf_dirs = np.column_stack([self.mf_dirs, load])
@@ -514,10 +509,10 @@ class ModalProblem:
         change of the model's own fluid's Q by the section's thickness per row (:meth:`_thickness`)."""
         f = np.full(self.n, np.nan)
         Q = np.full(self.n, np.nan)
+        want = gap is not None or q_thickness is not None  # the solve's fluid quantities (added mass, top share)
         for L in self.lengths:
             s = self.state(values, causes, L)
             h: dict = {}
-            want = gap is not None or q_thickness is not None
             if full:
                 ff, qq, info = full_solve(self.bases[L], s, self.need_of[L])
                 h = info["hydro"]
@@ -577,7 +572,7 @@ class ModalProblem:
                 # w/L, its torsion modes by Green & Sader's -- both thin-section limits, held also within the
                 # section's thickness (q_thickness, _hydro_setup) -- and its lateral ones by the faces' Stokes layers
                 # (held alike); an axial mode's damping is the one Q_int, held within the intrinsic scatter as in a vacuum
-                qt = self.q_thickness if q_thickness is None else q_thickness[i]
+                qt = 0.0 if q_thickness is None else q_thickness[i]
                 sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2 + qt**2),
                                np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
