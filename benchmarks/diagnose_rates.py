@@ -61,7 +61,8 @@ from probedyn.diagnose.modal import ModalProblem  # noqa: E402
 
 MAIN = {"point-mass": ("mass", 0.0), "clamp-compliance": ("c_rot", 0.0), "thickness-error": ("t_ratio", 1.0),
         "width-error": ("w_ratio", 1.0), "length-error": ("dL", 0.0), "modulus-error": ("e_ratio", 1.0),
-        "axial-prestress": ("sigma", 0.0), "fluid-loading": ("rho_f", 0.0), "crystal-anisotropy": ("a_crystal", 0.0)}
+        "axial-prestress": ("sigma", 0.0), "fluid-loading": ("rho_f", 0.0), "crystal-anisotropy": ("a_crystal", 0.0),
+        "bonded-overlap": ("lam_n", 1e-4)}
 _BASES: dict = {}
 STATIC_REL: float | None = None  # --static
 try:  # the commit the rows were computed with (a resumed study may mix commits: each row says which)

@@ -245,6 +245,8 @@ def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_
         over["youngs_modulus"] = E_SI * params["e_ratio"]
     elif effect == "crystal-anisotropy":  # the cubic crystal meshed as such (the cause interpolates C)
         over["material"] = params["material"]
+    elif effect == "bonded-overlap":  # the lever meshed on through the overlap (x < L_o), its clamp face free
+        over["length"] = geo["length"] * (1.0 + params["lo"])
     values = probe.resolve(over)
     model = probe.build(values)
     extra = {}
@@ -269,9 +271,42 @@ def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_
         d[2::3] = kt * a
         K = (K + sp.diags(d)).tocsr()
         clamped = False
+    if effect == "bonded-overlap":
+        K, extra["lo_mesh"] = _bond_springs(model, K, geo, params)
+        clamped = False
     if effect == "axial-prestress":
         K = (K + _geometric_stiffness(model, params["sigma"])).tocsr()
     return model, K, M, clamped, extra
+
+
+def _bond_springs(model, K, geo, params):
+    """Lumped nodal springs on the bottom face of the overlap (the mesh's first ``lo L`` along x): normal
+    ``k_n`` and tangential ``k_t`` per unit area (HRZ-lumped nodal areas of the bonded facets), from the bond
+    lengths ``lam = 1 / (beta L)``, ``beta^4 = 3 k / (E t^3)``. Returns K and the bonded length over L as
+    meshed (facets whose centroid lies in the overlap)."""
+    from skfem import BilinearForm, FacetBasis
+
+    L, t = geo["length"], geo["thickness"]
+    k_n, k_t = (E_SI * t**3 / (3.0 * (params[k] * L) ** 4) for k in ("lam_n", "lam_t"))
+    mesh = model.mesh
+    bf = mesh.boundary_facets()
+    fx = mesh.p[:, mesh.facets[:, bf]]  # (3, vertices, nf)
+    zmin = mesh.p[2].min()
+    bottom = np.all(np.abs(fx[2] - zmin) <= 1e-9 * t, axis=0) & (fx[0].mean(axis=0) < params["lo"] * L)
+    facets = bf[bottom]
+    fb = FacetBasis(mesh, model.basis.elem, facets=facets, intorder=4)
+
+    @BilinearForm
+    def mass(u, v, w):
+        return u * v
+
+    S = mass.assemble(fb)
+    d = S.diagonal()
+    d = d * (float(S.sum()) / d.sum())  # HRZ lumping, as _face_nodal_areas
+    sp_d = np.zeros(model.ndofs_total)
+    sp_d[0::3], sp_d[1::3], sp_d[2::3] = k_t * d, k_t * d, k_n * d
+    lo_mesh = float(mesh.p[0, np.unique(mesh.facets[:, facets])].max() / L)
+    return (K + sp.diags(sp_d)).tocsr(), lo_mesh
 
 
 def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
@@ -411,6 +446,11 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
         s_cr = math.pi**2 * E_SI * g["thickness"] ** 2 / (48 * g["length"] ** 2)
         v = -rng.uniform(0.1, 0.6) if rng.uniform() < 0.3 else 10 ** rng.uniform(np.log10(0.2), np.log10(5))
         return {"sigma": float(v * s_cr)}
+    if effect == "bonded-overlap":  # a thin isotropic bond: k_t / k_n = (1 - 2 nu) / (2 (1 - nu)), nu in [0.3, 0.45]
+        nu_b = rng.uniform(0.3, 0.45)
+        lam_n = 10 ** rng.uniform(-2.5, -1.3)  # flapwise -0.6 % to -10 %
+        return {"lam_n": float(lam_n), "lam_t": float(lam_n * (2 * (1 - nu_b) / (1 - 2 * nu_b)) ** 0.25),
+                "lo": float(rng.uniform(0.1, 0.4))}
     if effect == "crystal-anisotropy":  # single-crystal silicon along <110> (cubic), diagnosed as isotropic silicon
         return {"material": "silicon-110", "a_crystal": 1.0}  # a_crystal: the cause's value for this truth
     if effect == "fluid-loading":

@@ -72,6 +72,7 @@ import numpy as np
 
 from probedyn.core.errors import DataFormatError, GeometryError
 from probedyn.diagnose.causes import CauseParam, catalog
+from probedyn.diagnose.fem_terms import face_mass_scalar
 from probedyn.diagnose.formats import ModalData
 from probedyn.diagnose.hydrodynamics import MEDIA, section_thickness_change
 from probedyn.diagnose.modal_model import (FAMILIES, FEMBaseline, ModalState, ReducedModal, full_solve,
@@ -266,6 +267,11 @@ class ModalProblem:
                 except (GeometryError, ValueError):
                     self._mass_path_ok = False
             return self._mass_path_ok
+        if what == "overlap":
+            # a lever bonded over an overlap: its clamp face is the lever's rectangular section, across the axis
+            n = np.abs(np.asarray(b.clamp_normal, float))
+            area = float(face_mass_scalar(b.model, b.clamp_face).sum())
+            return bool(n[b.axis] > 0.999 and abs(area / (b.w * b.t) - 1.0) < 0.01)
         return True
 
     def _red(self, L) -> ReducedModal:

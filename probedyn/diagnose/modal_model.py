@@ -79,9 +79,10 @@ from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, 
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
                                          reduced_stiffness_split, stretch_sensitivity)
 from probedyn.diagnose.hydrodynamics import sader_gamma, stokes_layer_mass, torsion_gamma
-from probedyn.fem.modes import FAMILY_COLUMNS, section_slices
-from probedyn.fem.eigen import factorize
-from probedyn.fem.elasticity import assemble_mass as el_mass
+from probedyn.diagnose.overlap import bond_stiffness, segment_matrices
+from probedyn.fem.modes import FAMILY_COLUMNS, classify_shapes, section_slices
+from probedyn.fem.eigen import factorize, shift_invert_eigsh
+from probedyn.fem.elasticity import assemble_mass as el_mass, lumped_weights
 from probedyn.fem.materials import Material, get_material
 from probedyn.fem.augmented import AugmentedModel
 from probedyn.fem.model import ElasticModel, PointMass
@@ -91,6 +92,9 @@ __all__ = ["ModalState", "Term", "FEMBaseline", "ReducedModal", "full_solve", "F
 
 FAMILIES = ("flapwise", "lateral", "torsion", "axial")
 C_MIN = 1e-7  # smallest clamp compliance solved with the foundation; below it the clamp is rigid
+#: smallest bond length ``1 / (beta L)`` of a bonded overlap (:mod:`probedyn.diagnose.overlap`); both below it,
+#: the bond is rigid (the baseline: the jump is a clamp ~1e-4 L further back, ~1.5e-4 in frequency)
+LAMBDA_MIN = 1e-4
 
 
 @dataclass
@@ -116,6 +120,7 @@ class ModalState:
     rho_factor: float = 1.0
     masses: list = field(default_factory=list)  # (xi, kg)
     clamp: tuple[float, float] = (0.0, 0.0)  # (c_rot, c_trans), 0 = rigid
+    overlap: tuple[float, float, float] = (0.0, 0.0, 0.0)  # bonded overlap (lam_n, lam_t, L_o / L); 0, 0: none
     axial_stress: float = 0.0  # Pa
     medium: tuple[float, float] = (0.0, 1.8e-5)  # rho_f, eta_f
     fluid_factor: float = 1.0
@@ -625,6 +630,40 @@ class FEMBaseline:
         k_t = E * t * t / (12.0 * L**3 * max(c_trans, C_MIN))
         return k_n, k_t
 
+    def overlap_stiffness(self, lam_n: float, lam_t: float, scale=np.ones(3)) -> tuple[float, float]:
+        """Bond stiffnesses per unit area (k_n, k_t) [N/m^3] of the bonded overlap's dimensionless bond
+        lengths ``lam = 1 / (beta L)`` (:func:`probedyn.diagnose.overlap.bond_stiffness`), stretched
+        geometry; below :data:`LAMBDA_MIN` a bond is taken as rigid as that."""
+        L = self.L * scale[self.length_axis]
+        t = self.t * scale[self.thickness_axis]
+        return tuple(bond_stiffness(max(lam, LAMBDA_MIN), self.E_ref, t, L) for lam in (lam_n, lam_t))
+
+    def overlap_segment(self, s: "ModalState") -> tuple[np.ndarray, np.ndarray]:
+        """The bonded segment's stiffness and mass (:func:`probedyn.diagnose.overlap.segment_matrices`) of
+        state ``s``, its DOFs rotated to the model's axes: node 0 is the clamp face's rigid motion about its
+        centroid, in the order of the rigid-motion shapes (``u_x, u_y, u_z, theta_x, theta_y, theta_z``)."""
+        sc = np.asarray(s.scale, float)
+        lam_n, lam_t, lo = s.overlap
+        k_n, k_t = self.overlap_stiffness(lam_n, lam_t, sc)
+        mat = self.model.materials[0]
+        if mat.is_isotropic(rtol=1e-6):
+            E, nu = mat.isotropic_constants()
+        else:  # a crystal: the axial modulus and the shear modulus C44 (the segment is a beam of it)
+            E = self.E_ref
+            nu = min(max(E / (2.0 * float(np.asarray(mat.C, float)[3, 3])) - 1.0, 0.0), 0.49)
+        E *= s.E_factor
+        L = self.L * sc[self.length_axis]
+        Kl, Ml = segment_matrices(E, nu, mat.density * s.rho_factor, self.w * sc[self.width_axis],
+                                  self.t * sc[self.thickness_axis], lo * L, k_n, k_t)
+        ex = -np.asarray(self.clamp_normal, float)
+        ez = np.zeros(3)
+        ez[self.thickness_axis] = 1.0
+        ez -= ex * float(ex @ ez)
+        ez /= np.linalg.norm(ez)
+        Rl = np.column_stack([ex, np.cross(ez, ex), ez])  # local -> model axes
+        T = np.kron(np.eye(Kl.shape[0] // 3), Rl.T)  # model-axis DOFs -> local DOFs, per 3-vector
+        return T.T @ Kl @ T, T.T @ Ml @ T
+
     def clamp_face_factor(self, scale) -> float:
         """Area stretch of the clamp face (product of the two in-plane stretches)."""
         n = np.abs(self.clamp_normal)
@@ -642,8 +681,11 @@ class ReducedModal:
       components (an affine stretch rescales the components of a mode differently);
     * ``stretch``: first-order shape sensitivities ``K^-1 (dK/ds_a - lambda_i dM/ds_a) phi_i`` of
       the modes to a stretch along each axis (Fox & Kapoor);
-    * ``clamp``: the six rigid-body motions (the root of a soft clamp translates and rotates)
-      and, for every mode, the static extension into the body of the clamp-face displacement a
+    * ``rigid``: the six rigid-body motions (the root of a soft clamp translates and rotates) and
+      the clamped body's static responses ``K^-1 M r`` to their inertia (a moving root is a base
+      excitation); every other shape is zero on the clamp face, so with these blocks alone the face
+      moves rigidly (the bonded overlap, ``ModalState.overlap``: the face tied to the segment's end);
+    * ``clamp``: for every mode, the static extension into the body of the clamp-face displacement a
       Winkler foundation takes under the mode's root reaction (its normal and tangential parts:
       ``u_face = S^-1 R / k``);
     * ``mass``: static responses to unit forces on the mass path (at four positions);
@@ -669,7 +711,7 @@ class ReducedModal:
     written as quadratic forms on the basis.
     """
 
-    BLOCKS = ("modes", "stretch", "clamp", "mass", "prestress", "crystal", "lumped", "static", "static_clamp")
+    BLOCKS = ("modes", "stretch", "rigid", "clamp", "mass", "prestress", "crystal", "lumped", "static", "static_clamp")
 
     def __init__(self, base: FEMBaseline, n_modes: int | None = None, n_mass_corr: int = 4) -> None:
         t0 = time.perf_counter()
@@ -710,15 +752,11 @@ class ReducedModal:
                     F -= _tip_sensitivity(m, base.tip[0], Phi0, a, lam0)
                 blocks["stretch"].append(ksolve(F))
             # clamp: rigid motions and the foundation's face displacement under the root reactions
-            X = m.basis.doflocs - base.clamp_centroid[:, None]
-            rig = np.zeros((m.n_nodes, 3, 6))
-            for c in range(3):
-                rig[:, c, c] = 1.0
-            for a in range(3):
-                e = np.zeros(3)
-                e[a] = 1.0
-                rig[:, :, 3 + a] = np.cross(e[None, :], X.T)
-            blocks["clamp"].append(rig.reshape(N, 6))
+            rig = _rigid_motions(m, base.clamp_centroid, split=True)
+            blocks["rigid"].append(rig)
+            # the clamped body's static response to the rigid motions' inertia (a root that moves
+            # drives the lever as a base excitation does)
+            blocks["rigid"].append(ksolve(np.asarray(M @ rig)))
             cd = m.clamped_dofs
             Sface = face_mass_scalar(m, base.clamp_face)
             nn = np.outer(base.clamp_normal, base.clamp_normal)
@@ -836,6 +874,17 @@ class ReducedModal:
             Mt = el_mass(m.mesh, np.where(base.tip[0], m.elem_density, 0.0), element=m.element, basis=m.basis)
             self.M_tip = _sym(P.T @ (Mt @ P))
         self.K_r = _sym(P.T @ (K @ P))
+        # the clamp face's area moments and every basis shape's face moments (reference coordinates about
+        # the face centroid): the rigid motion a shape gives the face, in any stretched geometry (_Sub.face_rigid)
+        Xc = (m.basis.doflocs - base.clamp_centroid[:, None]).T  # (n_nodes, 3)
+        s1 = np.asarray(Sface @ np.ones(m.n_nodes)).ravel()
+        SX = np.asarray(Sface @ Xc)
+        U = P.reshape(m.n_nodes, 3, self.r)
+        self.face_A = float(s1.sum())
+        self.face_X1 = Xc.T @ s1
+        self.face_J = Xc.T @ SX
+        self.face_m0 = np.einsum("n,ncr->cr", s1, U)
+        self.face_m1 = np.einsum("nd,ncr->cdr", SX, U)
         self.Sn_r = P.T @ (directional(Sface, nn) @ P)
         self.St_r = P.T @ (directional(Sface, np.eye(3) - nn) @ P)
         self.G_r = P.T @ (self.Gfull @ P)
@@ -863,8 +912,15 @@ class ReducedModal:
         need = ["modes"]
         if np.any(np.asarray(s.scale) != 1.0):
             need.append("stretch")
-        if s.clamp[0] >= C_MIN or s.clamp[1] >= C_MIN:
-            need.append("clamp")
+        face = s.clamp[0] >= C_MIN or s.clamp[1] >= C_MIN
+        bonded = overlap_active(s)
+        if face and bonded:
+            raise ProbedynError("a compliant clamp face and a bonded overlap are two models of one support: "
+                                "a state takes one of them")
+        if face:
+            need += ["rigid", "clamp"]
+        if bonded:
+            need.append("rigid")
         if any(mass for _, mass in s.masses):
             need.append("mass")
         if s.axial_stress:
@@ -872,7 +928,8 @@ class ReducedModal:
         if s.crystal:
             need.append("crystal")
         if s.terms:  # a cause's own matrix: all shapes (but the static load's, which is for static_stiffness)
-            need = [b for b in ReducedModal.BLOCKS if not b.startswith("static")]
+            need = [b for b in ReducedModal.BLOCKS if not b.startswith("static")
+                    and not (bonded and b == "clamp")]  # a bonded face moves rigidly
         return tuple(need)
 
     def _blocks(self, s: ModalState) -> tuple[str, ...]:
@@ -967,6 +1024,8 @@ class ReducedModal:
         sub = self._subspace(blocks)
         K, _ = sub.matrices(s, penalty="clamp" in blocks)
         a = sub.T.T @ self.end_op
+        if overlap_active(s):
+            K, _ = sub.overlap_terms(K, K, s)
         try:
             c = float(a @ np.linalg.solve(K, a))
         except (np.linalg.LinAlgError, ValueError):
@@ -984,6 +1043,8 @@ class ReducedModal:
         q = K.shape[0]
         if self.lumped_tip is not None:
             K, M = sub.augment(K, M)
+        if overlap_active(s):
+            K, M = sub.overlap_terms(K, M, s)
         nlow = min(K.shape[0], max(2 * len(self.base.families), 12))
         lam, V = _lowest_pairs(K, M, nlow, self.shift)
         fams = sub.families_of(V[:q, :nlow])
@@ -1042,6 +1103,8 @@ class _Sub:
         self.top_w = None if red.top_w_r is None else P(red.top_w_r)
         self.forms = np.array([P(red._fam_forms[f]) for f in FAMILIES + ("total",)])
         self.A_lt = None if red.A_lt_r is None else red.A_lt_r @ T
+        self.face_m0 = red.face_m0 @ T
+        self.face_m1 = red.face_m1 @ T
         self._Ks = None
         self._Ks_tip = None
         self._Kc: dict[bool, np.ndarray | None] = {}
@@ -1154,6 +1217,47 @@ class _Sub:
         Ma[q:, q:] = lt.mass * np.eye(3)
         return Ka, Ma
 
+    def face_rigid(self, scale, gram: bool = False):
+        """(6, q) the clamp face's rigid motion (translations, rotations about its centroid, model axes) of
+        each basis shape in the geometry stretched by ``scale``: the face-mass least-squares fit of the
+        face displacement by the stretched face's rigid motions (exact when the face moves rigidly).
+        ``gram``: also their Gram matrix ``int R^T R dA`` (over the reference face's area)."""
+        red = self.red
+        sc = np.asarray(scale, float)
+        J = red.face_J * np.outer(sc, sc)
+        X1 = red.face_X1 * sc
+        G = np.zeros((6, 6))
+        G[:3, :3] = red.face_A * np.eye(3)
+        rot = np.einsum("cad,d->ca", _EPS, X1)  # int (e_a x X)_c dA
+        G[:3, 3:] = rot
+        G[3:, :3] = rot.T
+        G[3:, 3:] = np.einsum("cad,cbe,de->ab", _EPS, _EPS, J)
+        rhs = np.zeros((6, self.face_m0.shape[1]))
+        rhs[:3] = self.face_m0
+        rhs[3:] = np.einsum("cad,d,cdk->ak", _EPS, sc, self.face_m1)
+        P = np.linalg.solve(G, rhs)
+        return (P, G) if gram else P
+
+    def overlap_terms(self, K: np.ndarray, M: np.ndarray, s: "ModalState") -> tuple[np.ndarray, np.ndarray]:
+        """``K``, ``M`` with the bonded segment (:meth:`FEMBaseline.overlap_segment`) condensed on its chip-edge
+        node (Guyan: its static shapes under the node's six motions, which carry its inertia too -- exact in
+        statics, and in dynamics while the segment's own modes on the bond lie above the measured ones: the
+        full re-solve keeps every DOF of it, :func:`full_solve`). The node is the clamp face's rigid motion
+        ``P a`` (:meth:`face_rigid`; coordinates appended before, e.g. a lumped tip's, do not move the face);
+        the face's deformation beyond it is held as by a rigid clamp."""
+        base = self.red.base
+        Ks, Ms = base.overlap_segment(s)
+        Tg = np.vstack([np.eye(6), -np.linalg.solve(Ks[6:, 6:], Ks[6:, :6])])
+        Kr, Mr = _sym(Tg.T @ Ks @ Tg), _sym(Tg.T @ Ms @ Tg)
+        q = self.face_m0.shape[1]
+        P, G = self.face_rigid(s.scale, gram=True)
+        K, M = K.copy(), M.copy()
+        # a stretched mesh's rotation shapes are not rigid, their face parts are: int |u - R q|^2 dA = u^T S u - q^T G q
+        K[:q, :q] += _sym(P.T @ Kr @ P + base.clamp_stiffness(C_MIN, C_MIN)[0] * base.clamp_face_factor(s.scale)
+                          * (self.Sn + self.St - P.T @ G @ P))
+        M[:q, :q] += _sym(P.T @ Mr @ P)
+        return K, M
+
     def families_of(self, V: np.ndarray) -> list[str]:
         q = (V[None, :, :] * (self.forms @ V)).sum(axis=1)  # (5, k)
         shares = q[:-1] / q[-1]
@@ -1164,6 +1268,17 @@ class _Sub:
 
 def _sym(A: np.ndarray) -> np.ndarray:
     return 0.5 * (A + A.T)
+
+
+_EPS = np.zeros((3, 3, 3))  # the Levi-Civita symbol: (e_a x X)_c = eps[c, a, d] X_d
+for _i, _j, _k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+    _EPS[_i, _j, _k], _EPS[_i, _k, _j] = 1.0, -1.0
+
+
+def overlap_active(s: ModalState) -> bool:
+    """Whether state ``s`` carries a bonded overlap (a compliant bond over a positive length)."""
+    lam_n, lam_t, lo = s.overlap
+    return lo > 0 and max(lam_n, lam_t) > LAMBDA_MIN
 
 
 def _lowest_pairs(K: np.ndarray, M: np.ndarray, n: int, shift: float) -> tuple[np.ndarray, np.ndarray]:
@@ -1372,25 +1487,114 @@ def end_stiffness(model: ElasticModel, axis: int) -> float:
 
 
 def full_static_stiffness(base: FEMBaseline, s: ModalState) -> float:
-    """:func:`end_stiffness` of the full FEM of state ``s`` (:func:`extended_model`)."""
-    return end_stiffness(extended_model(base, s), base.thickness_axis)
+    """:func:`end_stiffness` of the full FEM of state ``s`` (:func:`extended_model`; a bonded overlap:
+    :class:`_BondedSystem`)."""
+    model = extended_model(base, s)
+    if not overlap_active(s):
+        return end_stiffness(model, base.thickness_axis)
+    A = _end_operator(model, base.thickness_axis)
+    if A is None:
+        return math.nan
+    sysb = _BondedSystem(base, s, model)
+    g = sysb.load(A)
+    fac = factorize(sysb.K.tocsc(), spd=True)
+    try:
+        c = float(g @ fac.solve(np.ascontiguousarray(g)))
+    finally:
+        fac.release()
+    if not (math.isfinite(c) and c > 0):
+        raise SolverError(f"static end stiffness: non-positive compliance {c:g} m/N (a state beyond buckling?)")
+    return 1.0 / c
+
+
+def _rigid_motions(model: ElasticModel, centroid: np.ndarray, split: bool = False) -> np.ndarray:
+    """(N, 6) the rigid motions of ``model``: translations, then rotations about ``centroid`` (model axes).
+    ``split``: (N, 9), each rotation's two displacement components as separate shapes (``(z, 0, 0)`` and
+    ``(0, 0, -x)`` for a rotation about y): an affine stretch of the geometry turns a rigid rotation of the
+    mesh into a strained one, and the rotation of the stretched body is another combination of the two."""
+    X = model.basis.doflocs - np.asarray(centroid, float)[:, None]
+    rig = np.zeros((model.n_nodes, 3, 9 if split else 6))
+    for c in range(3):
+        rig[:, c, c] = 1.0
+        e = np.zeros(3)
+        e[c] = 1.0
+        r = np.cross(e[None, :], X.T)  # (n, 3)
+        if not split:
+            rig[:, :, 3 + c] = r
+            continue
+        comps = [d for d in range(3) if d != c]
+        for j, d in enumerate(comps):
+            rig[:, d, 3 + 2 * c + j] = r[:, d]
+    return rig.reshape(model.ndofs_total, rig.shape[2])
+
+
+class _BondedSystem:
+    """The full FEM of a bonded-overlap state: the body with its clamp face moving rigidly, ``u = v + R q``
+    (``v`` zero on the face, ``R`` the face's rigid motions about its centroid), and the bonded segment's
+    DOFs with its chip-edge node equal to ``q``. Unknowns ``[v_free, q, segment]``; exact, sparse (``R``
+    adds six dense columns)."""
+
+    def __init__(self, base: "FEMBaseline", s: ModalState, model: ElasticModel) -> None:
+        K, M = model.assemble()
+        self.model, self.free = model, model.free_dofs
+        f = np.asarray(model.mesh.boundaries[base.clamp_face])
+        centroid = model.mesh.p[:, np.unique(model.mesh.facets[:, f])].mean(axis=1)
+        self.R = R = _rigid_motions(model, centroid)
+        Ks, Ms = base.overlap_segment(s)
+        fr = self.free
+        blocks = []
+        for A, S in ((K, Ks), (M, Ms)):
+            A = A.tocsr()
+            AR = np.asarray(A @ R)
+            top = sp.hstack([A[fr][:, fr], sp.csr_matrix(AR[fr]), sp.csr_matrix((fr.size, S.shape[0] - 6))])
+            seg = S.copy()
+            seg[:6, :6] += R.T @ AR
+            low = sp.hstack([sp.csr_matrix(np.vstack([AR[fr].T, np.zeros((S.shape[0] - 6, fr.size))])),
+                             sp.csr_matrix(_sym(seg))])
+            blocks.append(sp.vstack([top, low]).tocsr())
+        self.K, self.M = blocks
+
+    def body(self, V: np.ndarray) -> np.ndarray:
+        """The body's displacement (N, k) of augmented vectors ``V``."""
+        nf = self.free.size
+        U = self.R @ V[nf:nf + 6]
+        U[self.free] += V[:nf]
+        return U
+
+    def load(self, A: sp.spmatrix) -> np.ndarray:
+        """The generalised force of a body load ``A`` (1, N) on the augmented unknowns."""
+        a = np.asarray(A.todense()).ravel()
+        return np.concatenate([a[self.free], self.R.T @ a, np.zeros(self.K.shape[0] - self.free.size - 6)])
 
 
 def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], n_modes: int | None = None
                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """Frequencies and Q of the measured ``(family, order)`` modes from the full FEM of state ``s``
-    (:func:`extended_model`); the fluid loading is applied per flapwise mode with the FEM mode
-    shape (Rayleigh quotient, iterated to the loaded frequency).
+    (:func:`extended_model`; a bonded overlap: :class:`_BondedSystem`); the fluid loading is applied per
+    flapwise mode with the FEM mode shape (Rayleigh quotient, iterated to the loaded frequency).
     """
     t0 = time.perf_counter()
     sc = np.asarray(s.scale, float)
     model = extended_model(base, s)
     n = n_modes or len(base.families) + 4
-    res = model.modes(n, sigma=None if not model.clamp else 0.0)
-    fams = [md.family for md in res.modes]
+    K, M = model.assemble()
+    if overlap_active(s):
+        sysb = _BondedSystem(base, s, model)
+        r = shift_invert_eigsh(sysb.K, sysb.M, n, sigma=0.0)
+        V = r.vectors / np.sqrt(np.einsum("ij,ij->j", r.vectors, sysb.M @ r.vectors))[None, :]
+        U = sysb.body(V)
+        wts = lumped_weights(model.mesh, model.elem_density, model.element, model.basis)
+        fams, _ = classify_shapes(model.basis.doflocs, wts, U.reshape(model.n_nodes, 3, -1), axis=model.beam_axis)
+        omegas = np.sqrt(np.maximum(r.eigenvalues, 0.0))
+        # per mode: (family, omega, body shape, modal stiffness, modal mass) -- the segment's share included
+        modes = [(fams[i], float(omegas[i]), U[:, i], float(V[:, i] @ (sysb.K @ V[:, i])), 1.0)
+                 for i in range(V.shape[1])]
+    else:
+        res = model.modes(n, sigma=None if not model.clamp else 0.0)
+        modes = [(md.family, md.omega, md.shape, None, None) for md in res.modes]
+    fams = [md[0] for md in modes]
     f = np.empty(len(needed))
     Q = np.full(len(needed), s.Q_int)
-    K, M = model.assemble()
     Stop = Stop_w = None
     x_added = np.full(len(needed), np.nan)
     r_top = np.full(len(needed), np.nan)
@@ -1404,19 +1608,18 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
         if len(idx) < o:
             f[k] = np.nan
             continue
-        md = res.modes[idx[o - 1]]
-        f[k] = md.frequency_hz
+        _, omega, a, kq, mq = modes[idx[o - 1]]
+        f[k] = omega / (2 * np.pi)
+        if kq is None:
+            kq, mq = float(a @ (K @ a)), float(a @ (M @ a))
         if Stop_w is not None and fa == "lateral":
-            a = md.shape
-            f[k], Q[k] = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Stop_w @ a)), md.omega,
-                                      rho_f, eta_f, s.fluid_factor, s.Q_int)
+            f[k], Q[k] = _stokes_mode(kq, mq, float(a @ (Stop_w @ a)), omega, rho_f, eta_f, s.fluid_factor, s.Q_int)
         if Stop is not None and fa in ("flapwise", "torsion"):
-            a = md.shape
-            mq, sq = float(a @ (M @ a)), float(a @ (Stop @ a))
-            f[k], Q[k], x_added[k] = _fluid_mode(float(a @ (K @ a)), mq, sq, md.omega, w, rho_f, eta_f,
+            sq = float(a @ (Stop @ a))
+            f[k], Q[k], x_added[k] = _fluid_mode(kq, mq, sq, omega, w, rho_f, eta_f,
                                                  s.fluid_factor, s.Q_int, torsion=fa == "torsion")
             if fa == "flapwise":
                 r_top[k] = min(rho_t * sq / mq, 1.0)
     info = {"dofs": model.dofs, "seconds": time.perf_counter() - t0, "families": fams,
-            "frequencies_hz": res.frequencies_hz.tolist(), "hydro": {"x": x_added, "r": r_top}}
+            "frequencies_hz": [md[1] / (2 * np.pi) for md in modes], "hydro": {"x": x_added, "r": r_top}}
     return f, Q, info

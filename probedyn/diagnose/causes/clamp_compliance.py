@@ -29,6 +29,7 @@ class ClampCompliance(Cause):
                    "the low modes more than the high ones, flapwise and lateral alike.")
     needs = "two or more bending modes (one mode cannot tell it from a stiffness error)"
     changes = ("clamp",)
+    alternative = "clamp support"  # the clamp face on a foundation or the lever bonded over an overlap: one at a time
     params = (
         CauseParam("c_rot", "1 (E / (L k_n))", 0.0, 3.0, 0.0, "root rotation compliance per unit width, in L/EI",
                    starts=(0.01, 0.1)),
