@@ -638,10 +638,12 @@ class FEMBaseline:
         t = self.t * scale[self.thickness_axis]
         return tuple(bond_stiffness(max(lam, LAMBDA_MIN), self.E_ref, t, L) for lam in (lam_n, lam_t))
 
-    def overlap_segment(self, s: "ModalState") -> tuple[np.ndarray, np.ndarray]:
+    def overlap_segment(self, s: "ModalState", condensed: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """The bonded segment's stiffness and mass (:func:`probedyn.diagnose.overlap.segment_matrices`) of
         state ``s``, its DOFs rotated to the model's axes: node 0 is the clamp face's rigid motion about its
-        centroid, in the order of the rigid-motion shapes (``u_x, u_y, u_z, theta_x, theta_y, theta_z``)."""
+        centroid, in the order of the rigid-motion shapes (``u_x, u_y, u_z, theta_x, theta_y, theta_z``).
+        ``condensed``: the 6 x 6 matrices of node 0 alone (Guyan condensation: the segment's static shapes
+        under the node's motions, which carry its inertia too)."""
         sc = np.asarray(s.scale, float)
         lam_n, lam_t, lo = s.overlap
         k_n, k_t = self.overlap_stiffness(lam_n, lam_t, sc)
@@ -661,8 +663,13 @@ class FEMBaseline:
         ez -= ex * float(ex @ ez)
         ez /= np.linalg.norm(ez)
         Rl = np.column_stack([ex, np.cross(ez, ex), ez])  # local -> model axes
-        T = np.kron(np.eye(Kl.shape[0] // 3), Rl.T)  # model-axis DOFs -> local DOFs, per 3-vector
-        return T.T @ Kl @ T, T.T @ Ml @ T
+        if not condensed:
+            T = np.kron(np.eye(Kl.shape[0] // 3), Rl.T)  # model-axis DOFs -> local DOFs, per 3-vector
+            return T.T @ Kl @ T, T.T @ Ml @ T
+        # Guyan: the segment's static shapes under its chip-edge node's six motions
+        Tg = np.vstack([np.eye(6), -np.linalg.solve(Kl[6:, 6:], Kl[6:, :6])])
+        T = np.kron(np.eye(2), Rl.T)
+        return T.T @ _sym(Tg.T @ Kl @ Tg) @ T, T.T @ _sym(Tg.T @ Ml @ Tg) @ T
 
     def clamp_face_factor(self, scale) -> float:
         """Area stretch of the clamp face (product of the two in-plane stretches)."""
@@ -899,6 +906,7 @@ class ReducedModal:
         self._Kc: dict[bool, np.ndarray | None] = {}  # the same splits of crystal_delta (lazy: crystal)
         self._sub: dict = {}
         self._term_cache: dict[str, np.ndarray] = {}
+        self._overlap_cache: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
         self._path_xi = np.linspace(0.0, 1.0, 101)
         self._path_ops: np.ndarray | None = None
         self.end_op = None if A_end is None else np.asarray(A_end @ P).ravel()  # (r,) face-mean deflection
@@ -1246,9 +1254,13 @@ class _Sub:
         ``P a`` (:meth:`face_rigid`; coordinates appended before, e.g. a lumped tip's, do not move the face);
         the face's deformation beyond it is held as by a rigid clamp."""
         base = self.red.base
-        Ks, Ms = base.overlap_segment(s)
-        Tg = np.vstack([np.eye(6), -np.linalg.solve(Ks[6:, 6:], Ks[6:, :6])])
-        Kr, Mr = _sym(Tg.T @ Ks @ Tg), _sym(Tg.T @ Ms @ Tg)
+        key = (tuple(s.overlap), tuple(np.asarray(s.scale, float)), s.E_factor, s.rho_factor)
+        cache = self.red._overlap_cache
+        if key not in cache:  # a fit's finite differences in other parameters reuse the segment
+            if len(cache) > 64:
+                cache.clear()
+            cache[key] = base.overlap_segment(s, condensed=True)
+        Kr, Mr = cache[key]
         q = self.face_m0.shape[1]
         P, G = self.face_rigid(s.scale, gram=True)
         K, M = K.copy(), M.copy()
