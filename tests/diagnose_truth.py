@@ -446,11 +446,15 @@ def draw_modal_effect(effect: str, lever: str, rng) -> dict:
         s_cr = math.pi**2 * E_SI * g["thickness"] ** 2 / (48 * g["length"] ** 2)
         v = -rng.uniform(0.1, 0.6) if rng.uniform() < 0.3 else 10 ** rng.uniform(np.log10(0.2), np.log10(5))
         return {"sigma": float(v * s_cr)}
-    if effect == "bonded-overlap":  # a thin isotropic bond: k_t / k_n = (1 - 2 nu) / (2 (1 - nu)), nu in [0.3, 0.45]
-        nu_b = rng.uniform(0.3, 0.45)
-        lam_n = 10 ** rng.uniform(-2.5, -1.3)  # flapwise -0.6 % to -10 %
-        return {"lam_n": float(lam_n), "lam_t": float(lam_n * (2 * (1 - nu_b) / (1 - 2 * nu_b)) ** 0.25),
-                "lo": float(rng.uniform(0.1, 0.4))}
+    if effect == "bonded-overlap":
+        # a glue layer (epoxy, cyanoacrylate: E 0.5-5 GPa, nu 0.3-0.45, 1-20 um thick): normal stiffness per area
+        # its constrained modulus over its thickness, shear stiffness its shear modulus over it
+        e_g, nu_b, h = 10 ** rng.uniform(np.log10(5e8), np.log10(5e9)), rng.uniform(0.3, 0.45), 10 ** rng.uniform(-6, np.log10(2e-5))
+        k_n = e_g * (1 - nu_b) / ((1 + nu_b) * (1 - 2 * nu_b) * h)
+        k_t = e_g / (2 * (1 + nu_b) * h)
+        lam = [float((E_SI * g["thickness"] ** 3 / (3 * k)) ** 0.25 / g["length"]) for k in (k_n, k_t)]
+        return {"lam_n": lam[0], "lam_t": lam[1], "lo": float(rng.uniform(0.1, 0.4)),
+                "glue_E": float(e_g), "glue_nu": float(nu_b), "glue_h": float(h)}
     if effect == "crystal-anisotropy":  # single-crystal silicon along <110> (cubic), diagnosed as isotropic silicon
         return {"material": "silicon-110", "a_crystal": 1.0}  # a_crystal: the cause's value for this truth
     if effect == "fluid-loading":

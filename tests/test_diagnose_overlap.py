@@ -115,12 +115,14 @@ def test_bond_lowers_lateral_more_than_a_face_support(lever_a):
     assert d_c[4] / d_c[0] < 1.0, d_c
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("seed,lever", [(9500, "A"), (9501, "B")])
+@pytest.mark.parametrize("seed,lever", [
+    (9511, {"length": 250e-6, "width": 40e-6, "thickness": 6e-6}),
+    pytest.param(9500, "A", marks=pytest.mark.slow), pytest.param(9501, "B", marks=pytest.mark.slow)])
 def test_a_bonded_lever_is_diagnosed_as_such(tmp_path, seed, lever):
-    """The 3D truth (lever meshed through the overlap, springs on its bottom face) with 1e-3 frequency noise:
-    the bonded overlap is named first, its flapwise bond length within 2x (lam_n trades against the overlap
-    length when the bond is soft) and its shear bond softer than its normal one."""
+    """The 3D truth (lever meshed through the overlap, springs on its bottom face; a glue layer drawn by
+    ``draw_modal_effect``) with 1e-3 frequency noise: the bonded overlap is named first, its flapwise bond
+    length within 2x of the truth's (the rate study's median error is 10 %: the segment is a beam, the truth
+    3D; lam_n trades against the overlap length) and its shear bond softer than its normal one."""
     from diagnose_truth import make_modal_case
 
     from probedyn.diagnose.engine import diagnose

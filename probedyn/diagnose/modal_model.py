@@ -41,6 +41,10 @@ Extended model (:class:`ModalState`): what the causes change --
   for lateral bending (and ``k_t I_p`` for twist). Parametrised by the dimensionless compliances
   ``c_rot = E / (L k_n)`` and ``c_trans = E t^2 / (12 L^3 k_t)`` (0 = rigid): the root rotation
   and root translation compliances relative to the beam's ``L / EI`` and ``L^3 / EI`` per unit width;
+* ``overlap``: the lever **bonded over an overlap** instead (``(lam_n, lam_t, L_o / L)``): the bonded segment behind
+  the clamp face, a beam on a bond of normal and shear stiffness per area (:mod:`probedyn.diagnose.overlap`; the
+  bond lengths ``lam = 1 / (beta L)``), its chip-edge node tied to the clamp face's rigid motion; Guyan-condensed
+  on it in the reduced model, every DOF of it in the full re-solve (:class:`_BondedSystem`);
 * ``axial_stress``: a uniform axial prestress sigma (Pa) with geometric stiffness ``sigma G_axis``;
 * ``medium``: fluid density and viscosity loading the flapwise modes through Sader's
   hydrodynamic function (:mod:`probedyn.diagnose.hydrodynamics`), applied per mode by the
@@ -758,12 +762,13 @@ class ReducedModal:
                     # contribute nothing to dK/ds and dM/ds along that axis (stretch_points)
                     F -= _tip_sensitivity(m, base.tip[0], Phi0, a, lam0)
                 blocks["stretch"].append(ksolve(F))
-            # clamp: rigid motions and the foundation's face displacement under the root reactions
+            # rigid: the face's rigid motions (each rotation's components apart) and the inertia they drive
             rig = _rigid_motions(m, base.clamp_centroid, split=True)
             blocks["rigid"].append(rig)
             # the clamped body's static response to the rigid motions' inertia (a root that moves
             # drives the lever as a base excitation does)
             blocks["rigid"].append(ksolve(np.asarray(M @ rig)))
+            # clamp: the foundation's face displacement under the root reactions
             cd = m.clamped_dofs
             Sface = face_mass_scalar(m, base.clamp_face)
             nn = np.outer(base.clamp_normal, base.clamp_normal)
