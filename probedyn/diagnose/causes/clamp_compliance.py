@@ -6,7 +6,8 @@ thickness t and width w this is, in beam terms, a root rotational stiffness per 
 ``k_n t^3 / 12`` and a root translational stiffness per unit width ``k_t t`` for flapwise bending,
 and -- the same support -- ``k_n t w^3 / 12`` and ``k_t w t`` for lateral bending (``k_t I_p`` for
 twist). A finite but stiff clamp therefore lowers flapwise and lateral modes in a fixed ratio,
-which a point mass or an anisotropy cannot imitate.
+which a point mass or an anisotropy cannot imitate. A lever bonded to its chip over an overlap is the other
+support of the catalog (``bonded-overlap``, an alternative: one support at a time).
 
 Parameters: the dimensionless compliances ``c_rot = E / (L k_n)`` (root rotation compliance in
 units of the beam's L / EI per unit width) and ``c_trans = E t^2 / (12 L^3 k_t)`` (root translation
