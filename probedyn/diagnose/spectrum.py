@@ -665,7 +665,8 @@ def _refined_grids(params, move, max_values: int) -> list[list[float]]:
 def _hypotheses(meas: SpectrumData, base: FEMBaseline, preds: list[dict]) -> list[dict]:
     """Mode frequencies of the nominal probe (``preds``) and of the probe carrying each catalog cause
     the declared conditions allow, at parameter values refined where the modes move
-    (:func:`_refined_grids`, products for two parameters), from the Ritz reduction of the FEM as ratios
+    (:func:`_refined_grids`, products for two parameters; a third stays at its null value), from the Ritz
+    reduction of the FEM as ratios
     to its nominal solution (exact at the null). A hidden effect moves the families differently -- a
     width error moves lateral and torsional modes only, a clamp compliance or a compressive stress
     mostly the first flapwise mode -- so one common scale cannot place every peak, and the nearest
@@ -712,8 +713,11 @@ def _hypotheses(meas: SpectrumData, base: FEMBaseline, preds: list[dict]) -> lis
                 return 0.0
             return float(np.max(np.abs(np.log(ra / rb))))
 
-        grids = _refined_grids(list(c.params), move, MAX_GRID_1D if len(c.params) == 1 else MAX_GRID_2D)
+        # a cause's first two parameters span its hypotheses; a third (the bonded overlap's length, which matters
+        # only on a soft bond) stays at its null value: a product of three refined grids is hundreds of solves
         nulls = [p.null for p in c.params]
+        grids = _refined_grids(list(c.params[:2]), lambda va, vb: move([*va, *nulls[2:]], [*vb, *nulls[2:]]),
+                               MAX_GRID_1D if len(c.params) == 1 else MAX_GRID_2D) + [[x] for x in nulls[2:]]
         for vals in itertools.product(*grids):
             if list(vals) == nulls:
                 continue
