@@ -1118,6 +1118,7 @@ class _Sub:
         self.A_lt = None if red.A_lt_r is None else red.A_lt_r @ T
         self.face_m0 = red.face_m0 @ T
         self.face_m1 = red.face_m1 @ T
+        self._face: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}  # overlap_terms, per stretch
         self._Ks = None
         self._Ks_tip = None
         self._Kc: dict[bool, np.ndarray | None] = {}
@@ -1267,11 +1268,17 @@ class _Sub:
             cache[key] = base.overlap_segment(s, condensed=True)
         Kr, Mr = cache[key]
         q = self.face_m0.shape[1]
-        P, G = self.face_rigid(s.scale, gram=True)
+        sk = tuple(np.asarray(s.scale, float))
+        if sk not in self._face:  # the face's projection and the hold on its deformation: per geometry
+            P, G = self.face_rigid(s.scale, gram=True)
+            # a stretched mesh's rotation shapes are not rigid, their face parts are: int |u - R q|^2 dA = u^T S u - q^T G q
+            hold = base.clamp_stiffness(C_MIN, C_MIN)[0] * base.clamp_face_factor(s.scale) * (self.Sn + self.St - P.T @ G @ P)
+            if len(self._face) > 64:
+                self._face.clear()
+            self._face[sk] = (P, _sym(hold))
+        P, hold = self._face[sk]
         K, M = K.copy(), M.copy()
-        # a stretched mesh's rotation shapes are not rigid, their face parts are: int |u - R q|^2 dA = u^T S u - q^T G q
-        K[:q, :q] += _sym(P.T @ Kr @ P + base.clamp_stiffness(C_MIN, C_MIN)[0] * base.clamp_face_factor(s.scale)
-                          * (self.Sn + self.St - P.T @ G @ P))
+        K[:q, :q] += _sym(P.T @ Kr @ P) + hold
         M[:q, :q] += _sym(P.T @ Mr @ P)
         return K, M
 

@@ -108,28 +108,53 @@ def segment_matrices(E: float, nu: float, rho: float, b: float, t: float, L_o: f
     M = np.zeros((n, n))
     # element e runs from node e+1 (x = -(e+1) h, xi = 0) to node e (x = -e h, xi = 1): x increases a -> b
     Ke, Me = _elements(segment_nodes(L_o, h0, n_el), E, G, rho, A, Iy, Iz, J, b, t, k_n, k_t)
+    idx = np.r_[6:12, 0:6]  # the element's node a is the global node e+1
+    Ke, Me = Ke[:, idx][:, :, idx], Me[:, idx][:, :, idx]
     for e in range(n_el):
-        sl = slice(6 * e, 6 * e + 12)
-        idx = np.r_[6:12, 0:6]  # the element's node a is the global node e+1
-        K[sl, sl] += Ke[e][np.ix_(idx, idx)]
-        M[sl, sl] += Me[e][np.ix_(idx, idx)]
+        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += Ke[e]
+        M[6 * e:6 * e + 12, 6 * e:6 * e + 12] += Me[e]
     return 0.5 * (K + K.T), 0.5 * (M + M.T)
 
 
-def _elements(h, E, G, rho, A, Iy, Iz, J, b, t, k_n, k_t):
-    """The elements' stiffness and mass (n_el, 12, 12; 4-point Gauss, exact for the cubic fields' products)."""
+def _reference_terms() -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Each energy term's element matrix at h = 1 (4-point Gauss, exact for the cubic fields' products) and the
+    DOFs that carry a length (the Hermite slopes): an element of length h has the term ``h^(1 - p - q)
+    S_h T S_h`` for fields of derivative orders p and q, ``S_h`` the slopes scaled by h."""
     gx, gw = _G4
-    r = _rows(0.5 * (gx + 1.0), h)
-    dx = 0.5 * gw[None, :] * np.asarray(h, float)[:, None]
-    sl = r["u"] + 0.5 * t * r["dw"]  # axial slip of the bonded face
-    sc = r["v"] + 0.5 * t * r["p"]  # slip across the width
+    r = {k: v[0] for k, v in _rows(0.5 * (gx + 1.0), np.ones(1)).items()}  # (n_g, 12)
+    w = 0.5 * gw
+    T = lambda a, b: np.einsum("g,gi,gj->ij", w, a, b)  # noqa: E731
+    terms = {"du": T(r["du"], r["du"]), "ddw": T(r["ddw"], r["ddw"]), "ddv": T(r["ddv"], r["ddv"]),
+             "dp": T(r["dp"], r["dp"]), "u": T(r["u"], r["u"]), "u_dw": T(r["u"], r["dw"]) + T(r["dw"], r["u"]),
+             "dw": T(r["dw"], r["dw"]), "dv": T(r["dv"], r["dv"]), "v": T(r["v"], r["v"]),
+             "v_p": T(r["v"], r["p"]) + T(r["p"], r["v"]), "p": T(r["p"], r["p"]), "w": T(r["w"], r["w"])}
+    slope = np.zeros(12, bool)
+    slope[[4, 5, 10, 11]] = True
+    return terms, slope
+
+
+_TERMS, _SLOPE = _reference_terms()
+#: each term's power of h (1 minus the derivative orders of its two fields)
+_POWER = {"du": -1, "ddw": -3, "ddv": -3, "dp": -1, "u": 1, "u_dw": 0, "dw": -1, "dv": -1, "v": 1, "v_p": 1, "p": 1,
+          "w": 1}
+
+
+def _elements(h, E, G, rho, A, Iy, Iz, J, b, t, k_n, k_t):
+    """The elements' stiffness and mass (n_el, 12, 12) from the reference terms (:func:`_reference_terms`)."""
+    h = np.asarray(h, float)
+    kt, kn = k_t * b, k_n * b
+    stiff = {"du": E * A, "ddw": E * Iy, "ddv": E * Iz, "dp": G * J,
+             # bond: the axial slip (u + t w'/2)^2, the slip across the width (v + t phi/2)^2, normal w, phi
+             "u": kt, "u_dw": kt * t / 2, "dw": kt * t * t / 4, "dv": k_t * b**3 / 12.0,
+             "v": kt, "v_p": kt * t / 2, "p": kt * t * t / 4 + k_n * b**3 / 12.0, "w": kn}
+    mass = {"u": rho * A, "v": rho * A, "w": rho * A, "p": rho * (Iy + Iz), "dw": rho * Iy, "dv": rho * Iz}
+    sc = np.where(_SLOPE[None, :], h[:, None], 1.0)
+    S = sc[:, :, None] * sc[:, None, :]
     out = []
-    for terms in (((E * A, r["du"]), (E * Iy, r["ddw"]), (E * Iz, r["ddv"]), (G * J, r["dp"]), (k_t * b, sl),
-                   (k_t * b**3 / 12.0, r["dv"]), (k_t * b, sc), (k_n * b, r["w"]), (k_n * b**3 / 12.0, r["p"])),
-                  ((rho * A, r["u"]), (rho * A, r["v"]), (rho * A, r["w"]), (rho * (Iy + Iz), r["p"]),
-                   (rho * Iy, r["dw"]), (rho * Iz, r["dv"]))):
-        X = np.concatenate([a * np.sqrt(c * dx)[..., None] for c, a in terms], axis=1)  # (n_el, terms * n_g, 12)
-        out.append(np.einsum("egi,egj->eij", X, X))
+    for coef in (stiff, mass):
+        keys = list(coef)
+        c = np.array([coef[k] for k in keys])[None, :] * h[:, None] ** np.array([_POWER[k] for k in keys])[None, :]
+        out.append(S * np.einsum("ek,kij->eij", c, np.array([_TERMS[k] for k in keys])))
     return out[0], out[1]
 
 
