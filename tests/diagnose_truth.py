@@ -7,7 +7,9 @@ Every truth is produced by a path independent of the diagnosis:
   and stretched back), solved directly (shift-invert, no Ritz reduction), with the hidden effect built into the mesh or the matrices by code
   here -- a point mass on a mesh *vertex* (the diagnosis interpolates a point of its mass path),
   lumped nodal springs on the clamp-face nodes (the diagnosis uses a consistent face foundation
-  and a Ritz reduction), a *re-meshed* thicker / wider / longer lever (the diagnosis stretches its
+  and a Ritz reduction), a lever *meshed on through a bonded overlap* with lumped springs on the overlap's
+  bottom facets (the diagnosis: a beam segment on the bond tied to the clamp face), a *re-meshed* thicker / wider
+  / longer lever (the diagnosis stretches its
   mesh), another Young's modulus, a geometric stiffness assembled here, and fluid loading by this
   module's own hydrodynamic function on the exact uniform-beam relation (torsion: Green & Sader's function solved
   directly by the 2D Stokes FEM, not the diagnosis' table); plus a Timoshenko beam
