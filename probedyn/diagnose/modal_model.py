@@ -1561,9 +1561,8 @@ class _BondedSystem:
     def __init__(self, base: "FEMBaseline", s: ModalState, model: ElasticModel) -> None:
         K, M = model.assemble()
         self.model, self.free = model, model.free_dofs
-        f = np.asarray(model.mesh.boundaries[base.clamp_face])
-        centroid = model.mesh.p[:, np.unique(model.mesh.facets[:, f])].mean(axis=1)
-        self.R = R = _rigid_motions(model, centroid)
+        # the clamp face's centroid in the stretched geometry (the face is the lever's, never a tip's)
+        self.R = R = _rigid_motions(model, base.clamp_centroid * np.asarray(s.scale, float))
         Ks, Ms = base.overlap_segment(s)
         fr = self.free
         blocks = []
@@ -1601,7 +1600,6 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     sc = np.asarray(s.scale, float)
     model = extended_model(base, s)
     n = n_modes or len(base.families) + 4
-    K, M = model.assemble()
     if overlap_active(s):
         sysb = _BondedSystem(base, s, model)
         r = shift_invert_eigsh(sysb.K, sysb.M, n, sigma=0.0)
@@ -1614,8 +1612,10 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
         modes = [(fams[i], float(omegas[i]), U[:, i], float(V[:, i] @ (sysb.K @ V[:, i])), 1.0)
                  for i in range(V.shape[1])]
     else:
-        res = model.modes(n, sigma=None if not model.clamp else 0.0)
-        modes = [(md.family, md.omega, md.shape, None, None) for md in res.modes]
+        res = model.modes(n, sigma=None if not model.clamp else 0.0)  # assembles (its PARDISO analysis overlaps)
+        K, M = model.assemble()
+        modes = [(md.family, md.omega, md.shape, float(md.shape @ (K @ md.shape)), float(md.shape @ (M @ md.shape)))
+                 for md in res.modes]
     fams = [md[0] for md in modes]
     f = np.empty(len(needed))
     Q = np.full(len(needed), s.Q_int)
@@ -1634,8 +1634,6 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
             continue
         _, omega, a, kq, mq = modes[idx[o - 1]]
         f[k] = omega / (2 * np.pi)
-        if kq is None:
-            kq, mq = float(a @ (K @ a)), float(a @ (M @ a))
         if Stop_w is not None and fa == "lateral":
             f[k], Q[k] = _stokes_mode(kq, mq, float(a @ (Stop_w @ a)), omega, rho_f, eta_f, s.fluid_factor, s.Q_int)
         if Stop is not None and fa in ("flapwise", "torsion"):
