@@ -33,6 +33,7 @@ the baseline's flapwise, torsion and lateral modes, and the fluid cause fits an 
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -192,12 +193,17 @@ def section_thickness_change(re, t_over_w: float, motion: str = "flexure") -> tu
         raise ValueError(f"motion must be 'flexure' or 'torsion', got {motion!r}")
     x = np.clip(np.log10(np.maximum(np.asarray(re, float), 1e-300)), THICKNESS_LOG10_RE[0], THICKNESS_LOG10_RE[-1])
     h = float(np.clip(t_over_w, 0.0, THICKNESS_RATIOS[-1]))
-    out = []
-    for part in ("r", "i"):
-        tab = np.column_stack([np.zeros(len(THICKNESS_LOG10_RE)), np.array(_THICKNESS_CHANGE[(motion, part)])])
-        at_h = np.array([np.interp(h, np.r_[0.0, THICKNESS_RATIOS], row) for row in tab])
-        out.append(np.interp(x, THICKNESS_LOG10_RE, at_h))
-    return out[0], out[1]
+    return tuple(np.interp(x, THICKNESS_LOG10_RE, _thickness_column(motion, part, h)) for part in ("r", "i"))
+
+
+@functools.lru_cache(maxsize=64)
+def _thickness_column(motion: str, part: str, h: float) -> np.ndarray:
+    """:data:`_THICKNESS_CHANGE` interpolated to thickness ratio ``h`` at every tabulated Re (linear in t/w,
+    0 at t/w = 0); a fit evaluates one probe's ratio thousands of times."""
+    tab = np.column_stack([np.zeros(len(THICKNESS_LOG10_RE)), np.array(_THICKNESS_CHANGE[(motion, part)])])
+    at_h = np.array([np.interp(h, np.r_[0.0, THICKNESS_RATIOS], row) for row in tab])
+    at_h.flags.writeable = False
+    return at_h
 
 
 def stokes_layer_mass(omega, rho_f: float, eta_f: float):

@@ -1338,6 +1338,7 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = 
     uniform-beam loading exactly for a rigid section rotation (:func:`~probedyn.diagnose.hydrodynamics.torsion_gamma`)."""
     gamma = torsion_gamma if torsion else sader_gamma
     ma0 = factor * (3.0 * math.pi / 32.0 if torsion else 0.25 * math.pi) * rho_f * w * sq
+    done = False
     for _ in range(60):
         g = complex(gamma(om, w, rho_f, eta_f))
         om_new = math.sqrt(kq / (mq + ma0 * g.real))
@@ -1345,7 +1346,8 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = 
         om = om_new
         if done:
             break
-    g = complex(gamma(om, w, rho_f, eta_f))
+    if not done:  # converged: g is the function at the loaded frequency to 1e-14
+        g = complex(gamma(om, w, rho_f, eta_f))
     qf = (mq + ma0 * g.real) / (ma0 * g.imag) if g.imag > 0 else math.inf
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 

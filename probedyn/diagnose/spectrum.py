@@ -76,6 +76,8 @@ MAX_LABELLINGS = 4  # distinct labellings compared by their modal fit
 MAX_ASSIGNMENTS = 24  # one-to-one assignments of the peaks of a window holding several modes, per labelling
 NARROW_MAX_BINS = 6.0  # the widest a line found narrow (at most 3 bins at half its local prominence) is fitted
 DOUBLET_PLACES = 4  # independent centres of a second line within +- 1 width of a peak (resolved to ~1/2 width)
+LABEL_SCREEN_NFEV = 10  # evaluations each start of a cause fit gets in the labelling screen before the best goes on
+LABEL_NFEV_PER_PARAM = 40  # and the cap of that fit, per free parameter (+1): a screen, not the diagnosis
 CAUSE_SCALE = 1.1  # common frequency scale allowed on top of a cause hypothesis (E, rho, t of a nominal lever: ~10 %)
 
 
@@ -848,11 +850,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     ambiguous = []
     nominal_first = options[0][2]["cause"] is None
     if len(options) > 1:
-        for lab, tab, h, sh in options:
-            # a labelling that places no peak fits nothing (chi^2 0 on no rows): only its price counts
-            sc, model, pars = (_labelling_score(_modal_problem(meas, tab, base, L))
-                               if any(t["accepted"] for t in tab) else (0.0, None, {}))
-            scores.append((sc + _unlabelled_price(tab), model, pars))
+        scores = _labelling_scores(meas, options, base, L)
         order_ = np.argsort([x[0] for x in scores])
         k = int(order_[0])
         # the declared probe is prior information: labels that contradict its nominal ones must be
@@ -1166,23 +1164,84 @@ def _modal_problem(meas: SpectrumData, table: list[dict], base: FEMBaseline, L) 
     return ModalProblem(md, bases={L: base})
 
 
-def _labelling_score(prob: ModalProblem) -> tuple[float, str | None, dict]:
+def _labelling_scores(meas: SpectrumData, options: list[tuple], base: FEMBaseline, L) -> list[tuple[float, str | None, dict]]:
+    """Goodness of fit of every labelling ``(labels, table, hypothesis, scale)``: its best model's score
+    (:func:`_labelling_score`) plus the price of the resolved lines it leaves unlabelled
+    (:func:`_unlabelled_price`).
+
+    Only the best labelling and those within twice the evidence margin of it are used, so a labelling
+    that cannot come that close is not fitted with the catalog: every cause's score is at least its
+    likelihood-ratio threshold, so ``min(baseline chi^2, smallest threshold) + price`` bounds its score
+    from below. The baselines are fitted first (their score bounds the best one from above), the
+    labellings then in the order of that bound; one whose lower bound exceeds the best score so far by
+    more than twice the margin keeps its baseline score (an upper bound) and is not fitted further
+    (exact: it could be neither the best nor close to it)."""
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN
+
+    rows = []
+    for lab, tab, h, sh in options:
+        price = _unlabelled_price(tab)
+        if not any(t["accepted"] for t in tab):  # places no peak: fits nothing (chi^2 0 on no rows), only its price
+            rows.append((price, price, None, h, price))
+            continue
+        prob = _modal_problem(meas, tab, base, L)
+        b = _labelling_score(prob, baseline_only=True)
+        rows.append((b[0] + price, price + min(b[0], _threshold_min(prob)), prob, h, price))
+    scores: list[tuple[float, str | None, dict]] = [(up, None, {}) for up, *_ in rows]
+    best = min(scores)[0]
+    for j in sorted(range(len(rows)), key=lambda j: rows[j][0]):
+        up, low, prob, h, price = rows[j]
+        if prob is None or low > best + 2 * EVIDENCE_MARGIN:
+            continue
+        sc, model, pars = _labelling_score(prob, hint=h)
+        scores[j] = (sc + price, model, pars)
+        best = min(best, scores[j][0])
+    return scores
+
+
+def _threshold(c, n_c: int) -> float:
+    """A cause's likelihood-ratio threshold ``chi2_k(1 - alpha / N)`` (the engine's claim rule)."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from probedyn.diagnose.engine import ALPHA
+
+    return float(chi2_dist.ppf(1 - ALPHA / max(n_c, 1), len(c.params)))
+
+
+def _threshold_min(prob: ModalProblem) -> float:
+    return min((_threshold(c, len(prob.causes)) for c in prob.causes), default=math.inf)
+
+
+def _labelling_score(prob: ModalProblem, hint: dict | None = None,
+                     baseline_only: bool = False) -> tuple[float, str | None, dict]:
     """How well a labelling's peaks are explained: the lowest of the baseline's chi-square and each
     single catalog cause's chi-square plus its likelihood-ratio threshold chi2_k(1 - alpha / N) (the
     engine's claim rule: a cause with k parameters must buy at least that much), with the best model
     and its cause parameters. Without the penalty, with few peaks a labelling that needs a cause at
-    some value fits them exactly and always beats the nominal labels' baseline."""
-    from scipy.stats import chi2 as chi2_dist
+    some value fits them exactly and always beats the nominal labels' baseline.
 
-    from probedyn.diagnose.engine import ALPHA, Fitter
+    A screen, not the diagnosis: each start of a cause fit gets ``LABEL_SCREEN_NFEV`` evaluations and the
+    best start goes on to at most ``LABEL_NFEV_PER_PARAM`` per parameter; the cause of the hypothesis that
+    proposed the labelling (``hint``) also starts at that hypothesis's values. ``baseline_only``: the
+    baseline fit alone (kept on ``prob`` for the causes' nested fits)."""
+    from probedyn.diagnose.engine import Fitter
 
+    prob.screen_nfev = LABEL_SCREEN_NFEV
+    prob.nfev_per_param = LABEL_NFEV_PER_PARAM
     F = Fitter(prob)
     try:
-        b = F.baseline()
+        b = getattr(prob, "_labelling_baseline", None)
+        if b is None:
+            b = prob._labelling_baseline = F.baseline()
         best = (float(b.chi2), None, {})
-        n_c = max(len(prob.causes), 1)
-        for c, f in zip(prob.causes, F.map_nested([(b, (c,), None) for c in prob.causes])):
-            sc = float(f.chi2) + float(chi2_dist.ppf(1 - ALPHA / n_c, len(c.params)))
+        if baseline_only:
+            return best
+        n_c = len(prob.causes)
+        hint = hint or {}
+        jobs = [(b, (c,), None, dict(hint["values"])) if c.key == hint.get("cause") and hint.get("values")
+                else (b, (c,), None) for c in prob.causes]
+        for c, f in zip(prob.causes, F.map_nested(jobs)):
+            sc = float(f.chi2) + _threshold(c, n_c)
             if sc < best[0]:
                 best = (sc, c.key, {p.name: float(f.values[p.name]) for p in c.params})
         return best
