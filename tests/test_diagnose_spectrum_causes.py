@@ -228,3 +228,55 @@ def test_two_modes_in_one_window_are_labelled_by_the_fit_of_the_whole_set():
     assert list(best) == measured
     assert cands[best] < 1e-6
     assert best_chi2(labels(near)) > chi2.ppf(0.99, len(fits) - 1)
+
+
+def test_the_labelling_screen_skips_only_labellings_that_cannot_compete(monkeypatch):
+    """``_labelling_scores`` fits the catalog only on labellings whose lower bound ``price + min(baseline
+    chi^2, smallest threshold)`` comes within twice the evidence margin of the best score so far. Property over
+    random screens (baselines, prices, cause fits, thresholds drawn, the fits replaced by those numbers): the
+    best labelling, the labellings within twice the margin of it and their scores and models are those of
+    fitting every labelling."""
+    import numpy as np
+
+    from probedyn.diagnose import spectrum as S
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN
+
+    class Fake:
+        def __init__(self, j):
+            self.j = j
+
+    rng = np.random.default_rng(7)
+    skipped_any = False
+    for _ in range(300):
+        n = int(rng.integers(2, 7))
+        base = rng.choice([rng.uniform(0, 20, n), 10 ** rng.uniform(0, 4, n)])
+        price = rng.choice([np.zeros(n), rng.uniform(0, 30, n)])
+        thr = rng.uniform(6, 14)
+        cause = rng.uniform(0, 1, n) * base  # a nested cause fits no worse than its baseline
+        calls = []
+
+        def score(prob, hint=None, baseline_only=False, _b=base, _c=cause, _t=thr, _calls=calls):
+            if baseline_only:
+                return float(_b[prob.j]), None, {}
+            _calls.append(prob.j)
+            sc = float(_c[prob.j]) + _t
+            return (sc, "cause", {}) if sc < _b[prob.j] else (float(_b[prob.j]), None, {})
+
+        monkeypatch.setattr(S, "_modal_problem", lambda meas, tab, b, L: Fake(tab[0]["j"]))
+        monkeypatch.setattr(S, "_labelling_score", score)
+        monkeypatch.setattr(S, "_threshold_min", lambda prob, _t=thr: _t)
+        monkeypatch.setattr(S, "_unlabelled_price", lambda tab, _p=price: float(_p[tab[0]["j"]]))
+        options = [((j,), [{"j": j, "accepted": True}], {"cause": None}, 1.0) for j in range(n)]
+        got = S._labelling_scores(None, options, None, None)
+        full = [min(base[j], cause[j] + thr) + price[j] for j in range(n)]
+        best = min(full)
+        k = int(np.argmin([g[0] for g in got]))
+        assert got[k][0] == pytest.approx(best) and full[k] == pytest.approx(best)
+        for j in range(n):
+            if full[j] - best < 2 * EVIDENCE_MARGIN:  # competes: scored exactly, with its model
+                assert got[j][0] == pytest.approx(full[j])
+                assert (got[j][1] == "cause") == (cause[j] + thr < base[j])
+            else:  # may keep its baseline score, an upper bound: never closer than the margin
+                assert got[j][0] >= full[j] - 1e-9 and got[j][0] - best >= 2 * EVIDENCE_MARGIN
+        skipped_any |= len(calls) < n
+    assert skipped_any  # the bound did prune some screens
