@@ -1186,7 +1186,9 @@ class _Sub:
             K = stretched_sum(Ks, self.Ks_tip if tip else None)
             if s.crystal and self.Kc() is not None:  # None: no region has a crystal
                 K += s.crystal * stretched_sum(self.Kc(), self.Kc(True) if tip else None)
-            K = s.E_factor * K + (self.K - Ks.sum(axis=(0, 1)))
+            # the split's quadrature remainder (fem_terms.reduced_stiffness_split) is stiffness too: it
+            # scales with the modulus as in the unstretched branch below (continuous at s = 1)
+            K = s.E_factor * (K + (self.K - Ks.sum(axis=(0, 1))))
         else:
             K = s.E_factor * self.K if s.E_factor != 1.0 else self.K.copy()
             if s.crystal and self.Kc() is not None:
