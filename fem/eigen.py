@@ -97,11 +97,31 @@ PARDISO_OPTIONS: dict[str, int] = {
 }
 
 
+def _import_pypardiso():
+    """``import pypardiso`` with MKL's runtime library named for it where it lies in the environment's own
+    ``lib`` (pip's ``mkl`` wheel): without ``PYPARDISO_MKL_RT``, and where ``ctypes.util.find_library`` does
+    not see the venv, pypardiso globs the whole environment recursively for it, once at import and once per
+    solver object (~0.2-0.35 s each, measured in ``benchmarks/diagnose_modal.py``'s profile)."""
+    import glob
+    import os
+    import sys
+
+    if "PYPARDISO_MKL_RT" not in os.environ:
+        for pattern in ("lib/libmkl_rt.so*", "lib64/libmkl_rt.so*", "lib/libmkl_rt*.dylib", "Library/bin/mkl_rt*.dll"):
+            hits = sorted(glob.glob(os.path.join(sys.prefix, pattern)), key=len)
+            if hits:
+                os.environ["PYPARDISO_MKL_RT"] = hits[0]
+                break
+    import pypardiso
+
+    return pypardiso
+
+
 def have_pardiso() -> bool:
     # pypardiso is imported where it is used, not at module level: it is the optional fast
     # backend (SuperLU is the fallback when MKL is missing) and importing it loads MKL (~0.6 s).
     try:
-        import pypardiso  # noqa: F401
+        _import_pypardiso()
     except Exception:
         return False
     return True
@@ -219,9 +239,7 @@ _MKL: list = []
 def _mkl_pardiso():
     """The ``pardiso`` entry of MKL (found once by pypardiso, whose library search costs ~0.7 s)."""
     if not _MKL:
-        import pypardiso
-
-        _MKL.append(pypardiso.PyPardisoSolver(mtype=2)._mkl_pardiso)
+        _MKL.append(_import_pypardiso().PyPardisoSolver(mtype=2)._mkl_pardiso)
     return _MKL[0]
 
 
