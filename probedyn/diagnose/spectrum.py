@@ -1222,7 +1222,8 @@ def _labelling_score(prob: ModalProblem, hint: dict | None = None,
 
     A screen, not the diagnosis: each start of a cause fit gets ``LABEL_SCREEN_NFEV`` evaluations and the
     best start goes on to at most ``LABEL_NFEV_PER_PARAM`` per parameter; the cause of the hypothesis that
-    proposed the labelling (``hint``) also starts at that hypothesis's values. ``baseline_only``: the
+    proposed the labelling (``hint``) starts from its null and from that hypothesis's values instead of its
+    declared starts (the hypothesis placed the peaks there). ``baseline_only``: the
     baseline fit alone (kept on ``prob`` for the causes' nested fits)."""
     from probedyn.diagnose.engine import Fitter
 
