@@ -121,7 +121,7 @@ Hidden effects (one per record, in turn; the sidecar declares the nominal probe 
   (flapwise) and u_y (torsion) of the faces beyond what Gamma already holds; coupling of
   families by the fluid; loading of the non-reported modes; compressibility and rarefaction
   (Knudsen number ~ 0.07 um / delta ~ 0.02).
-  Check (``/tmp/blind_work/check_air.py``, 300 x 30 x 3 um, E = 160 GPa, nu = 0.25, 38.5k
+  Check (a scratch run of ``run_model`` in vacuum and in air, not kept; 300 x 30 x 3 um, E = 160 GPa, nu = 0.25, 38.5k
   DOFs), relative frequency shift air/vacuum of the FE model against a hand estimate for a
   uniform beam with a uniform load per length (mode-shape independent, Gamma at f_air):
     flapwise 1 (44.81 kHz): FE -4.7466e-3, hand 1/sqrt(1 + (pi/4) rho_f w Gamma_r / (rho t)) - 1
