@@ -128,10 +128,11 @@ class HexDivisions:
     refine: float = 1.0  # divides all sizes (a refinement study keeps the rest fixed)
     clamp: float = 0.25  # first element at the clamp: clamp x the through-thickness size
     aspect: float | None = None  # size across the width (bimorph, beam) / around (tube) over the through size
+    side: float | None = None  # beam: first element across the width at the side edges over the through size (None: uniform)
 
     def as_dict(self) -> dict[str, Any]:
         return {"n_thick": self.n_thick, "h": self.h, "ratio": float(self.ratio), "refine": float(self.refine),
-                "clamp": float(self.clamp), "aspect": self.aspect}
+                "clamp": float(self.clamp), "aspect": self.aspect, "side": self.side}
 
 
 def _count_check(n: int) -> None:
@@ -144,15 +145,27 @@ def _count_check(n: int) -> None:
 # ---------------------------------------------------------------------------------------------
 
 def cantilever_hex_grid(L: float, w: float, t: float, div: HexDivisions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Node coordinates (x, y, z) of the tensor grid of :func:`cantilever_hex`."""
+    """Node coordinates (x, y, z) of the tensor grid of :func:`cantilever_hex`.
+
+    Across the width the elements are ``aspect`` times the through-thickness size, uniform, or with
+    ``div.side`` graded towards both side edges from ``side`` times that size (growth ``div.ratio``):
+    the diagnosis meshes a thin lever thick and stretches it back (``probedyn.diagnose.modal_model``),
+    which leaves the width elements several thicknesses wide, while twist concentrates its shear
+    stress within about one thickness of the long edges (Saint-Venant's stress function of a thin
+    strip, Timoshenko & Goodier 1970 section 109); the graded width resolves that layer."""
     r = float(div.refine)
     nz = max(1, math.ceil((div.n_thick or CANTILEVER_DEFAULT["n_thick"]) * r - 1e-9))
     hz = t / nz
     aspect = div.aspect or CANTILEVER_DEFAULT["aspect"]
-    ny = 2 * max(1, math.ceil(w / (2 * aspect * hz) - 1e-9))  # even: the centre line y = 0 is a node line
     h = (div.h if div.h else CANTILEVER_DEFAULT["h_over_t"] * t) / r
     x = graded(0.0, L, div.clamp * hz, max(h, hz), div.ratio)
-    return x, np.linspace(-w / 2, w / 2, ny + 1), np.linspace(-t / 2, t / 2, nz + 1)
+    if div.side is not None and div.side < aspect:
+        # symmetric halves: the centre line y = 0 is a node line
+        y = graded_both(-w / 2, w / 2, div.side * hz, div.side * hz, aspect * hz, div.ratio)
+    else:
+        ny = 2 * max(1, math.ceil(w / (2 * aspect * hz) - 1e-9))  # even: the centre line y = 0 is a node line
+        y = np.linspace(-w / 2, w / 2, ny + 1)
+    return x, y, np.linspace(-t / 2, t / 2, nz + 1)
 
 
 def grid_nodes(nx: int, ny: int, nz: int, element: str) -> int:

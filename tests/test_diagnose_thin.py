@@ -116,3 +116,38 @@ def test_a_baseline_built_before_the_noise_is_known_refines_for_it():
         assert abs(r.freqs[r.index(fa, o)] - b.freqs[b.index(fa, o)]) <= b.disc_err[b.index(fa, o)]
     assert b.refined({k: 0.5 * v for k, v in tight.items()}) is r
     assert getattr(r, "reduced", None) is None  # no Ritz reduction of the coarse mesh carried over
+
+
+def test_the_width_graded_for_twist_resolves_torsion_on_the_stretched_mesh():
+    """Twist concentrates a thin strip's shear stress within about one thickness of its long edges; the
+    stretched mesh's width elements (``1.2 s / 3`` thicknesses, 2.5 at the default stretch 6.3 of this
+    lever) do not resolve that layer and leave torsion 1 stiff by 0.6 % (converging at order ~1 in s). With
+    the width graded towards the side edges (``build_within_budget(..., twist=True)``) torsion must come
+    within the default mesh's measured accuracy (``DEFAULT_ACCURACY``) of the converged unstretched FEM,
+    and the uniform width must not (the test would pass without the grading otherwise); the grading only
+    adds width elements (the thickness and axial grids are the same) and keeps y = 0 a node line."""
+    from probedyn.diagnose.modal_model import SIDE_GRADING_STRETCH, build_within_budget, thickness_stretch
+    from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
+
+    p = get_probe("cantilever")[0]
+    v = p.resolve(dict(REF["geometry_m"]))
+    s = thickness_stretch(v)
+    assert s > SIDE_GRADING_STRETCH
+    ref = REF["frequencies_hz"]["torsion"][0]
+    tol = DEFAULT_ACCURACY["cantilever"][0] + REF["relative_uncertainty"]
+    errs, grids = {}, {}
+    for twist in (False, True):
+        m = build_within_budget(p, v, s, twist)
+        r = m.modes(8)
+        f = next(fr for fr, md in zip(r.frequencies_hz, r.modes) if md.family == "torsion")
+        errs[twist] = abs(f / ref - 1.0)
+        grids[twist] = m.mesh.p
+    assert errs[True] < tol < errs[False], errs
+    y_u, y_g = (np.unique(np.round(grids[k][1] / v["width"], 9)) for k in (False, True))
+    assert y_g.size > y_u.size and 0.0 in y_g
+    np.testing.assert_allclose(y_g, -y_g[::-1], atol=1e-9)
+    for ax in (0, 2):
+        assert np.unique(np.round(grids[True][ax] / np.ptp(grids[True][ax]), 9)).size == \
+            np.unique(np.round(grids[False][ax] / np.ptp(grids[False][ax]), 9)).size
+    # the first width element is the declared thickness' element (3 layers)
+    assert y_g[1] - y_g[0] == pytest.approx(v["thickness"] / 3 / v["width"], rel=0.25)

@@ -44,6 +44,10 @@ _PARAMS = ParamSet([
     Param("tip_half_angle", 0.35, "rad", "tip half-angle (0.35 rad = 20 deg)", lo=0.01, hi=1.5, positive=True),
     Param("elements_through_thickness", 3, "", "element layers through the thickness", lo=1, hi=40,
           kind=int),
+    Param("side_element", None, "", "hexahedra: first element across the width at the side edges, over the "
+          "through-thickness element, graded to the width elements (resolves torsion's shear-stress layer at the "
+          "long edges of a lever meshed thick and stretched, as the modal diagnosis does); None = uniform width",
+          lo=0.01, hi=1.0, positive=True),
     *element_params("maximum element size (hexahedra: along the beam away from the clamp); "
                     "None = thickness / elements_through_thickness (hexahedra: the thickness, graded towards the clamp)",
                     1e-8, 0.01),
@@ -86,7 +90,7 @@ class Cantilever(Probe):
 
     def _divisions(self, values: dict[str, Any]) -> HexDivisions:
         return HexDivisions(int(values["elements_through_thickness"]), values.get("element_size"),
-                            refine=refinement_for("cantilever", values.get("accuracy")))
+                            refine=refinement_for("cantilever", values.get("accuracy")), side=values.get("side_element"))
 
     def mesh(self, values: dict[str, Any]):
         el = self.element(values)
