@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -680,12 +681,7 @@ class FEMBaseline:
         L = self.L * sc[self.length_axis]
         Kl, Ml = segment_matrices(E, nu, mat.density * s.rho_factor, self.w * sc[self.width_axis],
                                   self.t * sc[self.thickness_axis], lo * L, k_n, k_t)
-        ex = -np.asarray(self.clamp_normal, float)
-        ez = np.zeros(3)
-        ez[self.thickness_axis] = 1.0
-        ez -= ex * float(ex @ ez)
-        ez /= np.linalg.norm(ez)
-        Rl = np.column_stack([ex, np.cross(ez, ex), ez])  # local -> model axes
+        Rl = self._segment_frame  # local -> model axes
         if not condensed:
             T = np.kron(np.eye(Kl.shape[0] // 3), Rl.T)  # model-axis DOFs -> local DOFs, per 3-vector
             return T.T @ Kl @ T, T.T @ Ml @ T
@@ -693,6 +689,17 @@ class FEMBaseline:
         Tg = np.vstack([np.eye(6), -np.linalg.solve(Kl[6:, 6:], Kl[6:, :6])])
         T = np.kron(np.eye(2), Rl.T)
         return T.T @ _sym(Tg.T @ Kl @ Tg) @ T, T.T @ _sym(Tg.T @ Ml @ Tg) @ T
+
+    @functools.cached_property
+    def _segment_frame(self) -> np.ndarray:
+        """The bonded segment's local axes in the model's (columns: along the lever into the chip, across the
+        width, through the thickness), from the clamp face's normal (:meth:`overlap_segment`)."""
+        ex = -np.asarray(self.clamp_normal, float)
+        ez = np.zeros(3)
+        ez[self.thickness_axis] = 1.0
+        ez -= ex * float(ex @ ez)
+        ez /= np.linalg.norm(ez)
+        return np.column_stack([ex, np.cross(ez, ex), ez])
 
     def clamp_face_factor(self, scale) -> float:
         """Area stretch of the clamp face (product of the two in-plane stretches)."""

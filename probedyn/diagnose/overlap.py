@@ -34,6 +34,8 @@ face's rigid motion (:mod:`probedyn.diagnose.modal_model`).
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from probedyn.lumped.beam import torsion_constant_rect
@@ -104,16 +106,22 @@ def segment_matrices(E: float, nu: float, rho: float, b: float, t: float, L_o: f
         beta = (3.0 * max(k_n, k_t) / (E * t**3)) ** 0.25  # k b / (4 E I_y)
         h0 = 0.25 / beta if beta > 0 else L_o
     n = 6 * (n_el + 1)
-    K = np.zeros((n, n))
-    M = np.zeros((n, n))
     # element e runs from node e+1 (x = -(e+1) h, xi = 0) to node e (x = -e h, xi = 1): x increases a -> b
-    Ke, Me = _elements(segment_nodes(L_o, h0, n_el), E, G, rho, A, Iy, Iz, J, b, t, k_n, k_t)
-    idx = np.r_[6:12, 0:6]  # the element's node a is the global node e+1
-    Ke, Me = Ke[:, idx][:, :, idx], Me[:, idx][:, :, idx]
-    for e in range(n_el):
-        K[6 * e:6 * e + 12, 6 * e:6 * e + 12] += Ke[e]
-        M[6 * e:6 * e + 12, 6 * e:6 * e + 12] += Me[e]
+    Ke, Me = _elements(segment_nodes(float(L_o), float(h0), int(n_el)), E, G, rho, A, Iy, Iz, J, b, t, k_n, k_t)
+    flat = _scatter(int(n_el))
+    K = np.bincount(flat, Ke.ravel(), n * n).reshape(n, n)
+    M = np.bincount(flat, Me.ravel(), n * n).reshape(n, n)
     return 0.5 * (K + K.T), 0.5 * (M + M.T)
+
+
+@lru_cache(maxsize=8)
+def _scatter(n_el: int) -> np.ndarray:
+    """Flat indices into the ``(6 (n_el + 1))^2`` matrix of every entry of the elements' (n_el, 12, 12) matrices:
+    element e's local node a (its first six DOFs) is the global node e+1, its node b the global node e."""
+    n = 6 * (n_el + 1)
+    loc = np.r_[6:12, 0:6]  # local DOF i -> offset from 6 e
+    g = 6 * np.arange(n_el)[:, None] + loc[None, :]  # (n_el, 12) global DOFs
+    return (g[:, :, None] * n + g[:, None, :]).ravel()
 
 
 def _reference_terms() -> tuple[dict[str, np.ndarray], np.ndarray]:
