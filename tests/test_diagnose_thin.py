@@ -151,3 +151,28 @@ def test_the_width_graded_for_twist_resolves_torsion_on_the_stretched_mesh():
             np.unique(np.round(grids[False][ax] / np.ptp(grids[False][ax]), 9)).size
     # the first width element is the declared thickness' element (3 layers)
     assert y_g[1] - y_g[0] == pytest.approx(v["thickness"] / 3 / v["width"], rel=0.25)
+
+
+def test_a_torsion_line_labelled_on_a_bending_baseline_gets_the_graded_width():
+    """A spectrum's baseline is built for bending before its peaks are labelled (``spectrum_problem``); when a
+    torsion line is among them, ``refined`` first rebuilds it with the width graded for twist (same stretch and
+    layers, built once): its torsion 1 then lies within the default mesh's accuracy of the converged reference,
+    and within its own new discretisation estimate; a bending-only noise keeps the ungraded baseline."""
+    from probedyn.diagnose.modal_model import SIDE_GRADING_STRETCH
+    from probedyn.meshes.hexmeshes import DEFAULT_ACCURACY
+
+    p = get_probe("cantilever")[0]
+    b = FEMBaseline(p, p.resolve(dict(REF["geometry_m"])), {"flapwise": 2})
+    assert not b.twist and b.stretch > SIDE_GRADING_STRETCH
+    loose = 0.1  # relative noise far above every estimate: no refinement, only the grading is tested
+    bend = {("flapwise", 1): loose * b.freqs[b.index("flapwise", 1)]}
+    assert b.refined(bend) is b
+    tw = {**bend, ("torsion", 1): loose * b.freqs[b.index("torsion", 1)]}
+    g = b.refined(tw)
+    assert g is not b and g.twist and g.stretch == b.stretch and g.model.dofs > b.model.dofs
+    assert b.refined(tw) is g and b.graded_for_twist() is g and g.graded_for_twist() is g
+    ref = REF["frequencies_hz"]["torsion"][0]
+    i, j = g.index("torsion", 1), b.index("torsion", 1)
+    tol = DEFAULT_ACCURACY["cantilever"][0] + REF["relative_uncertainty"]
+    assert abs(g.freqs[i] / ref - 1.0) < tol < abs(b.freqs[j] / ref - 1.0)
+    assert abs(g.freqs[i] - ref) <= g.disc_err[i] + REF["relative_uncertainty"] * ref

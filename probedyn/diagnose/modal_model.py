@@ -615,6 +615,8 @@ class FEMBaseline:
         meshes does not depend on the noise (only where it stops), so each finer baseline is built
         once and kept: measurements of one probe with different noise share them."""
         b = self
+        if not b.twist and b.stretch > SIDE_GRADING_STRETCH and any(fa == "torsion" for fa, _ in noise):
+            b = b.graded_for_twist()  # a torsion line labelled on a baseline built for bending
         while b.excess(noise) > 1.0:
             if "_finer_baseline" not in b.__dict__:
                 c = copy.copy(b)
@@ -634,6 +636,28 @@ class FEMBaseline:
                 return b
             b = b._finer_baseline
         return b
+
+    def graded_for_twist(self) -> FEMBaseline:
+        """This baseline with its width graded for twist (:func:`build_within_budget` with ``twist``): the same
+        probe, stretch and layers, rebuilt and its discretisation re-estimated; itself when already graded or
+        not stretched past :data:`SIDE_GRADING_STRETCH`. Built once (a spectrum's baseline is built for bending
+        before its peaks are labelled; a torsion line among them needs the graded width, :meth:`refined`)."""
+        if self.twist or self.stretch <= SIDE_GRADING_STRETCH:
+            return self
+        if "_twist_baseline" not in self.__dict__:
+            c = copy.copy(self)
+            for attr in ("reduced", "_finer_baseline", "_twist_baseline"):
+                c.__dict__.pop(attr, None)
+            t0 = time.perf_counter()
+            c.twist = True
+            c.refinements = list(self.refinements) + [f"width graded for twist (stretch {self.stretch:.3g})"]
+            c._build(build_within_budget(c.probe, c.mesh_values, c.stretch, True), c.needed, c.max_modes)
+            c.disc_err = np.zeros(len(c.families))
+            c._estimate_discretisation(c.needed, len(c.families))
+            c.beam_gap, c.plate_gap, c.beam_note = c._beam_gap()
+            c.solve_s = self.solve_s + time.perf_counter() - t0
+            self._twist_baseline = c
+        return self._twist_baseline
 
     # -- geometry helpers ---------------------------------------------------------------------
     def mass_path(self, xi: np.ndarray) -> np.ndarray:
