@@ -615,14 +615,11 @@ class FEMBaseline:
         meshes does not depend on the noise (only where it stops), so each finer baseline is built
         once and kept: measurements of one probe with different noise share them."""
         b = self
-        if not b.twist and b.stretch > SIDE_GRADING_STRETCH and any(fa == "torsion" for fa, _ in noise):
+        if any(fa == "torsion" for fa, _ in noise):
             b = b.graded_for_twist()  # a torsion line labelled on a baseline built for bending
         while b.excess(noise) > 1.0:
             if "_finer_baseline" not in b.__dict__:
-                c = copy.copy(b)
-                for attr in ("reduced", "_finer_baseline"):  # the Ritz reduction belongs to b's mesh
-                    c.__dict__.pop(attr, None)
-                c.refinements = list(b.refinements)
+                c = b._copy_for_new_mesh()
                 t0 = time.perf_counter()
                 ok = c._refine_step(b.needed, b.max_modes, b.excess(noise))
                 if ok:
@@ -637,6 +634,15 @@ class FEMBaseline:
             b = b._finer_baseline
         return b
 
+    def _copy_for_new_mesh(self) -> FEMBaseline:
+        """A shallow copy to be rebuilt on another mesh: without what belongs to this mesh (its Ritz reduction,
+        the finer and the twist-graded baselines derived from it), with its own list of refinements."""
+        c = copy.copy(self)
+        for attr in ("reduced", "_finer_baseline", "_twist_baseline"):
+            c.__dict__.pop(attr, None)
+        c.refinements = list(self.refinements)
+        return c
+
     def graded_for_twist(self) -> FEMBaseline:
         """This baseline with its width graded for twist (:func:`build_within_budget` with ``twist``): the same
         probe, stretch and layers, rebuilt and its discretisation re-estimated; itself when already graded or
@@ -645,12 +651,10 @@ class FEMBaseline:
         if self.twist or self.stretch <= SIDE_GRADING_STRETCH:
             return self
         if "_twist_baseline" not in self.__dict__:
-            c = copy.copy(self)
-            for attr in ("reduced", "_finer_baseline", "_twist_baseline"):
-                c.__dict__.pop(attr, None)
+            c = self._copy_for_new_mesh()
             t0 = time.perf_counter()
             c.twist = True
-            c.refinements = list(self.refinements) + [f"width graded for twist (stretch {self.stretch:.3g})"]
+            c.refinements.append(f"width graded for twist (stretch {self.stretch:.3g})")
             c._build(build_within_budget(c.probe, c.mesh_values, c.stretch, True), c.needed, c.max_modes)
             c.disc_err = np.zeros(len(c.families))
             c._estimate_discretisation(c.needed, len(c.families))
