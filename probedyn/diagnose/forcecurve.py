@@ -213,7 +213,8 @@ def _interaction(st: ForceState, E_t, nu_t):
 
 def _build_interaction(st: ForceState, E_t, nu_t):
     """(P_loading, P_unloading, registry model or None). The model is evaluated through its
-    normalised curve (parametrised by the contact radius) in :func:`registry_polylines`."""
+    normalised curve (parametrised by the contact radius) in :func:`registry_polylines`. The blunted
+    cone (non-adhesive, monotone) gives both: its force callables and its model."""
     adhesive = st.contact is not None and st.W > 0
     # the null half-angle: the baseline's Hertz sphere (the registry's cone narrower than its smallest half-angle
     # is Sneddon's exact sphere at every depth, Hertz's while delta << R)
@@ -232,8 +233,7 @@ def _build_interaction(st: ForceState, E_t, nu_t):
         if adhesive:
             raise ProbedynError("adhesion with a conical tip is not in the contact registry")
         cone = get_contact_model("cone", **kw, alpha=st.alpha)
-        f = lambda d: cone.force(d)  # noqa: E731
-        return f, f, None
+        return cone.force, cone.force, cone
     if st.contact == "md":
         lam = st.lam if st.lam is not None else 1.0
         model = get_contact_model("md", **kw, W=st.W, z0=_z0_for_lambda(lam, st.W, st.R, 4.0 / 3.0 * st.E_star))
@@ -399,12 +399,30 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float, dz=None):
             Aq = A[idx] + t * (A[idx + 1] - A[idx])
             zc = zq[contact]
             a = Aq[contact]
-            for _ in range(3):  # Newton in A on Z(A) = du D(A) + Pu P(A) / k
+            # Newton in A on g(A) = Z(A) - z = du D(A) + Pu P(A) / k - z, kept inside the polyline's bracket
+            # where its end points (exact points of the curve) straddle the root: a step that leaves it
+            # bisects (a cone close to the sphere: D(A) steep near the cap's edge, where an unguarded step
+            # overshot to 30x the force); until the steps are below 1e-13 A
+            lo, hi = A[idx][contact], A[idx + 1][contact]
+            g_lo, g_hi = Z[idx][contact] - zc, Z[idx + 1][contact] - zc
+            bracket = g_lo * g_hi <= 0
+            for it in range(40):
                 D_, P_, dD_, dP_ = model.nd_curve(a)
                 g = du * D_ + Pu * P_ / k - zc
                 gp = du * dD_ + Pu * dP_ / k
-                a = np.where(gp > 0, a - g / np.where(gp > 0, gp, 1.0), a)
-            Fq[contact] = Pu * model.nd_curve(a)[1]
+                same = np.sign(g) == np.sign(g_lo)
+                lo, g_lo = np.where(bracket & same, a, lo), np.where(bracket & same, g, g_lo)
+                hi = np.where(bracket & ~same, a, hi)
+                a_new = np.where(gp > 0, a - g / np.where(gp > 0, gp, 1.0), a)
+                out = bracket & ~((a_new - lo) * (a_new - hi) <= 0)
+                a_new = np.where(out, 0.5 * (lo + hi), a_new)
+                done = np.abs(a_new - a) <= 1e-13 * np.maximum(np.abs(a), 1.0)
+                a, step = a_new, a_new - a
+                if it >= 2 and done.all():
+                    break
+            # converged: the last evaluation's force carried over the last step (|step| <= 1e-13 A: its
+            # second-order term is ~1e-26 of the force), else the curve at the final radius
+            Fq[contact] = Pu * (P_ + dP_ * step if done.all() else model.nd_curve(a)[1])
         tail = ~contact
         if tail.any():
             dq = delta[idx] + t * (delta[idx + 1] - delta[idx])
@@ -700,7 +718,7 @@ class ForceCurveProblem:
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
         P = np.empty(self.n)
         dP = np.empty(self.n)
-        if model is None:
+        if model is None or not model.adhesive:
             P[:] = Pl(delta)
             if st.alpha >= ALPHA_MIN:  # the cone's law: its slope by central differences (smooth in delta > 0)
                 h = 1e-3 * max(float(np.ptp(delta)), 1e-9)
@@ -811,8 +829,11 @@ class ForceCurveProblem:
             F = sls_lever_curve(t, z_rel, k, c, m, st.E_star, st.visco_strength, st.visco_tau)
             return F if dz is None else (F, F, np.full(len(F), -np.inf))
         Pl, Pu, model = _interaction(st, self.E_t, self.nu_t)
-        if model is None:
-            F = lever_curve(z_rel, segment, Pl, Pu, k, self.span)  # Hertz, cone: monotone, no jumps
+        if model is None or not model.adhesive:  # Hertz, cone: monotone, no jumps
+            # the cone on its exact curve in the contact radius (each force at a given penetration is a
+            # root in A: 7x the cost of the polyline bracket refined by Newton, equal to 1e-12 of the force)
+            F = (lever_curve(z_rel, segment, Pl, Pu, k, self.span) if model is None
+                 else lever_curve_registry(z_rel, segment, model, k, self.span))
             return F if dz is None else (F, F, np.full(len(F), -np.inf))
         return lever_curve_registry(z_rel, segment, model, k, self.span, dz)
 

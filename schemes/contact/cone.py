@@ -132,6 +132,11 @@ class _Tip(ContactModel):
     def nd_curve(self, A):
         return blunted_cone_nd(A, self.alpha_cone)
 
+    def nd_key(self) -> tuple:
+        """The normalised curve depends on the equivalent cone's half-angle alone (a cache key for its
+        polylines, to 12 digits)."""
+        return (self.key, float(f"{self.alpha_cone:.12g}"))
+
     def nd_endpoint(self):
         return 0.0, 0.0
 
