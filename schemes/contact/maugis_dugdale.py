@@ -75,53 +75,87 @@ def g_functions(s: np.ndarray):
     return g1, g2, dg1, dg2
 
 
-def _root_kernel(A, lam, tol, maxiter, out):  # compiled by numba on first use (:func:`_compiled_root`)
-    """Bracketed Newton on ``ln(rhs(s)) = 0`` in ``x = ln s`` for each ``A[i]``, into ``out[i]``; returns
-    -1 when done, or the index of the first point whose bracket has no sign change (-2 - i) or that did
-    not converge (i)."""
+def _root1(a, lam, tol, maxiter):  # compiled by numba on first use (:func:`_compiled`)
+    """``(s, status)`` for one ``A = a``: bracketed Newton on ``ln(rhs(s)) = 0`` in ``x = ln s`` (bracket
+    [-60, 60]); status 0 converged, 1 not converged, 2 no sign change over the bracket (checked when the
+    iterate ends at a bracket end: a root inside it needs no check)."""
+    c1 = 0.5 * lam * a * a
+    c2 = 4.0 / 3.0 * lam * lam * a
+    lo, hi = -60.0, 60.0
+    x = math.log(min(math.sqrt(1.5 / (lam * lam * a)), 2.0 / (a * math.sqrt(math.pi * lam))))
+    x = min(max(x, lo + 1e-3), hi - 1e-3)
+    for _ in range(maxiter):
+        s = math.exp(x)
+        m = math.hypot(1.0, s)
+        t = math.atan(s)
+        g1 = _sma(s) + s * s * t
+        g2 = s * t - s * s / (1.0 + m)
+        dg1 = 2.0 * s * t + 2.0 * s * s / (m * m)
+        dg2 = t - s * s * s / (m * m * (1.0 + m))
+        rhs = c1 * g1 + c2 * g2
+        f = math.log(rhs)
+        df = s * (c1 * dg1 + c2 * dg2) / rhs
+        if f < 0:
+            lo = x
+        if f > 0:
+            hi = x
+        xn = x - f / df
+        if not (lo <= xn <= hi) or not math.isfinite(xn):
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) <= tol:
+            if abs(xn) > 59.0:  # at a bracket end: is there a sign change at all?
+                for j in range(2):
+                    se = math.exp(-60.0 if j == 0 else 60.0)
+                    me = math.hypot(1.0, se)
+                    te = math.atan(se)
+                    fe = math.log(c1 * (_sma(se) + se * se * te) + c2 * (se * te - se * se / (1.0 + me)))
+                    if (j == 0 and fe >= 0.0) or (j == 1 and fe <= 0.0):
+                        return math.exp(xn), 2
+            return math.exp(xn), 0
+        x = xn
+    return math.exp(x), 1
+
+
+def _root_kernel(A, lam, tol, maxiter, out):
+    """:func:`_root1` at every ``A[i]`` into ``out[i]``; returns -1 when done, else ``i`` (point ``i`` did not
+    converge) or ``-2 - i`` (no sign change at point ``i``)."""
+    for i in range(A.shape[0]):
+        s, status = _root1(A[i], lam, tol, maxiter)
+        if status == 1:
+            return i
+        if status == 2:
+            return -2 - i
+        out[i] = s
+    return -1
+
+
+def _curve_kernel(A, lam, tol, maxiter, D, P, dD, dP, S):
+    """:func:`md_curve` point by point (its formulas, at the root :func:`_root1`); return code as
+    :func:`_root_kernel`."""
     for i in range(A.shape[0]):
         a = A[i]
-        c1 = 0.5 * lam * a * a
-        c2 = 4.0 / 3.0 * lam * lam * a
-        lo, hi = -60.0, 60.0
-        for j in range(2):  # the bracket's ends: ln(rhs) < 0 at lo, > 0 at hi
-            s = math.exp(lo if j == 0 else hi)
-            m = math.hypot(1.0, s)
-            t = math.atan(s)
-            g1 = _sma(s) + s * s * t
-            g2 = s * t - s * s / (1.0 + m)
-            f = math.log(c1 * g1 + c2 * g2)
-            if (j == 0 and f >= 0.0) or (j == 1 and f <= 0.0):
-                return -2 - i
-        x = math.log(min(math.sqrt(1.5 / (lam * lam * a)), 2.0 / (a * math.sqrt(math.pi * lam))))
-        x = min(max(x, lo + 1e-3), hi - 1e-3)
-        ok = False
-        for _ in range(maxiter):
-            s = math.exp(x)
-            m = math.hypot(1.0, s)
-            t = math.atan(s)
-            g1 = _sma(s) + s * s * t
-            g2 = s * t - s * s / (1.0 + m)
-            dg1 = 2.0 * s * t + 2.0 * s * s / (m * m)
-            dg2 = t - s * s * s / (m * m * (1.0 + m))
-            rhs = c1 * g1 + c2 * g2
-            f = math.log(rhs)
-            df = s * (c1 * dg1 + c2 * dg2) / rhs
-            if f < 0:
-                lo = x
-            if f > 0:
-                hi = x
-            xn = x - f / df
-            if not (lo <= xn <= hi) or not math.isfinite(xn):
-                xn = 0.5 * (lo + hi)
-            if abs(xn - x) <= tol:
-                x = xn
-                ok = True
-                break
-            x = xn
-        if not ok:
+        s, status = _root1(a, lam, tol, maxiter)
+        if status == 1:
             return i
-        out[i] = math.exp(x)
+        if status == 2:
+            return -2 - i
+        m = math.hypot(1.0, s)
+        t = math.atan(s)
+        g1 = _sma(s) + s * s * t
+        g2 = s * t - s * s / (1.0 + m)
+        dg1 = 2.0 * s * t + 2.0 * s * s / (m * m)
+        dg2 = t - s * s * s / (m * m * (1.0 + m))
+        m2 = 1.0 + s * s
+        F_A = lam * a * g1 + 4.0 / 3.0 * lam * lam * g2
+        F_s = 0.5 * lam * a * a * dg1 + 4.0 / 3.0 * lam * lam * a * dg2
+        ds = -F_A / F_s
+        h = s + m2 * t
+        dh = 2.0 + 2.0 * s * t
+        D[i] = a * a - 4.0 / 3.0 * lam * a * s
+        P[i] = a * a * a - lam * a * a * h
+        dD[i] = 2 * a - 4.0 / 3.0 * lam * (s + a * ds)
+        dP[i] = 3 * a * a - 2 * lam * a * h - lam * a * a * dh * ds
+        S[i] = s
     return -1
 
 
@@ -142,17 +176,24 @@ def _sma(s):  # scalar s - atan(s), as :func:`_s_minus_atan`
 _JIT: dict = {}
 
 
-def _compiled_root():
-    """:func:`_root_kernel` compiled with numba on first use (cached on disk): listing the contact registry
-    (CLI help) imports this module and should not import numba."""
+def _compiled(kernel: str):
+    """``kernel`` (:func:`_root_kernel`, :func:`_curve_kernel`) compiled with numba on first use (cached on
+    disk): listing the contact registry (CLI help) imports this module and should not import numba."""
     if not _JIT:
         from numba import njit
 
         g = globals()
-        for name in ("_sma", "_root_kernel"):  # callees first: numba binds globals
+        for name in ("_sma", "_root1", "_root_kernel", "_curve_kernel"):  # callees first: numba binds globals
             g[name] = njit(cache=True)(g[name])
-        _JIT["root"] = g["_root_kernel"]
-    return _JIT["root"]
+            _JIT[name] = g[name]
+    return _JIT[kernel]
+
+
+def _raise_on(flag: int, A: np.ndarray, lam: float) -> None:
+    if flag <= -2:
+        raise SolverError(f"Maugis equation: no sign change in the bracket (lam={lam:g}, A={A[-2 - flag]:g})")
+    if flag >= 0:
+        raise SolverError(f"Maugis equation did not converge (lam={lam:g}, A={A[flag]:g})")
 
 
 def solve_s(A, lam: float, tol: float = 1e-14, maxiter: int = 200) -> np.ndarray:
@@ -168,11 +209,7 @@ def solve_s(A, lam: float, tol: float = 1e-14, maxiter: int = 200) -> np.ndarray
     if lam <= 0:
         raise SolverError("solve_s needs lam > 0 (lam = 0 is the DMT model)")
     out = np.empty(A.shape)
-    flag = _compiled_root()(A.ravel(), float(lam), float(tol), int(maxiter), out.reshape(-1))
-    if flag <= -2:
-        raise SolverError(f"Maugis equation: no sign change in the bracket (lam={lam:g}, A={A.ravel()[-2 - flag]:g})")
-    if flag >= 0:
-        raise SolverError(f"Maugis equation did not converge (lam={lam:g}, A={A.ravel()[flag]:g})")
+    _raise_on(_compiled("_root_kernel")(A.ravel(), float(lam), float(tol), int(maxiter), out.reshape(-1)), A.ravel(), lam)
     return out
 
 
@@ -196,20 +233,15 @@ def md_curve(A, lam: float):
     A = np.atleast_1d(np.asarray(A, dtype=float))
     if lam == 0:  # DMT: m -> infinity, D = A^2, P = A^3 - 2
         return A * A, A**3 - 2.0, 2 * A, 3 * A * A, np.full_like(A, np.inf)
-    s = solve_s(A, lam)
-    g1, g2, dg1, dg2 = g_functions(s)
-    t = np.arctan(s)
-    m2 = 1.0 + s * s
-    F_A = lam * A * g1 + 4.0 / 3.0 * lam * lam * g2
-    F_s = 0.5 * lam * A * A * dg1 + 4.0 / 3.0 * lam * lam * A * dg2
-    ds = -F_A / F_s
-    h = s + m2 * t
-    dh = 2.0 + 2.0 * s * t
-    D = A * A - 4.0 / 3.0 * lam * A * s
-    P = A**3 - lam * A * A * h
-    dD = 2 * A - 4.0 / 3.0 * lam * (s + A * ds)
-    dP = 3 * A * A - 2 * lam * A * h - lam * A * A * dh * ds
-    return D, P, dD, dP, s
+    if lam < 0:
+        raise SolverError("md_curve needs lam >= 0")
+    # point by point in the compiled loop (:func:`_curve_kernel`): the root (:func:`solve_s`), then with
+    # g1, g2 of :func:`g_functions`, h = s + m^2 atan(s):
+    #   D = A^2 - 4/3 lam A s,  P = A^3 - lam A^2 h,  ds/dA = -F_A / F_s
+    Af = np.ascontiguousarray(A.ravel())
+    D, P, dD, dP, s = (np.empty(Af.shape) for _ in range(5))
+    _raise_on(_compiled("_curve_kernel")(Af, float(lam), 1e-14, 200, D, P, dD, dP, s), Af, lam)
+    return tuple(v.reshape(A.shape) for v in (D, P, dD, dP, s))
 
 
 @CONTACT_MODELS.register
