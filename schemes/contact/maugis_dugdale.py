@@ -75,6 +75,13 @@ def g_functions(s: np.ndarray):
     return g1, g2, dg1, dg2
 
 
+def _g4(s):  # compiled by numba on first use: the scalar :func:`g_functions`, and atan(s)
+    m = math.hypot(1.0, s)
+    t = math.atan(s)
+    return (_sma(s) + s * s * t, s * t - s * s / (1.0 + m), 2.0 * s * t + 2.0 * s * s / (m * m),
+            t - s * s * s / (m * m * (1.0 + m)), t)
+
+
 def _root1(a, lam, tol, maxiter):  # compiled by numba on first use (:func:`_compiled`)
     """``(s, status)`` for one ``A = a``: bracketed Newton on ``ln(rhs(s)) = 0`` in ``x = ln s`` (bracket
     [-60, 60]); status 0 converged, 1 not converged, 2 no sign change over the bracket (checked when the
@@ -86,12 +93,7 @@ def _root1(a, lam, tol, maxiter):  # compiled by numba on first use (:func:`_com
     x = min(max(x, lo + 1e-3), hi - 1e-3)
     for _ in range(maxiter):
         s = math.exp(x)
-        m = math.hypot(1.0, s)
-        t = math.atan(s)
-        g1 = _sma(s) + s * s * t
-        g2 = s * t - s * s / (1.0 + m)
-        dg1 = 2.0 * s * t + 2.0 * s * s / (m * m)
-        dg2 = t - s * s * s / (m * m * (1.0 + m))
+        g1, g2, dg1, dg2, t = _g4(s)
         rhs = c1 * g1 + c2 * g2
         f = math.log(rhs)
         df = s * (c1 * dg1 + c2 * dg2) / rhs
@@ -105,10 +107,8 @@ def _root1(a, lam, tol, maxiter):  # compiled by numba on first use (:func:`_com
         if abs(xn - x) <= tol:
             if abs(xn) > 59.0:  # at a bracket end: is there a sign change at all?
                 for j in range(2):
-                    se = math.exp(-60.0 if j == 0 else 60.0)
-                    me = math.hypot(1.0, se)
-                    te = math.atan(se)
-                    fe = math.log(c1 * (_sma(se) + se * se * te) + c2 * (se * te - se * se / (1.0 + me)))
+                    g1e, g2e, _, _, _ = _g4(math.exp(-60.0 if j == 0 else 60.0))
+                    fe = math.log(c1 * g1e + c2 * g2e)
                     if (j == 0 and fe >= 0.0) or (j == 1 and fe <= 0.0):
                         return math.exp(xn), 2
             return math.exp(xn), 0
@@ -139,12 +139,7 @@ def _curve_kernel(A, lam, tol, maxiter, D, P, dD, dP, S):
             return i
         if status == 2:
             return -2 - i
-        m = math.hypot(1.0, s)
-        t = math.atan(s)
-        g1 = _sma(s) + s * s * t
-        g2 = s * t - s * s / (1.0 + m)
-        dg1 = 2.0 * s * t + 2.0 * s * s / (m * m)
-        dg2 = t - s * s * s / (m * m * (1.0 + m))
+        g1, g2, dg1, dg2, t = _g4(s)
         m2 = 1.0 + s * s
         F_A = lam * a * g1 + 4.0 / 3.0 * lam * lam * g2
         F_s = 0.5 * lam * a * a * dg1 + 4.0 / 3.0 * lam * lam * a * dg2
@@ -183,7 +178,7 @@ def _compiled(kernel: str):
         from numba import njit
 
         g = globals()
-        for name in ("_sma", "_root1", "_root_kernel", "_curve_kernel"):  # callees first: numba binds globals
+        for name in ("_sma", "_g4", "_root1", "_root_kernel", "_curve_kernel"):  # callees first: numba binds globals
             g[name] = njit(cache=True)(g[name])
             _JIT[name] = g[name]
     return _JIT[kernel]
