@@ -44,7 +44,7 @@ def default_sizes(thickness: float, delta: float, refine: float = 1.0, growth: f
 
 
 def section_mesh(thickness: float, r_out: float, face: float, corner: float, growth: float = 0.2,
-                 sampling: int | None = None) -> MeshTri:
+                 sampling: int | None = None, quarter: bool = False) -> MeshTri:
     """Triangular mesh of the fluid around the rectangle ``|x| <= 1, |y| <= thickness/2`` inside the
     circle of radius ``r_out`` (module docstring; units of the half-width).
 
@@ -52,6 +52,10 @@ def section_mesh(thickness: float, r_out: float, face: float, corner: float, gro
     increase per unit distance; the size is capped at ``r_out / 10``. ``sampling``: points per side
     of gmsh's distance field (default: enough for the finest size). Returns a MeshTri with
     ``mesh.boundaries == {"section": facets, "outer": facets}``.
+
+    ``quarter=True``: only the quadrant ``x >= 0, y >= 0`` (the section's top face and right end, one corner, a
+    quarter of the circle), with the symmetry lines as two more groups, ``sym_x`` (on ``x = 0``) and ``sym_y``
+    (on ``y = 0``); the solver imposes each motion's symmetry there (:mod:`probedyn.fem.stokes2d`).
     """
     t = float(thickness)
     if not (0 < t < 2.0):
@@ -66,17 +70,30 @@ def section_mesh(thickness: float, r_out: float, face: float, corner: float, gro
     with gmsh_session("section2d") as gmsh:
         geo = gmsh.model.geo
         hw, ht = 1.0, t / 2.0
-        corners = [geo.addPoint(x, y, 0.0) for x, y in ((-hw, -ht), (hw, -ht), (hw, ht), (-hw, ht))]
-        sides = [geo.addLine(corners[i], corners[(i + 1) % 4]) for i in range(4)]
         centre = geo.addPoint(0.0, 0.0, 0.0)
-        rim = [geo.addPoint(r_out * math.cos(k * math.pi / 2), r_out * math.sin(k * math.pi / 2), 0.0)
-               for k in range(4)]
-        arcs = [geo.addCircleArc(rim[k], centre, rim[(k + 1) % 4]) for k in range(4)]
-        surface = geo.addPlaneSurface([geo.addCurveLoop(arcs), geo.addCurveLoop(sides)])
+        if quarter:
+            end_mid, corner_pt, top_mid = (geo.addPoint(x, y, 0.0) for x, y in ((hw, 0.0), (hw, ht), (0.0, ht)))
+            corners = [corner_pt]
+            rim = [geo.addPoint(r_out, 0.0, 0.0), geo.addPoint(0.0, r_out, 0.0)]
+            sym_y = geo.addLine(end_mid, rim[0])
+            arcs = [geo.addCircleArc(rim[0], centre, rim[1])]
+            sym_x = geo.addLine(rim[1], top_mid)
+            sides = [geo.addLine(top_mid, corner_pt), geo.addLine(corner_pt, end_mid)]
+            surface = geo.addPlaneSurface([geo.addCurveLoop([sym_y, arcs[0], sym_x] + sides)])
+        else:
+            corners = [geo.addPoint(x, y, 0.0) for x, y in ((-hw, -ht), (hw, -ht), (hw, ht), (-hw, ht))]
+            sides = [geo.addLine(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+            rim = [geo.addPoint(r_out * math.cos(k * math.pi / 2), r_out * math.sin(k * math.pi / 2), 0.0)
+                   for k in range(4)]
+            arcs = [geo.addCircleArc(rim[k], centre, rim[(k + 1) % 4]) for k in range(4)]
+            surface = geo.addPlaneSurface([geo.addCurveLoop(arcs), geo.addCurveLoop(sides)])
         geo.synchronize()
         gmsh.model.addPhysicalGroup(2, [surface], name="fluid")
         gmsh.model.addPhysicalGroup(1, sides, name="section")
         gmsh.model.addPhysicalGroup(1, arcs, name="outer")
+        if quarter:
+            gmsh.model.addPhysicalGroup(1, [sym_x], name="sym_x")
+            gmsh.model.addPhysicalGroup(1, [sym_y], name="sym_y")
 
         fld = gmsh.model.mesh.field
         fields = []
