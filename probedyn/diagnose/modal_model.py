@@ -1394,15 +1394,30 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = 
     uniform-beam loading exactly for a rigid section rotation (:func:`~probedyn.diagnose.hydrodynamics.torsion_gamma`)."""
     gamma = torsion_gamma if torsion else sader_gamma
     ma0 = factor * (3.0 * math.pi / 32.0 if torsion else 0.25 * math.pi) * rho_f * w * sq
+
+    def loaded(o):  # one pass of the fixed point o = sqrt(kq / (mq + ma Gamma_r(o))), and Gamma at o
+        gg = complex(gamma(o, w, rho_f, eta_f))
+        return math.sqrt(kq / (mq + ma0 * gg.real)), gg
+
+    # the fixed point by secant steps on h(o) = loaded(o) - o (the plain iteration contracts by ~x / (2 (1 + x))
+    # |d ln Gamma_r / d ln omega| per pass, ~0.05 in water: 11 passes to 1e-14 against 4-5); a secant step that
+    # is not finite and positive falls back to the plain pass
     done = False
+    prev = None
     for _ in range(60):
-        g = complex(gamma(om, w, rho_f, eta_f))
-        om_new = math.sqrt(kq / (mq + ma0 * g.real))
-        done = abs(om_new - om) <= 1e-14 * om
-        om = om_new
+        om_new, g = loaded(om)
+        h = om_new - om
+        done = abs(h) <= 1e-14 * om
         if done:
             break
-    if not done:  # converged: g is the function at the loaded frequency to 1e-14
+        nxt = om_new
+        if prev is not None and h != prev[1]:
+            cand = om - h * (om - prev[0]) / (h - prev[1])
+            if math.isfinite(cand) and cand > 0:
+                nxt = cand
+        prev = (om, h)
+        om = nxt
+    if not done:
         g = complex(gamma(om, w, rho_f, eta_f))
     qf = (mq + ma0 * g.real) / (ma0 * g.imag) if g.imag > 0 else math.inf
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
