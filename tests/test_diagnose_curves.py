@@ -541,3 +541,47 @@ def test_a_noise_free_twin_is_offered_the_escape_starts(tmp_path):
     fit = F.nested(base, (dmt,))
     assert base.chi2 > 300 and fit.chi2 < 2.0  # the law that made it, to the record's 9 written digits
     assert fit.values["W"] == pytest.approx(truth["params"]["W"], rel=0.05)
+
+
+@pytest.mark.parametrize("law, k", [("jkr", 0.3), ("jkr", 5.0), ("md", 1.0)])
+def test_the_pull_off_alternative_is_the_exact_fold(law, k):
+    """After the pull-off, a retract sample's alternative is the pre-jump branch held at its fold
+    (:func:`forcecurve._jump_alternatives`). The fold is where the lever's equilibrium turns, ``dZ/dA = du D'(A)
+    + Pu P'(A) / k = 0``: solved here independently by Brent's method on the law's analytic slopes. The
+    diagnosis locates it on the exact curve between its polyline neighbours (``forcecurve._exact_extrema``: two
+    rounds of 65 points, the radius to ~1e-5, so the force to ~P' 1e-5 < 1e-4 of pi W R); read off the polyline
+    (session 40) it was up to 3.6e-2 of pi W R off. The soft lever's fold tends to the force-controlled pull-off
+    -1.5 pi W R (JKR)."""
+    from scipy.optimize import brentq
+
+    from probedyn.diagnose import forcecurve as fc
+    from probedyn.schemes.contact import get_contact_model
+
+    E_t, nu_t, nu_s, E_s, R, W = 169e9, 0.27, 0.3, 3e9, 20e-9, 0.05
+    kw = dict(E_t=E_t, nu_t=nu_t, E_s=E_s, nu_s=nu_s, R_t=R, R_s=0.0, W=W)
+    if law == "md":
+        K = 4 / 3 / ((1 - nu_t**2) / E_t + (1 - nu_s**2) / E_s)
+        kw["z0"] = fc._z0_for_lambda(3.0, W, R, K)
+    m = get_contact_model(law, **kw)
+    du, Pu = m.scales.d_unit, m.scales.P_unit
+
+    def slope(A):
+        _, _, dD, dP = m.nd_curve(np.array([A]))
+        return du * dD[0] + Pu * dP[0] / k
+
+    grid = np.linspace(0.05, 5.0, 2000)
+    s = np.array([slope(a) for a in grid])
+    turns = np.flatnonzero(np.diff(np.sign(s)))
+    assert len(turns) == 1  # one fold on the contact curve
+    A_f = brentq(slope, grid[turns[0]], grid[turns[0] + 1], xtol=1e-15)
+    P_f = m.nd_curve(np.array([A_f]))[1][0] * Pu
+    span = 20e-9 + 5 * Pu / k
+    z = np.linspace(-span, 10e-9 + 2 * Pu / k, 600)
+    zz, seg = np.r_[z, z[::-1]], np.r_[np.zeros(600, int), np.ones(600, int)]
+    F, alt, log_w = fc.lever_curve_registry(zz, seg, m, k, span, np.full(1200, z[1] - z[0]))
+    # off contact after the jump (the tail, above the fold's force): the alternative is the fold force
+    after = (seg == 1) & np.isfinite(log_w) & (alt < -0.5 * Pu) & (F > alt + 0.1 * Pu)
+    assert after.sum() > 10
+    assert np.max(np.abs(alt[after] - P_f)) < 1e-4 * Pu, (alt[after][:3] / Pu, P_f / Pu)
+    if law == "jkr" and k < 1:
+        assert P_f / Pu == pytest.approx(-1.5, abs=1e-3)
