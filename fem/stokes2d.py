@@ -40,13 +40,13 @@ velocity DOFs, weighted by the rigid motion (the consistent traction, much more 
 integrating the stress of the discrete solution: :func:`stress_integral`, 0.1-0.4 % off at Re = 10 and
 converging slowly because of the corner singularities, while the reaction changes by < 1e-5).
 
-Accuracy (benchmarks/torsional_gamma_table.py, Re = 0.1 .. 1e4): on the default mesh (``refine=1``,
-20-100k unknowns on the whole disc, a quarter of that on the quadrant) the reaction converges with order
-~3-4 in the mesh size and is within ~1e-4 (Re <= 1e3) to ~4e-4 (Re = 1e4) of |Gamma| from the converged
-value; the zero-thickness extrapolation (:func:`thin_limit`) adds < 1e-4; the flexural function so obtained agrees with Sader's fit
-within 1e-4 (real part, all Re) and 3e-4 (imaginary part, Re <= 100; it drifts to +0.7 % at Re = 1e4, the
-top of the fit's range, where our values follow the boundary-layer asymptote). Finite thickness matters:
-at h/b = 0.01 and Re = 1e4 Gamma_i is 7-8 % low.
+Accuracy (benchmarks/torsional_gamma_table.py, Re = 0.1 .. 1e4): on the default mesh (``refine=1``, 20-100k
+unknowns on the whole disc, a quarter of that on the quadrant) the reaction converges with order ~3-4 in the
+mesh size and is within ~1e-4 (Re <= 1e3) to ~4e-4 (Re = 1e4) of |Gamma| from the converged value; the
+zero-thickness extrapolation (:func:`thin_limit`) adds < 1e-4; the flexural function so obtained agrees with
+Sader's fit within 1e-4 (real part, all Re) and 3e-4 (imaginary part, Re <= 100; it drifts to +0.7 % at Re =
+1e4, the top of the fit's range, where our values follow the boundary-layer asymptote). Finite thickness
+matters: at h/b = 0.01 and Re = 1e4 Gamma_i is 7-8 % low.
 
 Symmetry (since session 41): both motions are symmetric under the section's two mirror lines, so one
 quadrant is solved (:func:`probedyn.meshes.section2d.section_mesh` with ``quarter=True``, the default of
