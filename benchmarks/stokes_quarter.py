@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 import probedyn  # noqa: F401  (before numpy: thread settings)
+from probedyn.core.io import write_json
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEAT = 2
@@ -57,9 +58,7 @@ def main(argv: list[str]) -> dict:
     res = dict(refine=REFINE, rows=rows,
                ratio_min=min(r["ratio"] for r in rows), ratio_max=max(r["ratio"] for r in rows),
                worst_rel_diff=max(max(v) for r in rows for v in r["rel_diff"].values()))
-    tmp = out.with_suffix(".tmp")
-    tmp.write_text(json.dumps(res, indent=1))
-    tmp.replace(out)
+    write_json(out, res, defer=False)
     print(json.dumps(res, indent=1))
     return res
 

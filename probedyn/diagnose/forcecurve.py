@@ -334,6 +334,14 @@ def _nd_contact(model, A_hi: float, n_fine: int, n_c: int):
     return float(Dg[-1]), (A_star, D_min, Ac, Dc, Pc)
 
 
+def _jump_runs(X: np.ndarray) -> list[tuple[int, int]]:
+    """The runs ``[s, e)`` of polyline points below the running maximum of ``X``: a followed branch that moves
+    towards increasing ``X`` jumps over each (the point before a run is its fold)."""
+    env = np.maximum.accumulate(X)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], (X < env).astype(np.int8), [0]])))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist()))
+
+
 def _jump_alternatives(Z, P, zq, dzq):
     """The other branch at every sample of a segment with a jump, for motion towards increasing ``Z``
     (the approach; the retract is passed mirrored). ``Z`` = piezo position of the polyline points,
@@ -353,11 +361,8 @@ def _jump_alternatives(Z, P, zq, dzq):
 
     alt = np.full(len(zq), np.nan)
     log_w = np.full(len(zq), -np.inf)
-    env = np.maximum.accumulate(Z)
-    below = np.concatenate([[0], (Z < env).astype(np.int8), [0]])
-    edges = np.flatnonzero(np.diff(below))
     best = np.full(len(zq), np.inf)
-    for s, e in zip(edges[::2], edges[1::2]):  # run [s, e) below the envelope
+    for s, e in _jump_runs(Z):
         if s == 0 or e >= len(Z):
             continue
         zj, Pf = Z[s - 1], P[s - 1]
@@ -389,15 +394,12 @@ def _exact_extrema(model, k: float, delta, P, A, retract: bool, n: int = 65, rou
     Z = delta + P / k
     sign = -1.0 if retract else 1.0
     X = sign * Z[::-1] if retract else Z  # the followed branch is the running maximum of X
-    env = np.maximum.accumulate(X)
-    below = np.concatenate([[0], (X < env).astype(np.int8), [0]])
-    edges = np.flatnonzero(np.diff(below))  # runs [s, e) below the envelope
     m_ = len(Z)
 
     def orig(i):
         return m_ - 1 - i if retract else i
 
-    for s0, e in zip(edges[::2], edges[1::2]):
+    for s0, e in _jump_runs(X):
         if s0 == 0:
             continue
         lowest = s0 + int(np.argmin(X[s0:e]))
