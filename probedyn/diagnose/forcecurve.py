@@ -886,6 +886,23 @@ class ForceCurveProblem:
                     starts.append(st)
         return own + self._separation_optima(causes, starts, mask)
 
+    #: the registration scan's moves of the contact point, in median piezo intervals (:meth:`registration_starts`)
+    REGISTRATION_SHIFTS = (-2, -1, 1, 2)
+
+    def registration_starts(self, values: dict, causes: tuple, new: tuple) -> list[dict]:
+        """Starts for the engine's registration scan (:meth:`.engine.Fitter.registered`, whitened fits only):
+        the optimum with the contact point ``z_c`` moved by 1 and 2 median piezo intervals either way, when a
+        new cause is an adhesion law (a predicted snap-in or pull-off). Under AR(1) noise the fit runs on
+        innovations (differences of neighbouring samples), which weigh a jump's position relative to the
+        samples sharply: the misfit has minima one or two samples apart in ``z_c`` (session 41, seed 2001:
+        DMT 635.7 from its best start, 625.6 two intervals on; docs/diagnose.md 9.27-9.28)."""
+        if not any(p.name == "W" for c in new for p in c.params):
+            return []
+        dz = float(np.median(self.dz))
+        lo, hi = self.base_params[0].lo, self.base_params[0].hi
+        zc = values["z_c"]
+        return [dict(values, z_c=zc + s * dz) for s in self.REGISTRATION_SHIFTS if lo <= zc + s * dz <= hi]
+
     def _separation_optima(self, causes: tuple, starts: list[dict], mask=None) -> list[dict]:
         """The optimum of a fit in the force-separation domain (:meth:`_separation_residuals`) from each start;
         every one is offered (that misfit ranks them only roughly)."""
