@@ -894,8 +894,8 @@ class ForceCurveProblem:
         the optimum with the contact point ``z_c`` moved by 1 and 2 median piezo intervals either way, when a
         new cause is an adhesion law (a predicted snap-in or pull-off). Under AR(1) noise the fit runs on
         innovations (differences of neighbouring samples), which weigh a jump's position relative to the
-        samples sharply: the misfit has minima one or two samples apart in ``z_c`` (session 41, seed 2001:
-        DMT 635.7 from its best start, 625.6 two intervals on; docs/diagnose.md 9.27-9.28)."""
+        samples sharply: the misfit has minima one or two samples apart in ``z_c`` (seed 2001, rho = 0.8: DMT
+        632.75 from its best start, 625.37 after the scan's rounds; docs/diagnose.md 9.27-9.28)."""
         if not any(p.name == "W" for c in new for p in c.params):
             return []
         dz = float(np.median(self.dz))
