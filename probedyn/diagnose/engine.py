@@ -419,7 +419,9 @@ class Fitter:
         weighed sharply, and the misfit is rugged at the sample spacing (docs/diagnose.md 9.28); on white
         residuals a scan of the rate cases found no such minima (9.27)."""
         starts_of = getattr(self.problem, "registration_starts", None)
-        for _ in range(rounds if starts_of is not None else 0):
+        if starts_of is None:
+            return f
+        for _ in range(rounds):
             starts = starts_of(dict(f.values), tuple(f.causes), tuple(new))
             if not starts:
                 break
