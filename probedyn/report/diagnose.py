@@ -134,6 +134,11 @@ def summary(res: dict[str, Any]) -> str:
                 if isinstance(v, (int, float))))
         for fl in f["flags"]:
             lines.append(f"  flag: {fl}")
+        pa = f.get("parsimony")
+        if pa and not any(pa["container"] in c["causes"] for c in res["confounded"]):
+            vals = ", ".join(f"{k} = {v:.4g}" for k, v in pa["container_parameters"].items())
+            lines.append(f"  {pa['container']} ({vals}; evidence {pa['container_evidence']:.1f} nats) contains it as a "
+                         "limit: its extra parameter is not supported, so it is the same explanation, not a rival")
     for x in res.get("not_claimed") or []:
         lines.append(f"not claimed: {x['cause']} (Delta chi2 {x['delta_chi2']:.4g}; the chain up to it leaves an excess "
                      f"chi2 - dof of {x['remainder']:.4g} that no cause describes: not separable from that model error)")
