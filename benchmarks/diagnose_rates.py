@@ -12,7 +12,7 @@ levers in turn, every third from the Timoshenko beam, every fourth declared in a
 Truth (tests/diagnose_truth.py, independent of the diagnosis): probedyn's 3D FEM on a finer,
 unstretched mesh (4 layers of 20-node hexahedra instead of the diagnosis' 3 stretched), solved
 directly, with the hidden effect built into the mesh or the matrices (a point mass on a mesh
-vertex, lumped springs on the clamp-face nodes, a re-meshed thicker/wider/longer lever, another
+vertex, springs on the clamp face (a consistent foundation on the truth's mesh), a re-meshed thicker/wider/longer lever, another
 modulus, a geometric stiffness assembled in the test module, Sader fluid loading by the test
 module's own hydrodynamic function), plus noise (1e-3 relative on six frequencies, 5 % on Q where
 given); Timoshenko nulls: ``probedyn.lumped.beam`` (four flapwise + one lateral mode). The nominal

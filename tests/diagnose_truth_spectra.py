@@ -69,14 +69,21 @@ def _code_hash() -> str:
     return hashlib.sha1(src.encode()).hexdigest()[:10]
 
 
+def _spectrum_key(lever: str, effect: str | None, params: dict) -> tuple[dict, str | None, str]:
+    """(the FEM's parameters, its effect, the cache key) of a spectrum truth: lever, effect, parameters, mesh,
+    the truth code and an effect's revision (``diagnose_truth.TRUTH_REVISION``)."""
+    fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
+    eff = effect if effect != "fluid-loading" else None
+    items = [lever, eff, {k: round(float(v), 12) for k, v in sorted(fem_params.items())}, dt.TRUTH_ETT, _code_hash()]
+    if eff in dt.TRUTH_REVISION:
+        items.append(dt.TRUTH_REVISION[eff])
+    return fem_params, eff, hashlib.sha1(json.dumps(items).encode()).hexdigest()[:16]
+
+
 def spectrum_fem_truth(lever: str, effect: str | None, params: dict) -> dict:
     """FEM truth (frequencies and detector displacements of MODES), cached on disk keyed by the
     lever, effect, parameters and the truth code."""
-    fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
-    eff = effect if effect != "fluid-loading" else None
-    key = json.dumps([lever, eff, {k: round(float(v), 12) for k, v in sorted(fem_params.items())}, dt.TRUTH_ETT,
-                      _code_hash()])
-    h = hashlib.sha1(key.encode()).hexdigest()[:16]
+    fem_params, eff, h = _spectrum_key(lever, effect, params)
     shipped = json.loads(SHIPPED.read_text()) if SHIPPED.exists() else {}
     if h in shipped:  # the default tests' truths ship with the repository (no FEM solve in a fast test)
         return shipped[h]
@@ -95,12 +102,8 @@ def spectrum_fem_truth(lever: str, effect: str | None, params: dict) -> dict:
 def ship_truth(lever: str, effect: str | None, params: dict) -> None:
     """Add one FEM truth to the file shipped with the tests (``SHIPPED``)."""
     out = spectrum_fem_truth(lever, effect, params)
-    fem_params = {k: v for k, v in params.items() if k not in ("medium", "rho_f", "eta_f")}
-    eff = effect if effect != "fluid-loading" else None
-    key = json.dumps([lever, eff, {k: round(float(v), 12) for k, v in sorted(fem_params.items())}, dt.TRUTH_ETT,
-                      _code_hash()])
     shipped = json.loads(SHIPPED.read_text()) if SHIPPED.exists() else {}
-    shipped[hashlib.sha1(key.encode()).hexdigest()[:16]] = out
+    shipped[_spectrum_key(lever, effect, params)[2]] = out
     SHIPPED.write_text(json.dumps(shipped, indent=0, sort_keys=True))
 
 

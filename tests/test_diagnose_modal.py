@@ -214,7 +214,7 @@ def test_a_compliant_clamp_is_not_a_length_error_stiffer_than_the_rigid_clamp(tm
     closed that gap with an amplitude 0.8 gap *stiffer* than the rigid-clamp FEM (torsion's gap is 1.8 % on
     this lever) and was named first, the clamp confounded. The prior on the physical bracket [beam, FEM]
     (MF_CENTRE, MF_SCALE) leaves the length error 6 chi^2 behind; the clamp is named first, with its
-    compliance within 10 % (the truth's lumped nodal springs against the diagnosis' consistent foundation)."""
+    compliance within 10 % (the truth's foundation on its own finer mesh against the diagnosis' reduced one)."""
     from probedyn.diagnose.modal import MF_CENTRE, MF_SCALE
 
     assert abs(-1.0 - MF_CENTRE) / MF_SCALE == pytest.approx(abs(0.0 - MF_CENTRE) / MF_SCALE)

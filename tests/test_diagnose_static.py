@@ -113,6 +113,20 @@ def test_reduced_static_stiffness_equals_the_full_fem_and_the_beam_limits(lever_
         assert 1 - expect < 1 - kf / k0 < 1 - expect + gap
 
 
+def test_the_truths_clamp_foundation_is_mesh_independent_and_near_the_beam():
+    """The truth generator's compliant clamp (springs per unit area on the clamp face, the consistent face
+    mass): on lever C at c_rot = 0.0127 the static spring constant drops by the same fraction with 2 and 4
+    layers of 20-node hexahedra (measured 3.730 / 3.733 %: within 0.5 % of the drop) and within 3 % of the
+    beam's 1 / (1 + 3 c_rot) (3.670 %: the 3D root's share). HRZ-lumped nodal springs, the truth until
+    session 43, dropped it by 3.737 / 4.182 %: a discretisation error of 12 % of the clamp's effect that does
+    not vanish with refinement (4.189 % with 6 layers)."""
+    c = 0.0127
+    drop = {ett: 1.0 - static_truth("C", "clamp-compliance", {"c_rot": c, "c_trans": 0.0}, ett)
+            / static_truth("C", None, {}, ett) for ett in (2, 4)}
+    assert drop[2] == pytest.approx(drop[4], rel=5e-3)
+    assert drop[4] == pytest.approx(1.0 - 1.0 / (1.0 + 3.0 * c), rel=0.03)
+
+
 def test_static_spring_constant_breaks_the_clamp_tip_mass_duality(tmp_path):
     """Rate-study seed 1041 (lever C, c_rot = 0.0127): from six frequencies a point mass is named first, the
     clamp in its confounded group (the exact duality); the static spring constant, measured to 0.5 %, falls by
@@ -122,11 +136,11 @@ def test_static_spring_constant_breaks_the_clamp_tip_mass_duality(tmp_path):
     assert prob.static is not None and prob.group_labels[-1] == "static spring constant"
     res = diagnose(prob)
     assert res["findings"] and res["findings"][0]["cause"] == "clamp-compliance"
-    # c_rot within 15 %: the truth's clamp (lumped nodal springs on its own mesh) softens this lever 12 % more
-    # than the diagnosis' consistent foundation at the same c (static shift 4.17 % against 3.73 % at
-    # c = 0.0127, measured in session 33), so the fit's c lies that much above the truth's
-    c = res["findings"][0]["parameters"]["c_rot"]["value"]
-    assert c == pytest.approx(truth["params"]["c_rot"], rel=0.15)
+    # c_rot within three of its standard deviations (the static row at 0.5 % alone pins 3 c = 3.8 % to 13 % of
+    # itself; the frequencies add the rest: sigma 3 % of c). Until session 43 the truth's clamp was HRZ-lumped
+    # nodal springs, 12 % softer than the same foundation held consistently, and this bound was 15 %
+    c = res["findings"][0]["parameters"]["c_rot"]
+    assert abs(c["value"] - truth["params"]["c_rot"]) < 3 * c["sigma"] < 0.1 * truth["params"]["c_rot"]
     # the baseline misses the static spring constant (measured below it: the clamp's -3 c is 7 of its sigmas,
     # less what the model-form prior absorbs), the final model (re-solved with the FEM) holds it to its noise
     assert res["baseline"]["structure"]["static"]["residual_sigma"] < -3
