@@ -310,7 +310,7 @@ def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_
         # the foundation on the face, consistent (k times the face mass, per direction; DOFs interleaved
         # x, y, z per node). Not lumped: HRZ nodal springs on 20-node hexahedra (a corner node gets a
         # ninth of a mid-side node's area) let the face deform between the nodes they hold, and that
-        # compliance does not vanish with the mesh -- on lever C at c_rot = 0.0127 the static spring
+        # compliance is mesh-dependent at the truth's sizes -- on lever C at c_rot = 0.0127 the static spring
         # constant dropped by 3.737 / 4.182 / 4.189 % with 2 / 4 / 6 layers, against 3.730 / 3.733 /
         # 3.733 % consistent and 3.670 % for the beam's 1 / (1 + 3 c_rot) (docs/diagnose.md 9.29)
         K = (K + sp.kron(_face_mass(model, "clamp"), sp.diags([kn, kt, kt]))).tocsr()

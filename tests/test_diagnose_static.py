@@ -118,8 +118,8 @@ def test_the_truths_clamp_foundation_is_mesh_independent_and_near_the_beam():
     mass): on lever C at c_rot = 0.0127 the static spring constant drops by the same fraction with 2 and 4
     layers of 20-node hexahedra (measured 3.730 / 3.733 %: within 0.5 % of the drop) and within 3 % of the
     beam's 1 / (1 + 3 c_rot) (3.670 %: the 3D root's share). HRZ-lumped nodal springs, the truth until
-    session 43, dropped it by 3.737 / 4.182 %: a discretisation error of 12 % of the clamp's effect that does
-    not vanish with refinement (4.189 % with 6 layers)."""
+    session 43, dropped it by 3.737 / 4.182 %: a discretisation error of 12 % of the clamp's effect on the
+    truth's mesh, not reduced by 6 layers (4.189 %)."""
     c = 0.0127
     drop = {ett: 1.0 - static_truth("C", "clamp-compliance", {"c_rot": c, "c_trans": 0.0}, ett)
             / static_truth("C", None, {}, ett) for ett in (2, 4)}
