@@ -7,8 +7,8 @@ Usage: ``python benchmarks/diagnose_rates_effect.py EFFECT N OUT.json`` (resumab
 Truth (tests/diagnose_truth.py, probedyn's FEM with the effect built into the mesh or the matrices, 4 layers of
 20-node hexahedra, solved directly) plus 1e-3 frequency noise on the six modes (flapwise 1-4, lateral 1, torsion
 1): ``crystal-anisotropy`` meshes the cubic ``silicon-110`` and declares the catalog's isotropic silicon;
-``bonded-overlap`` meshes the lever on through an overlap of ``lo L`` whose bottom face rests on lumped nodal
-springs (normal ``k_n``, tangential ``k_t`` per area; a thin isotropic bond, ``k_t / k_n = (1 - 2 nu) / (2 (1 -
+``bonded-overlap`` meshes the lever on through an overlap of ``lo L`` (elements of t/4 along it since session 43)
+whose bottom face rests on springs (normal ``k_n``, tangential ``k_t`` per area, a consistent foundation since session 43; a thin isotropic bond, ``k_t / k_n = (1 - 2 nu) / (2 (1 -
 nu))``, nu in [0.3, 0.45]) and leaves its end free -- not the cause's beam segment on the clamp face. Levers cycle
 through A (300 x 30 x 10 um), B (100 x 40 x 10), C (150 x 20 x 10) and three more geometries.
 

@@ -7,7 +7,7 @@ Every truth is produced by a path independent of the diagnosis:
   and stretched back), solved directly (shift-invert, no Ritz reduction), with the hidden effect built into the mesh or the matrices by code
   here -- a point mass on a mesh *vertex* (the diagnosis interpolates a point of its mass path),
   springs on the clamp face assembled here on the truth's own mesh and added to its full matrices
-  (the diagnosis: its foundation on its coarser, stretched mesh, in a Ritz reduction), a lever *meshed on through a bonded overlap* with lumped springs on the overlap's
+  (the diagnosis: its foundation on its coarser, stretched mesh, in a Ritz reduction), a lever *meshed on through a bonded overlap* (elements of t/4 along it) with springs on the overlap's
   bottom facets (the diagnosis: a beam segment on the bond tied to the clamp face), a *re-meshed* thicker / wider
   / longer lever (the diagnosis stretches its
   mesh), another Young's modulus, a geometric stiffness assembled here, and fluid loading by this
@@ -290,6 +290,11 @@ def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_
         over["material"] = params["material"]
     elif effect == "bonded-overlap":  # the lever meshed on through the overlap (x < L_o), its clamp face free
         over["length"] = geo["length"] * (1.0 + params["lo"])
+        # elements of a quarter thickness along the lever: the bond's Winkler lengths are >= 0.8 t, and the default
+        # grading (fine at x = 0, the overlap's free end) left 7-10 um elements at the chip edge -- flapwise 1 of
+        # lever C on a bond of lam_n 0.047 moved -7.0 % there against -11.1 % resolved (t/2: -11.0 %, t/4: -11.1 %;
+        # docs/diagnose.md 9.29)
+        over["element_size"] = geo["thickness"] / 4.0
     values = probe.resolve(over)
     model = probe.build(values)
     extra = {}
@@ -324,8 +329,8 @@ def _truth_model(lever: str, effect: str | None, params: dict, ett: int = TRUTH_
 
 
 def _bond_springs(model, K, geo, params):
-    """Lumped nodal springs on the bottom face of the overlap (the mesh's first ``lo L`` along x): normal
-    ``k_n`` and tangential ``k_t`` per unit area (HRZ-lumped nodal areas of the bonded facets), from the bond
+    """Springs on the bottom face of the overlap (the mesh's first ``lo L`` along x): normal ``k_n`` and
+    tangential ``k_t`` per unit area (the bonded facets' consistent face mass, as the clamp's), from the bond
     lengths ``lam = 1 / (beta L)``, ``beta^4 = 3 k / (E t^3)``. Returns K and the bonded length over L as
     meshed (facets whose centroid lies in the overlap)."""
     from skfem import BilinearForm, FacetBasis
@@ -345,12 +350,8 @@ def _bond_springs(model, K, geo, params):
         return u * v
 
     S = mass.assemble(fb)
-    d = S.diagonal()
-    d = d * (float(S.sum()) / d.sum())  # HRZ lumping, as _face_nodal_areas
-    sp_d = np.zeros(model.ndofs_total)
-    sp_d[0::3], sp_d[1::3], sp_d[2::3] = k_t * d, k_t * d, k_n * d
     lo_mesh = float(mesh.p[0, np.unique(mesh.facets[:, facets])].max() / L)
-    return (K + sp.diags(sp_d)).tocsr(), lo_mesh
+    return (K + sp.kron(S, sp.diags([k_t, k_t, k_n]))).tocsr(), lo_mesh
 
 
 def fem_truth(lever: str, effect: str | None, params: dict, ett: int = TRUTH_ETT, n_modes: int = 12,
@@ -428,7 +429,7 @@ def timoshenko_truth(lever: str) -> dict:
 
 
 #: effects whose truth was rebuilt after its first version (the older cached entries are not reused)
-TRUTH_REVISION = {"clamp-compliance": "consistent foundation"}
+TRUTH_REVISION = {"clamp-compliance": "consistent foundation", "bonded-overlap": "consistent bond, t/4 elements"}
 
 
 def _key(lever, effect, params, ett, tip=None) -> str:
