@@ -156,7 +156,7 @@ def test_parsimony_prefers_the_contained_limit():
     claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 0.9 * EVIDENCE_MARGIN, 290.0)]
     note = _parsimony(claimed, EVIDENCE_MARGIN)
     assert claimed[0]["cause"].key == "adhesion-jkr" and claimed[1].get("contains_leader")
-    assert note["container"] == "adhesion-md"
+    assert note["container"] == "adhesion-md" and note["contains_leader"]
     # evidence beyond the margin but lambda not supported in sample (Delta chi2 below chi2_1(0.99) = 6.63)
     claimed = [row(AdhesionMD, 100.0), row(AdhesionJKR, 100.0 - 10 * EVIDENCE_MARGIN, 300.0 - 6.0)]
     assert _parsimony(claimed, EVIDENCE_MARGIN) is not None and claimed[0]["cause"].key == "adhesion-jkr"
@@ -219,7 +219,8 @@ def test_the_summary_names_a_container_that_is_not_a_rival():
     parameter is named as such, and not when it stays a confounded rival."""
     from probedyn.report.diagnose import summary
 
-    note = {"container": "adhesion-md", "container_evidence": 6510.5, "container_parameters": {"W": 0.0939, "lam": 10.0}}
+    note = {"container": "adhesion-md", "container_evidence": 6510.5, "container_parameters": {"W": 0.0939, "lam": 10.0},
+            "contains_leader": True}
     res = {"baseline": {"chi2": 1.4e4, "dof": 600, "p_value": 0.0, "residual_rms": 4.8}, "method": {},
            "verdict": "explained", "verdict_reasons": [], "confounded": [],
            "findings": [{"status": "explained", "cause": "adhesion-jkr", "parameters": {}, "evidence": 6511.9, "flags": [],
@@ -228,6 +229,9 @@ def test_the_summary_names_a_container_that_is_not_a_rival():
     assert "adhesion-md (W = 0.0939, lam = 10; evidence 6510.5 nats) contains it as a limit" in summary(res)
     res["confounded"] = [{"margin_nats": 2.3, "causes": ["adhesion-dmt", "adhesion-md"], "evidence": [1.0, 0.5],
                           "separating_measurements": [], "pairs_left_unseparated": []}]
+    assert "contains it as a limit" not in summary(res)
+    # nor when the rule handed the lead to a limit of the container's own size (DMT: MD's lambda is no extra)
+    res["confounded"], note["contains_leader"] = [], False
     assert "contains it as a limit" not in summary(res)
 
 

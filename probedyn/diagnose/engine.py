@@ -1269,7 +1269,8 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
                     "unsupported by the likelihood-ratio test against it, does not lead; the container's limits "
                     "are then ranked by their in-sample Akaike score",
             "container": best["cause"].key, "container_evidence": best["evidence"],
-            "container_parameters": {p.name: best["fit"].values[p.name] for p in best["cause"].params}}
+            "container_parameters": {p.name: best["fit"].values[p.name] for p in best["cause"].params},
+            "contains_leader": bool(best.get("contains_leader"))}
 
 
 def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> None:

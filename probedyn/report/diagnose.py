@@ -135,7 +135,7 @@ def summary(res: dict[str, Any]) -> str:
         for fl in f["flags"]:
             lines.append(f"  flag: {fl}")
         pa = f.get("parsimony")
-        if pa and not any(pa["container"] in c["causes"] for c in res["confounded"]):
+        if pa and pa.get("contains_leader") and not any(pa["container"] in c["causes"] for c in res["confounded"]):
             vals = ", ".join(f"{k} = {v:.4g}" for k, v in pa["container_parameters"].items())
             lines.append(f"  {pa['container']} ({vals}; evidence {pa['container_evidence']:.1f} nats) contains it as a "
                          "limit: its extra parameter is not supported, so it is the same explanation, not a rival")
