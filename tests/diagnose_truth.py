@@ -240,11 +240,13 @@ def _geometric_stiffness(model, sigma):
 
 
 def _face_mass(model, face):
-    """The consistent face mass ``int_face N_i N_j dA`` of a face (the model's own scalar element): a
-    Winkler foundation of stiffness ``k`` per unit area on the face is ``k`` times it, per direction."""
+    """The consistent face mass ``int_face N_i N_j dA`` of a face (a boundary's name, or facet indices) with the
+    model's own scalar element: a Winkler foundation of stiffness ``k`` per unit area on the face is ``k`` times
+    it, per direction."""
     from skfem import BilinearForm, FacetBasis
 
-    fb = FacetBasis(model.mesh, model.basis.elem, facets=np.asarray(model.mesh.boundaries[face]), intorder=4)
+    facets = np.asarray(model.mesh.boundaries[face] if isinstance(face, str) else face)
+    fb = FacetBasis(model.mesh, model.basis.elem, facets=facets, intorder=4)
 
     @BilinearForm
     def mass(u, v, w):
@@ -333,8 +335,6 @@ def _bond_springs(model, K, geo, params):
     tangential ``k_t`` per unit area (the bonded facets' consistent face mass, as the clamp's), from the bond
     lengths ``lam = 1 / (beta L)``, ``beta^4 = 3 k / (E t^3)``. Returns K and the bonded length over L as
     meshed (facets whose centroid lies in the overlap)."""
-    from skfem import BilinearForm, FacetBasis
-
     L, t = geo["length"], geo["thickness"]
     k_n, k_t = (E_SI * t**3 / (3.0 * (params[k] * L) ** 4) for k in ("lam_n", "lam_t"))
     mesh = model.mesh
@@ -343,13 +343,7 @@ def _bond_springs(model, K, geo, params):
     zmin = mesh.p[2].min()
     bottom = np.all(np.abs(fx[2] - zmin) <= 1e-9 * t, axis=0) & (fx[0].mean(axis=0) < params["lo"] * L)
     facets = bf[bottom]
-    fb = FacetBasis(mesh, model.basis.elem, facets=facets, intorder=4)
-
-    @BilinearForm
-    def mass(u, v, w):
-        return u * v
-
-    S = mass.assemble(fb)
+    S = _face_mass(model, facets)
     lo_mesh = float(mesh.p[0, np.unique(mesh.facets[:, facets])].max() / L)
     return (K + sp.kron(S, sp.diags([k_t, k_t, k_n]))).tocsr(), lo_mesh
 
