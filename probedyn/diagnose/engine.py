@@ -1213,15 +1213,7 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
     first order, when the rule does not act)."""
     if not claimed:
         return None
-    best = claimed[0]
-    lims = set(getattr(best["cause"], "limits", ()))
-    order = [id(d) for d in claimed]
-
-    def unsupported(d):
-        k_extra = best["k"] - d["k"]
-        lr = float(chi2_dist.ppf(1 - alpha, k_extra))
-        return d["evidence"] >= best["evidence"] - margin or best["dchi2"] - d["dchi2"] <= lr
-
+    lead = claimed[0]
     # the same rule seen from the other side: the leader is one of a container's limits, and the container
     # is within the margin behind it: the container is ranked as if it led, so that the rule below decides
     # (a JKR truth under AR(1) noise, seed 2049: Maugis-Dugdale 2.7 of chi^2 *behind* JKR at its lambda
@@ -1229,22 +1221,24 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
     # alone; seed 2001: DMT 0.7 nats ahead of JKR held out, 1.9 behind it by Akaike -- the held-out scatter
     # next to a jump that the rule below exists for). Which of them leads by a fraction of the margin must
     # not change the verdict.
-    for d in claimed[1:]:
-        if best["cause"].key in getattr(d["cause"], "limits", ()) and d["evidence"] >= best["evidence"] - margin:
-            claimed.remove(d)
-            claimed.insert(0, d)
-            best = d
-            lims = set(getattr(best["cause"], "limits", ()))
-            break
+    best = next((d for d in claimed[1:] if lead["cause"].key in getattr(d["cause"], "limits", ())
+                 and d["evidence"] >= lead["evidence"] - margin), lead)
+    lims = set(getattr(best["cause"], "limits", ()))
+
+    def unsupported(d):
+        k_extra = best["k"] - d["k"]
+        lr = float(chi2_dist.ppf(1 - alpha, k_extra))
+        return d["evidence"] >= best["evidence"] - margin or best["dchi2"] - d["dchi2"] <= lr
 
     # only a limit with fewer parameters is nested: DMT with its tail's range fitted (W, zeta_0) has as many
     # as Maugis-Dugdale (W, lambda -- lambda is the Dugdale range in disguise), and MD's lambda -> 0 keeps a
     # Dugdale tail, not DMT's van der Waals one: of equal size, they are alternatives (session 26: an MD
     # truth, seed 2058, lambda 0.73, was handed to a DMT at its shortest tail and MD hidden as its container)
-    inner = [d for d in claimed[1:] if d["cause"].key in lims and best["k"] > d["k"] and unsupported(d)]
+    inner = [d for d in claimed if d is not best and d["cause"].key in lims and best["k"] > d["k"] and unsupported(d)]
     if not inner:
-        claimed.sort(key=lambda d: order.index(id(d)))  # the container's extra parameters are supported
-        return None
+        return None  # the container's extra parameters are supported (or no container): ``claimed`` as it was
+    claimed.remove(best)
+    claimed.insert(0, best)
     # between the container's limits (JKR and DMT under Maugis-Dugdale, nested or not) the in-sample
     # likelihood with Akaike's parameter count decides, not the held-out evidence: the limits are not nested
     # in each other, and where the data jump (snap-in, pull-off) the held-out evidence of a law is dominated
