@@ -199,6 +199,37 @@ def test_an_extension_pushed_onto_a_bound_yields_to_one_within_its_range():
     assert not _strained(fit(1.3, 1.0), c) and not _strained(fit(1.0, 0.01), c)
 
 
+def test_a_bounds_gain_is_the_exact_chi2_of_lifting_it_on_a_linear_model():
+    """:func:`probedyn.diagnose.engine._bound_gain` (whether a bound binds, docs/diagnose.md 9.30): for a linear
+    model the score statistic at the constrained optimum is the exact chi^2 the unconstrained fit gains (Frisch-
+    Waugh-Lovell), whatever the other parameters do. Checked against scipy's bounded and unbounded linear least
+    squares, at a lower and at an upper bound; a step that points back into the range gains nothing, and so does a
+    column the model does not respond to."""
+    from scipy.optimize import lsq_linear
+
+    from probedyn.diagnose.engine import _bound_gain
+
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(40, 3))
+    X[:, 2] += 0.6 * X[:, 0]  # correlated with another parameter: the projection matters
+    for side, b_true in (("lower", -0.4), ("upper", 1.4)):
+        y = X @ np.array([1.0, -0.5, b_true]) + 0.3 * rng.normal(size=40)
+        lo, hi = np.array([-np.inf, -np.inf, 0.0]), np.array([np.inf, np.inf, 1.0])
+        con = lsq_linear(X, y, bounds=(lo, hi), tol=1e-14, lsmr_tol="auto", method="bvls")
+        assert con.x[2] == pytest.approx(0.0 if side == "lower" else 1.0, abs=1e-12)
+        free = np.linalg.lstsq(X, y, rcond=None)[0]
+        exact = np.sum((X @ con.x - y) ** 2) - np.sum((X @ free - y) ** 2)
+        assert exact > 1.0
+        assert _bound_gain(X, X @ con.x - y, 2, side, 1.0) == pytest.approx(exact, rel=1e-9)
+        assert _bound_gain(X, X @ con.x - y, 2, side, 4.0) == pytest.approx(exact / 4.0, rel=1e-9)
+        other = "upper" if side == "lower" else "lower"
+        assert _bound_gain(X, X @ con.x - y, 2, other, 1.0) == 0.0  # the free step points into the range
+    Xz = X.copy()
+    Xz[:, 2] = 0.0
+    assert _bound_gain(Xz, X @ free - y, 2, "lower", 1.0) == 0.0
+    assert _bound_gain(X[:10], X @ free - y, 2, "lower", 1.0) is None  # a Jacobian of other rows: no claim
+
+
 def test_a_baseline_modulus_run_to_the_rigid_limit_is_not_refused(tmp_path):
     """A contact branch steeper than the lever (a deflection sensitivity 13 % high on a 1.7 GPa sample, seed 2321)
     drives the Hertz baseline's E* towards the rigid-sample limit, where the curve depends on it only as a shift of

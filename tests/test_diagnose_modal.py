@@ -224,6 +224,14 @@ def test_a_compliant_clamp_is_not_a_length_error_stiffer_than_the_rigid_clamp(tm
     assert [f["cause"] for f in res["findings"]][:1] == ["clamp-compliance"], (res["verdict"], res["findings"])
     fit = res["findings"][0]["parameters"]["c_rot"]["value"]
     assert fit == pytest.approx(truth["params"]["c_rot"], rel=0.10)
+    # the truth has no translational compliance: c_trans sits at its null bound 0, which does not bind (to first
+    # order nothing is gained past it), so it is a note, not a flag that lowers the verdict (docs 9.30)
+    assert truth["params"]["c_trans"] == 0.0
+    ct = res["findings"][0]["parameters"]["c_trans"]
+    assert ct["at_bound"] and ct["bound"] == "lower" and not ct["bound_binding"], ct
+    assert ct["bound_gain_chi2"] < ct["bound_threshold_chi2"] == pytest.approx(6.635, abs=1e-3)
+    assert not any(fl.startswith("c_trans") for fl in res["findings"][0]["flags"])
+    assert any(nt.startswith("c_trans at its lower bound, which does not bind") for nt in res["findings"][0]["notes"])
 
 
 def test_a_declared_liquid_carries_the_sections_thickness(tmp_path):

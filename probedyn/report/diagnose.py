@@ -52,7 +52,7 @@ def _fmt_param(name: str, p: dict[str, Any]) -> str:
         lo, hi = p["interval"]
         txt += f" (68 % interval [{lo:.3g}, {hi:.3g}], one-sided)"
     if p.get("at_bound"):
-        txt += f" [at {p['bound']} bound]"
+        txt += f" [at {p['bound']} bound" + ("" if p.get("bound_binding", True) else ", not binding") + "]"
     return txt
 
 
@@ -134,6 +134,8 @@ def summary(res: dict[str, Any]) -> str:
                 if isinstance(v, (int, float))))
         for fl in f["flags"]:
             lines.append(f"  flag: {fl}")
+        for nt in f.get("notes") or []:
+            lines.append(f"  note: {nt}")
         pa = f.get("parsimony")
         if pa and pa.get("contains_leader") and not any(pa["container"] in c["causes"] for c in res["confounded"]):
             vals = ", ".join(f"{k} = {v:.4g}" for k, v in pa["container_parameters"].items())
