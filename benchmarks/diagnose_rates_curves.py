@@ -145,9 +145,12 @@ class CovarianceWhitener:
 
 
 def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho: float = 0.0,
-                alpha: float | None = None) -> dict:
+                alpha: float | None = None, targeted: bool = False) -> dict:
     """The effect's signal: the chi-square of the diagnosis' baseline fitted to the noise-free record
     (stated noise), and the detection threshold ``chi2_dof(1 - alpha) - dof`` of the baseline test.
+    ``targeted`` (the record itself states its noise, so the diagnosis has the targeted route, session 44):
+    the expected cause's gain on the noise-free record against its likelihood-ratio threshold
+    ``chi2_k(1 - alpha / N) - k`` is a second way to be detectable, as in the modal study.
     With AR(1) noise of correlation ``rho`` (the sidecar at ``path`` states its marginal sigma) every
     chi-square is the generalised one, ``r^T Sigma^-1 r`` on the true noise covariance (the fits on AR(1)
     innovations, :class:`probedyn.diagnose.noise.AR1Whitener`): a smooth signal's is about
@@ -176,6 +179,12 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho:
     base = F.baseline()
     thr = float(chi2_dist.ppf(1 - ALPHA, base.dof)) - base.dof
     out = {"signal_chi2": base.chi2, "threshold": thr, "detectable": bool(base.chi2 >= thr)}
+    cause = [c for c in prob.causes if c.key == expected]
+    if targeted and cause:
+        k = len(cause[0].params)
+        out["targeted_signal"] = float(base.chi2 - F.nested(base, (cause[0],)).chi2)
+        out["targeted_threshold"] = float(chi2_dist.ppf(1 - ALPHA / len(prob.causes), k)) - k
+        out["detectable"] = out["detectable"] or out["targeted_signal"] >= out["targeted_threshold"]
     if expected is not None and out["detectable"]:
         # identifiability of the cause: every cause fitted (nested, as the diagnosis does) to the
         # noise-free record; a rival whose noise-free chi-square is within 2 x the evidence margin of
@@ -226,7 +235,7 @@ def run_case(folder: Path, seed: int, effect: str | None, rho: float = 0.0, stat
     twin = path
     if effect and not stated:  # the same draws (the sidecar's text is the only difference)
         twin, _ = make_curve_case(folder / "stated", seed, effect, noise_rho=rho, state_noise=True, noise_alpha=alpha)
-    det = signal_chi2(twin, clean, EXPECTED[effect][0], rho, alpha) if effect else None
+    det = signal_chi2(twin, clean, EXPECTED[effect][0], rho, alpha, targeted=stated) if effect else None
     t0, c0 = time.perf_counter(), time.process_time()
     res = run(path)
     row = {"seed": seed, "effect": effect, "truth": truth, "detectability": det, "verdict": res["verdict"],
