@@ -113,7 +113,7 @@ def signals(prob, effect: str) -> dict:
     expected cause's gain against the targeted test's (where the problem has that route)."""
     from scipy.stats import chi2 as chi2_dist
 
-    from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter
+    from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter, lr_threshold
 
     F = Fitter(prob)
     try:
@@ -129,7 +129,7 @@ def signals(prob, effect: str) -> dict:
         if getattr(prob, "model_error_in_likelihood", False):
             k = len(cause[0].params)
             out["targeted_signal"] = float(base.chi2) - chi[effect]
-            out["targeted_threshold"] = float(chi2_dist.ppf(1 - ALPHA / len(prob.causes), k)) - k
+            out["targeted_threshold"] = lr_threshold(k, len(prob.causes)) - k
             det = det or out["targeted_signal"] >= out["targeted_threshold"]
         out["detectable"] = bool(det)
         # identifiability (as diagnose_rates_curves.identifiability): a rival whose noise-free chi-square is

@@ -161,7 +161,7 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho:
 
     from scipy.stats import chi2 as chi2_dist
 
-    from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter
+    from probedyn.diagnose.engine import ALPHA, EVIDENCE_MARGIN, Fitter, lr_threshold
     from probedyn.diagnose.formats import read_measurement
     from probedyn.diagnose.forcecurve import ForceCurveProblem
     from probedyn.diagnose.noise import AR1Whitener
@@ -183,7 +183,7 @@ def signal_chi2(path: Path, clean: np.ndarray, expected: str | None = None, rho:
     if targeted and cause:
         k = len(cause[0].params)
         out["targeted_signal"] = float(base.chi2 - F.nested(base, (cause[0],)).chi2)
-        out["targeted_threshold"] = float(chi2_dist.ppf(1 - ALPHA / len(prob.causes), k)) - k
+        out["targeted_threshold"] = lr_threshold(k, len(prob.causes)) - k
         out["detectable"] = out["detectable"] or out["targeted_signal"] >= out["targeted_threshold"]
     if expected is not None and out["detectable"]:
         # identifiability of the cause: every cause fitted (nested, as the diagnosis does) to the

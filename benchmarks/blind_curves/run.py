@@ -17,7 +17,6 @@ import sys
 import time
 from pathlib import Path
 
-import probedyn  # noqa: F401  (before numpy: the package sets its thread limits)
 from probedyn.diagnose.engine import run
 
 EXPECTED = {"adhesion-dmt": "adhesion-dmt", "adhesion-jkr": "adhesion-jkr", "adhesion-md": "adhesion-md",

@@ -863,6 +863,13 @@ def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
     return b1 if b1.chi2 <= b2.chi2 else b2
 
 
+def lr_threshold(k: int, n_causes: int, alpha: float = ALPHA) -> float:
+    """The likelihood-ratio test's threshold for a cause of ``k`` parameters, one of ``n_causes`` tested:
+    ``chi2_k(1 - alpha / n_causes)`` (Bonferroni over the catalog: under the baseline the chance that any
+    cause passes is at most ``alpha``; step 3 of the module docstring)."""
+    return float(chi2_dist.ppf(1 - alpha / n_causes, k))
+
+
 def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -> tuple["Fit", list["Fit"]]:
     """Step 3: every cause fitted nested in the baseline (and the baseline re-fitted where a candidate's own
     baseline parameters fit better); returns the (possibly re-fitted) baseline and the fits in cause order."""
@@ -871,7 +878,7 @@ def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -
     # parameters fits better than the baseline optimum by more than a one-parameter LR threshold
     # (the baseline fit stopped in a shallower basin or at its evaluation cap: a rugged chi^2), the
     # baseline is re-fitted from there and the candidates are fitted again from it (at most 3 rounds)
-    thr1 = float(chi2_dist.ppf(1 - alpha / n_causes, 1))
+    thr1 = lr_threshold(1, n_causes, alpha)
     for _round in range(3):
         bf = min(fits, key=lambda f: f.chi2) if fits and base.k else None
         if bf is None or not bf.chi2 < base.chi2 - thr1:
@@ -983,7 +990,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     for c, fit in zip(causes, fits):
         k = len(c.params)
         dchi2 = max(base.chi2 - fit.chi2, 0.0)
-        thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
+        thr = lr_threshold(k, n_causes, alpha)
         cands.append({"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr,
                       "lr_pass": bool(dchi2 > thr), "evidence": None, "evidence_cv": None,
                       "evidence_se": None, "method": None})
@@ -1048,7 +1055,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                 fit = F.nested(current, (c,))
                 k = len(c.params)
                 dchi2 = max(current.chi2 - fit.chi2, 0.0)
-                thr = float(chi2_dist.ppf(1 - alpha / n_causes, k))
+                thr = lr_threshold(k, n_causes, alpha)
                 if dchi2 <= thr:
                     continue
                 e = {"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr, "lr_pass": True}
