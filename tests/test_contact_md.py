@@ -168,27 +168,30 @@ def test_dense_grid_every_lambda_every_penetration_solves():
 
 
 @pytest.mark.parametrize("lam", [0.01, 0.1, 0.5, 0.9])
-def test_force_is_continuous_across_the_contact_transition_dmt_like(lam):
-    # lam < 0.938: loading = unloading, and the tail meets the contact branch at D0 (2.33)
-    md = MaugisDugdale(lam=lam)
+@pytest.mark.parametrize("key,branch", [("md-vdw", "loading"), ("md-vdw", "unloading"), ("md", "unloading")])
+def test_force_is_continuous_across_the_contact_transition_dmt_like(lam, key, branch):
+    # lam < 0.938: the tail meets the contact branch at D0 -- the source's van der Waals tail (2.33) on both
+    # branches, Maugis' own non-contact branch on the retract (its approach stays free to D_free: below)
+    md = get_contact_model(key, lam=lam)
     D0, P0 = md.nd_endpoint()
     eps = np.array([1e-4, 1e-6, 1e-8])
-    below = md.nd_state(D0 - eps)["P"]
-    above = md.nd_state(D0 + eps)["P"]
+    below = md.nd_state(D0 - eps, branch)["P"]
+    above = md.nd_state(D0 + eps, branch)["P"]
     # the jump shrinks with eps (Lipschitz-like on the tail, sqrt-like on the curve)
     assert np.all(np.abs(above - below) < 20 * np.sqrt(eps))
-    assert md.nd_tail(np.array([D0]))[0][0] == pytest.approx(P0, rel=1e-14)
+    assert md.nd_tail(np.array([D0]), branch)[0][0] == pytest.approx(P0, rel=1e-14)
     # dense scan: no jump larger than what the local slope allows
     D = np.linspace(D0 - 1, D0 + 1, 20001)
-    P = md.nd_state(D)["P"]
+    D = D[D > md.nd_pull_off()["D_jump_out"] + 1e-3] if key == "md" else D  # the retract's own fold
+    P = md.nd_state(D, branch)["P"]
     assert np.max(np.abs(np.diff(P))) < 0.02
 
 
 @pytest.mark.parametrize("lam", [1.0, 2.0, 5.0, 10.0])
 def test_parametric_path_is_continuous_jkr_like(lam):
     # lam > 0.938: along the parametric path tail -> unstable branch -> stable branch the
-    # force is continuous; under displacement control it jumps in at D0 and out at D_min
-    md = MaugisDugdale(lam=lam)
+    # force is continuous; under displacement control it jumps in at D0 and out at D_min (the source's tail)
+    md = get_contact_model("md-vdw", lam=lam)
     D0, P0 = md.nd_endpoint()
     assert md.nd_tail(np.array([D0]))[0][0] == pytest.approx(P0, rel=1e-14)
     un = md.nd_state(np.array([D0 - 1e-9]), "unstable")
@@ -201,15 +204,103 @@ def test_parametric_path_is_continuous_jkr_like(lam):
     assert jump_in < 0  # the approach snaps onto the more adhesive stable branch
 
 
-def test_unloading_and_loading_differ_only_between_dmin_and_d0():
-    md = MaugisDugdale(lam=3.0)
+@pytest.mark.parametrize("key", ["md", "md-vdw"])
+def test_unloading_and_loading_differ_only_between_dmin_and_the_loading_edge(key):
+    md = get_contact_model(key, lam=3.0)
     tab = md._table()
-    D0 = md.nd_endpoint()[0]
+    edge = md.nd_edge("loading")  # D0 with the source's tail, D_free = -2 / (pi lam) > D0 with Maugis' own
+    assert edge == pytest.approx(md.nd_endpoint()[0] if key == "md-vdw" else -2 / (math.pi * 3.0), rel=1e-14)
     D = np.linspace(-2, 2, 401)
     lo = md.nd_state(D, "loading")["P"]
     un = md.nd_state(D, "unloading")["P"]
     differ = ~np.isclose(lo, un, rtol=0, atol=1e-12)
-    assert np.all((D[differ] >= tab["D_min"]) & (D[differ] < D0))
+    assert np.all((D[differ] >= tab["D_min"]) & (D[differ] < edge))
+
+
+# ---------------------------------------------------------------- Maugis' own non-contact branch
+def test_dugdale_zone_displacements_are_boussinesq_s():
+    """The non-contact branch rests on the normal displacement of a half-space under a uniform pressure p on a
+    disc of radius c: 2 p c / E' at the centre, 4 p c / (pi E') at the rim (E' = E / (1 - nu^2)). Checked
+    here by integrating the Boussinesq kernel (1 / (pi E' rho)) over the disc in polar coordinates about the
+    point, an independent route (quadrature error < 1e-7)."""
+    from scipy.integrate import quad
+
+    c = 1.0
+    centre = quad(lambda th: c, 0, 2 * math.pi)[0] / math.pi  # integral of dA / rho about the centre: 2 pi c
+    # about the rim point (c, 0): the chord length in direction th is 2 c cos(th), |th| < pi/2
+    rim = quad(lambda th: 2 * c * math.cos(th), -math.pi / 2, math.pi / 2)[0] / math.pi
+    assert centre == pytest.approx(2 * c, rel=1e-9) and rim == pytest.approx(4 * c / math.pi, rel=1e-7)
+
+
+@pytest.mark.parametrize("lam", [0.01, 0.1, 0.5, 0.938, 1.0, 3.0, 30.0])
+def test_dugdale_branch_ends_at_maugis_end_point(lam):
+    """Maugis' own non-contact branch (Dugdale zone, elastic half-spaces; derived in the module) closes the
+    centre's gap exactly at the A -> 0 end point (2.31)-(2.32) of the contact curve: two independent
+    derivations of the same point, to rounding."""
+    from probedyn.schemes.contact.maugis_dugdale import dugdale_noncontact, touch_radius
+
+    D, P = dugdale_noncontact(touch_radius(lam), lam)
+    D0, P0 = endpoint(lam)
+    assert D == pytest.approx(D0, rel=1e-12, abs=1e-14) and P == pytest.approx(P0, rel=1e-12)
+
+
+def test_dugdale_branch_tends_to_the_rigid_ramp_as_lambda_vanishes():
+    """lam -> 0: the surfaces hardly deform out of contact, and the Dugdale force is the rigid ramp
+    -2 pi W R (1 - gap / h0) (h0 = W / sigma_0, 2 / (pi lam) in Maugis units); its relative deviation is of
+    absolute deviation, from C = C_* + sqrt(C_*^2 + 2 (D - D_free)), is pi lam C_* (C_* + sqrt(...)) <=
+    pi lam C_* (C_* + sqrt(2 h0)) ~ lam^1.5: 3e-3 at lam = 0.01, a thousandth of it at lam = 1e-4."""
+    bounds = []
+    for lam in (0.01, 1e-4):
+        md = MaugisDugdale(lam=lam)
+        h0 = 2 / (math.pi * lam)
+        cs = 8 * lam / (3 * math.pi)
+        D = np.linspace(-0.9 * h0, md.nd_endpoint()[0], 50)
+        P = md.nd_tail(D, "loading")[0]
+        ramp = -2 * (1 - (-D) / h0)
+        bound = math.pi * lam * cs * (cs + math.sqrt(2 * h0))
+        assert np.max(np.abs(P - ramp)) <= 1.0001 * bound
+        bounds.append(bound)
+    assert bounds[0] < 3.1e-3 and bounds[1] < 1.1e-3 * bounds[0]
+
+
+@pytest.mark.parametrize("lam", [0.3, 0.7, 0.9, 2.0])
+def test_dugdale_hysteresis_out_of_contact(lam):
+    """Under displacement control the approach stays free until the gap reaches h0 (D_free = -2 / (pi lam)),
+    the retract follows the stable non-contact part (C > C_*) down to its fold; below lam = 0.938
+    (lam^3 = 9 pi / (16 (pi - 1))) that part exists and ends at the end point, above it does not."""
+    md = MaugisDugdale(lam=lam)
+    d_free = -2 / (math.pi * lam)
+    cs = 8 * lam / (3 * math.pi)
+    D = np.linspace(d_free - 1.0, md.nd_edge("loading") - 1e-9, 4001)
+    lo = md.nd_state(D, "loading")["P"]
+    assert np.all(lo[D < d_free] == 0.0)
+    un = md.nd_state(D, "unloading")["P"]
+    po = md.nd_pull_off()
+    if lam < (9 * math.pi / (16 * (math.pi - 1))) ** (1 / 3):
+        assert po["D_jump_out"] == pytest.approx(d_free - cs * cs / 2, rel=1e-12)
+        assert po["P_jump_out"] == pytest.approx(-math.pi * lam * cs * cs / 2, rel=1e-12)
+        on = (D > po["D_jump_out"]) & (D < md.nd_tail_knots("unloading").max())
+        assert np.all(un[on] < 0) and np.all(un[D < po["D_jump_out"]] == 0.0)
+        # the stable part: dP/dD < 0 (the attraction grows as the gap closes) and its inverse is exact
+        C = cs + np.sqrt(cs * cs + 2 * (D[on] - d_free))
+        assert np.allclose(un[on], -math.pi * lam / 2 * C * C, rtol=1e-13)
+    else:
+        assert np.all(un[D < md._table()["D_min"]] == 0.0)
+
+
+def test_force_curve_on_maugis_own_branch_jumps_in_at_the_dugdale_range():
+    """A stiff lever over the Dugdale law (lam = 0.3): the non-contact attraction's gradient, pi W R / h0 per
+    Maugis unit... beats no lever near C = 0 (the branch turns there: dD/dC = -C_*), so the approach jumps at
+    the end of the free state, the undeformed gap h0 = W / sigma_0 (to the lever's resolution of the path)."""
+    from probedyn.schemes.contact.force_curve import force_curve
+
+    m = get_contact_model("md", lam=0.3)
+    s = m.scales
+    h0 = 2 / (math.pi * 0.3) * s.d_unit
+    r = force_curve(m, 50.0)
+    assert r["jump_in"] is not None
+    assert r["jump_in"]["gap_before"] == pytest.approx(h0, rel=2e-3)
+    assert r["jump_in"]["P_before"] == pytest.approx(0.0, abs=1e-3 * s.P_unit)
 
 
 # ---------------------------------------------------------------- bad input

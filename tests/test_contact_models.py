@@ -15,7 +15,7 @@ from probedyn.schemes.contact import COMMON_PARAMS, get_contact_model, list_mode
 
 
 def test_registry_lists_the_models():
-    assert set(list_models()) == {"dmt", "jkr", "md", "cone", "pyramid"}
+    assert set(list_models()) == {"dmt", "jkr", "md", "md-vdw", "cone", "pyramid"}
     assert get_contact_model("Maugis-Dugdale").name == "md"
     for name in list_models():
         m = get_contact_model(name)

@@ -300,7 +300,7 @@ def test_a_container_never_fits_worse_than_a_limit_it_contains(tmp_path, monkeyp
     JKR's 609.6, lambda 2.8 too); a stalled fit is therefore made here (lambda held at 0.5, the DMT side) and handed
     to the candidates' re-fits, which must restart it from JKR's
     optimum with lambda at its bounds and end within the fitter's tolerance of JKR or better, lambda towards the JKR
-    side. The contact point's registration scan (session 42) is switched off: this test is of the re-fit alone."""
+    side (0.88 since departure 47; 2.8 with the source's grafted tail). The contact point's registration scan (session 42) is switched off: this test is of the re-fit alone."""
     from probedyn.diagnose.engine import _limit_refits
     from probedyn.diagnose.forcecurve import ForceCurveProblem
     from probedyn.diagnose.noise import AR1Whitener
@@ -324,7 +324,9 @@ def test_a_container_never_fits_worse_than_a_limit_it_contains(tmp_path, monkeyp
     chi = {f.causes[0].key: f.chi2 for f in fits}
     md = fits[i_md]
     assert chi["adhesion-md"] <= min(chi["adhesion-jkr"], chi["adhesion-dmt"]) + 1e-6 * chi["adhesion-jkr"]
-    assert md.values["lam"] > 2.0 and abs(md.values["W"] / truth["params"]["W"] - 1) < 0.1
+    # off the held DMT-side value towards JKR's (with Maugis' own non-contact branch, departure 47, the Dugdale
+    # hysteresis matches this JKR record from lambda ~ 0.9 on: chi^2 608.9 at 0.88), W within 10 %
+    assert md.values["lam"] > 0.7 and abs(md.values["W"] / truth["params"]["W"] - 1) < 0.1
 
 
 def test_a_whitened_adhesion_fit_is_registered_in_its_contact_point(tmp_path):

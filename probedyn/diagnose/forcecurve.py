@@ -247,9 +247,10 @@ def _build_interaction(st: ForceState, E_t, nu_t):
 def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n_tail: int = 400):
     """Loading and unloading force-penetration polylines of a registry contact model, built from
     its normalised curve ``(D(A), P(A))`` (:meth:`nd_curve`, contact radius A) and its tail
-    (:meth:`nd_tail`): loading = tail up to the contact end point D0, then the stable branch from
-    D0 on (the jump into contact of JKR-like curves); unloading = the stable branch down to its
-    minimum penetration D_min (at A_*), then the tail. Returns ``{branch: (delta, P, A)}`` with A = -1
+    (:meth:`nd_tail` of the branch): loading = tail up to the loading edge (:meth:`nd_edge`: the end point D0,
+    or where Maugis-Dugdale's free state ends), then the stable branch from there on (the jump into contact of
+    JKR-like curves); unloading = the stable branch down to its minimum penetration D_min (at A_*), then the
+    tail. Returns ``{branch: (delta, P, A)}`` with A = -1
     on the tail."""
     sc = model.scales
     du, Pu = sc.d_unit, sc.P_unit
@@ -257,7 +258,7 @@ def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n
     Dmax = max(d_hi / du, D0 + 1.0)
     _A_star, D_min, Ac, Dc, Pc = _contact_polyline(model, Dmax, n_contact)
     out = {}
-    for branch, edge in (("loading", D0), ("unloading", D_min)):
+    for branch, edge in (("loading", model.nd_edge("loading")), ("unloading", D_min)):
         keep = Dc >= edge
         Ak, Dk, Pk = Ac[keep], Dc[keep], Pc[keep]
         i = int(np.argmax(keep)) if keep.any() else 0
@@ -275,7 +276,10 @@ def registry_polylines(model, d_lo: float, d_hi: float, n_contact: int = 1500, n
         # the tail ends exactly at the branch's edge (the fold: where the loading branch jumps into
         # contact), so the jump is placed at the right piezo position and not one tail spacing early
         Dt = np.linspace(min(d_lo / du, edge) - 1.0, edge, n_tail)
-        Pt, _ = model.nd_tail(Dt)
+        knots = model.nd_tail_knots(branch)
+        if knots.size:  # a tail with its own fold or jump (Maugis-Dugdale's non-contact branch): held exactly
+            Dt = np.union1d(Dt, knots[(knots > Dt[0]) & (knots < edge)])
+        Pt, _ = model.nd_tail(Dt, branch)
         delta = np.concatenate([Dt, Dk]) * du
         P = np.concatenate([Pt, Pk]) * Pu
         A = np.concatenate([np.full(len(Dt), -1.0), Ak])
@@ -390,6 +394,7 @@ def _exact_extrema(model, k: float, delta, P, A, retract: bool, n: int = 65, rou
     up to 0.57 on the fits' polylines; now 6.6e-5 and 1.2e-6 (against polylines 16x finer)."""
     sc = model.scales
     du, Pu = sc.d_unit, sc.P_unit
+    branch = "unloading" if retract else "loading"
     delta, P, A = delta.copy(), P.copy(), A.copy()
     Z = delta + P / k
     sign = -1.0 if retract else 1.0
@@ -413,7 +418,7 @@ def _exact_extrema(model, k: float, delta, P, A, retract: bool, n: int = 65, rou
             best = None
             for _ in range(rounds):
                 x = np.linspace(x_lo, x_hi, n)
-                Dn, Pn = (model.nd_curve(x)[:2] if contact else (x, model.nd_tail(x)[0]))
+                Dn, Pn = (model.nd_curve(x)[:2] if contact else (x, model.nd_tail(x, branch)[0]))
                 Zx = sign * (du * Dn + Pu * Pn / k)  # in X's orientation
                 i = int(np.argmax(Zx) if want_max else np.argmin(Zx))
                 cand = (Zx[i], x[i], du * Dn[i], Pu * Pn[i])
@@ -448,7 +453,7 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float, dz=None):
     F_alt = np.full(len(z_rel), np.nan)
     lw_alt = np.full(len(z_rel), -np.inf)
     # per sample: its polyline cell's end points (radius or penetration, and Z - z) and the interpolated force
-    where, a_lo, a_hi, g_lo, g_hi, start, Fq, on_contact = ([] for _ in range(8))
+    where, a_lo, a_hi, g_lo, g_hi, start, Fq, on_contact, unload = ([] for _ in range(9))
     for s_, branch in ((0, "loading"), (1, "unloading")):
         sel = np.flatnonzero(segment == s_)
         if not sel.size:
@@ -481,11 +486,14 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float, dz=None):
         start.append(var[0] + t * (var[1] - var[0]))
         Fq.append(P[idx] + t * (P[idx + 1] - P[idx]))
         on_contact.append(contact)
+        unload.append(np.full(len(sel), s_ == 1))
     if not where:
         return F if dz is None else (F, F, lw_alt)
-    where, lo, hi, g_lo, g_hi, a0, Fq, contact = (np.concatenate(v) for v in
-                                                   (where, a_lo, a_hi, g_lo, g_hi, start, Fq, on_contact))
+    where, lo, hi, g_lo, g_hi, a0, Fq, contact, unload = (np.concatenate(v) for v in
+                                                           (where, a_lo, a_hi, g_lo, g_hi, start, Fq, on_contact, unload))
     zq = z_rel[where]
+    tail = ~contact
+    t_lo, t_hi = np.minimum(lo[tail], hi[tail]), np.maximum(lo[tail], hi[tail])
     if contact.any():
         zc = zq[contact]
         a = a0[contact]
@@ -515,16 +523,31 @@ def lever_curve_registry(z_rel, segment, model, k: float, span: float, dz=None):
         # converged: the last evaluation's force carried over the last step (|step| <= 1e-13 A: its
         # second-order term is ~1e-26 of the force), else the curve at the final radius
         Fq[contact] = Pu * (P_ + dP_ * step if done else model.nd_curve(a)[1])
-    tail = ~contact
     if tail.any():
         d = a0[tail]
         zt = zq[tail]
-        for _ in range(3):
-            Pt, dPt = model.nd_tail(d / du)
+        unl = unload[tail]
+
+        def on_tail(x):  # each sample on its own branch's tail
+            P_, dP_ = np.empty_like(x), np.empty_like(x)
+            for b, m in (("loading", ~unl), ("unloading", unl)):
+                if m.any():
+                    P_[m], dP_[m] = model.nd_tail(x[m] / du, b)
+            return P_, dP_
+
+        # Newton in the penetration; where the sample's polyline cell straddles the root, kept in the cell (a
+        # tail with a jump: Maugis-Dugdale's); until the steps are below 1e-10 of the penetration unit
+        straddle = g_lo[tail] * g_hi[tail] <= 0
+        for _ in range(8):
+            Pt, dPt = on_tail(d)
             g = d + Pu * Pt / k - zt
             gp = 1.0 + Pu * dPt / (du * k)
-            d = np.where(gp > 0, d - g / np.where(gp > 0, gp, 1.0), d)
-        Fq[tail] = Pu * model.nd_tail(d / du)[0]
+            d_new = np.where(gp > 0, d - g / np.where(gp > 0, gp, 1.0), d)
+            d_new = np.where(straddle, np.clip(d_new, t_lo, t_hi), d_new)
+            step, d = np.abs(d_new - d).max(), d_new
+            if step <= 1e-10 * du:
+                break
+        Fq[tail] = Pu * on_tail(d)[0]
     F[where] = Fq
     if dz is None:
         return F

@@ -214,8 +214,25 @@ class ContactModel(Model, ABC):
     def nd_endpoint(self) -> tuple[float, float]:
         """``(D0, P0)``: the ``A -> 0`` end of the contact curve."""
 
-    def nd_tail(self, D: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Non-contact tail ``(P_bar, dP_bar/dD_bar)`` for ``D_bar <= D0``.
+    def nd_edge(self, branch: Branch = "loading") -> float:
+        """The normalised penetration where ``branch`` leaves the tail for the contact curve: ``D0`` on
+        loading (the end point: a JKR-like law jumps into contact there), the turning point ``D_min`` on
+        unloading (the jump-out). A law whose non-contact branch has its own folds overrides it."""
+        return self.nd_endpoint()[0] if branch == "loading" else float(self._table()["D_min"])
+
+    def nd_tail_knots(self, branch: Branch = "loading") -> np.ndarray:
+        """Penetrations a polyline of the tail must hold (its discontinuities and the part where it bends
+        sharply); none for the Hamaker tail, which is smooth."""
+        return np.array([])
+
+    def nd_noncontact_path(self, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
+        """``(D_bar, P_bar)`` along a non-contact equilibrium branch of the law's own, unstable parts included
+        (Maugis-Dugdale's Dugdale zone); empty for a law whose tail is a function of the penetration."""
+        return np.array([]), np.array([])
+
+    def nd_tail(self, D: np.ndarray, branch: Branch = "loading") -> tuple[np.ndarray, np.ndarray]:
+        """Non-contact tail ``(P_bar, dP_bar/dD_bar)`` below the branch's edge (:meth:`nd_edge`); the same
+        on both branches here (a law with a non-contact branch of its own overrides it).
 
         The Hamaker sphere–flat law ``P = -H R / (6 d^2)`` (2.23) written in Maugis units
         (``-H R / 6 = -2 pi W R zeta_0^2``), with the gap ``d = d0 + (D0 - D)`` whose origin
@@ -353,8 +370,8 @@ class ContactModel(Model, ABC):
             A[in_c] = self._solve_branch(D[in_c], stable=False)
             contact = in_c
         else:
-            edge = D0 if branch == "loading" else D_min
-            contact = D >= edge if branch != "stable" else D >= D_min
+            edge = self.nd_edge(branch) if branch != "stable" else D_min
+            contact = D >= edge
             A[contact] = self._solve_branch(D[contact], stable=True)
         P = np.full(D.shape, np.nan)
         k = np.full(D.shape, np.nan)
@@ -372,7 +389,7 @@ class ContactModel(Model, ABC):
         if branch in ("loading", "unloading"):
             nc = ~contact
             if np.any(nc):
-                Pt, kt = self.nd_tail(D[nc])
+                Pt, kt = self.nd_tail(D[nc], branch)
                 P[nc], k[nc] = Pt, kt
                 A[nc] = 0.0
         res = dict(D=D, P=P, A=A, k=k, contact=contact)
@@ -528,8 +545,7 @@ class ContactModel(Model, ABC):
         s = self.scales
         if s.W == 0:
             return lambda delta: (self.state(delta)["force"], self.state(delta)["stiffness"])
-        D0, _ = self.nd_endpoint()
-        edge = D0 if branch == "loading" else self._table()["D_min"]
+        edge = self.nd_edge(branch)
         Dmax = 20.0 if delta_max is None else float(delta_max) / s.d_unit
         if Dmax <= edge:
             raise ParameterError(f"delta_max must exceed the contact edge {edge * s.d_unit:.3g} m")
@@ -549,7 +565,7 @@ class ContactModel(Model, ABC):
             far = Db > Dmax
             mid = ~tail & ~far
             if np.any(tail):
-                P[tail], k[tail] = self.nd_tail(Db[tail])
+                P[tail], k[tail] = self.nd_tail(Db[tail], branch)
             if np.any(mid):
                 uu = np.sqrt(Db[mid] - edge)
                 P[mid] = spline(uu)

@@ -140,7 +140,7 @@ class _Tip(ContactModel):
     def nd_endpoint(self):
         return 0.0, 0.0
 
-    def nd_tail(self, D):
+    def nd_tail(self, D, branch="loading"):
         D = np.asarray(D, dtype=float)
         return np.zeros_like(D), np.zeros_like(D)
 

@@ -55,9 +55,15 @@ def equilibrium_path(model: Any, gap_max: float | None = None, n_tail: int = 400
     z0 = s.z0
     gap_max = 30.0 * z0 if gap_max is None else float(gap_max)
     delta_max = 30.0 * z0 if delta_max is None else float(delta_max)
-    # tail: gaps log-spaced so that the fold is resolved whatever k is
-    Dt = np.sort(D0 - np.geomspace(gap_max / s.d_unit, 1e-6 * z0 / s.d_unit, n_tail))
-    Pt, _ = model.nd_tail(Dt)
+    Dn, Pn = model.nd_noncontact_path(n_tail)
+    if Dn.size:
+        # a law with its own non-contact branch (Maugis-Dugdale): free (P = 0) out to the gap max, then the branch
+        # in the Dugdale zone's radius, its unstable part included, to the end point
+        Df = np.linspace(min(Dn[0], -gap_max / s.d_unit), Dn[0], n_tail)[:-1]
+        Dt, Pt = np.concatenate([Df, Dn]), np.concatenate([np.zeros_like(Df), Pn])
+    else:  # the tail: gaps log-spaced so that the fold is resolved whatever k is
+        Dt = np.sort(D0 - np.geomspace(gap_max / s.d_unit, 1e-6 * z0 / s.d_unit, n_tail))
+        Pt, _ = model.nd_tail(Dt)
     cur = model.nd_curves(D_range=(D0 - 1.0, delta_max / s.d_unit), n=10)
     A, Dc, Pc = cur["A"], cur["D"], cur["P"]
     order = np.argsort(A)
@@ -84,8 +90,11 @@ def force_curve(model: Any, k: float, **path_kw: Any) -> dict[str, Any]:
     ds = np.diff(s)
     sc = model.scales
     D0, P0 = model.nd_endpoint()
-    # the tail's gap (eq 2.23) is d = d0 + (D0 - D) in Maugis units, d0 = z0_bar sqrt(2 / -P0)
+    # the tail's gap (eq 2.23) is d = d0 + (D0 - D) in Maugis units, d0 = z0_bar sqrt(2 / -P0); on Maugis-Dugdale's
+    # own non-contact branch the gap is the undeformed one, -delta
     d0 = sc.z0_bar * math.sqrt(2.0 / -P0) if P0 < 0 else 0.0
+    if model.nd_noncontact_path(2)[0].size:
+        d0 = -D0
     gap_at = lambda delta: (d0 + D0) * sc.d_unit - delta  # noqa: E731
     out: dict[str, Any] = dict(k=k, delta=d, P=P, s=s, jump_in=None, jump_out=None,
                                predicted_tail_jump_gap=tail_jump_gap(sc.H, sc.R, k),

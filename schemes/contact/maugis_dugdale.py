@@ -26,11 +26,23 @@ Limits used by the tests: ``lam -> infinity`` gives JKR (``P_bar = A^3 - sqrt(6 
 pull-off -1.5); ``lam -> 0`` gives DMT (``P_bar = A^3 - 2``, pull-off -2); ``A -> 0`` gives the
 end point (2.31)–(2.32), derived independently in the docs.
 
-The non-contact tail (2.33–2.34) is that of :meth:`.base.ContactModel.nd_tail`: the Hamaker
-law ``-H R / (6 d^2)`` with the same ``H = 12 pi W zeta_0^2`` as the DMT model, its gap origin
-placed so that it equals ``P0`` (2.31) at ``D0`` (2.32). The source's form
-``-I0 (D0 - z0)^2 / (D - z0)^2`` is the same functional form; its sign conventions and its
-``z0_bar`` are not defined in the print and are fixed here as explained in docs/contact.md.
+Out of contact (departure 47: the source's tail 2.33–2.34 is a van der Waals law grafted on at the
+end point) the model is Maugis' own: the Dugdale stress ``sigma_0`` acts on a disc of radius ``c``
+where the gap is below ``h0 = W / sigma_0`` while the surfaces do not touch. The disc pulls each
+half-space in by ``2 sigma_0 c / E*`` at its centre and ``4 sigma_0 c / (pi E*)`` at its rim, so that
+with the rim's gap equal to ``h0`` and ``C = c / a_unit`` (:func:`dugdale_noncontact`)::
+
+    P_bar = -(pi lam / 2) C^2,     D_bar = C^2 / 2 - C_* C - 2 / (pi lam),     C_* = 8 lam / (3 pi)
+
+from the free state (``C = 0``: the gap reaches ``h0`` at ``D_free = -2 / (pi lam)``) to the first
+touch (the centre's gap closes: ``C^2 / 2 + 4 lam (pi - 2) / (3 pi) C = 2 / (pi lam)``), which is the
+end point (2.31)–(2.32) exactly (tested: an independent check of both). The branch is stable
+(``dD/dC > 0``) for ``C > C_*`` only; it has a stable part, ending at the end point, exactly when the
+contact curve is monotone (``lam^3 < 9 pi / (16 (pi - 1))``, ``lam < 0.938``). Under displacement
+control the approach stays free up to ``D_free`` and the retract follows the stable part down to
+``D(C_*)`` (:meth:`MaugisDugdale.nd_tail`): the Dugdale law's hysteresis, which sets in below the
+JKR-like regime. ``lam -> 0``: the rigid Dugdale ramp ``P_bar = -2 (1 - gap / h0)``, DMT's ``-2`` at
+contact.
 """
 
 from __future__ import annotations
@@ -239,6 +251,21 @@ def md_curve(A, lam: float):
     return tuple(v.reshape(A.shape) for v in (D, P, dD, dP, s))
 
 
+def dugdale_noncontact(C, lam: float):
+    """``(D_bar, P_bar)`` on the Maugis-Dugdale non-contact branch at Dugdale-zone radius(es) ``C`` (module
+    doc): ``D_bar = C^2 / 2 - 8 lam C / (3 pi) - 2 / (pi lam)``, ``P_bar = -(pi lam / 2) C^2``."""
+    C = np.asarray(C, dtype=float)
+    return C * C / 2.0 - 8.0 * lam / (3.0 * math.pi) * C - 2.0 / (math.pi * lam), -0.5 * math.pi * lam * C * C
+
+
+def touch_radius(lam: float) -> float:
+    """The Dugdale-zone radius ``C_on`` at which the centre's gap closes (the first touch): the positive root of
+    ``C^2 / 2 + 4 lam (pi - 2) / (3 pi) C - 2 / (pi lam) = 0``; the end point (2.31)-(2.32) is there."""
+    b = 4.0 * lam * (math.pi - 2.0) / (3.0 * math.pi)
+    q = 4.0 / (math.pi * lam)
+    return q / (b + math.sqrt(b * b + q))  # -b + sqrt(b^2 + q), rationalised
+
+
 @CONTACT_MODELS.register
 class MaugisDugdale(ContactModel):
     """Maugis–Dugdale contact (2.24–2.35, corrected per departure 7) with the
@@ -263,3 +290,103 @@ class MaugisDugdale(ContactModel):
 
     def nd_endpoint(self):
         return endpoint(self.lam)
+
+    # ------------------------------------------------------------------ the non-contact branch
+    def _dugdale(self) -> tuple[float, float, float] | None:
+        """``(C_*, C_on, D_free)`` of the non-contact branch (module doc), None at lam = 0 (DMT: no range)."""
+        lam = self.lam
+        if lam == 0:
+            return None
+        return 8.0 * lam / (3.0 * math.pi), touch_radius(lam), -2.0 / (math.pi * lam)
+
+    def nd_edge(self, branch="loading") -> float:
+        """Loading: the contact forms where the free state ends (``D_free``, the gap reaches ``h0``) if that is
+        past the end point, else at the end point ``D0``; unloading: the contact curve's turning point."""
+        dg = self._dugdale()
+        if branch == "loading" and dg is not None:
+            return max(self.nd_endpoint()[0], dg[2])
+        return super().nd_edge(branch)
+
+    def nd_tail(self, D, branch="loading"):
+        """``(P_bar, dP_bar/dD_bar)`` out of contact: the stable part of the Dugdale non-contact branch
+        (``C >= C_*``, inverted as ``C = C_* + sqrt(C_*^2 + 2 (D + 2 / (pi lam)))``) where the branch is reached
+        -- on loading from ``D_free`` on (the free state ends there), on unloading down to its fold ``D(C_*)``
+        -- and zero (free) elsewhere. ``lam = 0``: flat at ``P0 = -2`` (the DMT limit)."""
+        D = np.asarray(D, dtype=float)
+        dg = self._dugdale()
+        if dg is None:
+            return np.full_like(D, self.nd_endpoint()[1]), np.zeros_like(D)
+        cs, c_on, d_free = dg
+        P, dP = np.zeros_like(D), np.zeros_like(D)
+        if c_on <= cs:  # no stable non-contact state (lam >= 0.938): free up to the contact
+            return P, dP
+        lo = d_free if branch == "loading" else d_free - 0.5 * cs * cs
+        on = (D >= lo) & (D <= self.nd_endpoint()[0])
+        if np.any(on):
+            root = np.sqrt(np.maximum(cs * cs + 2.0 * (D[on] - d_free), 0.0))
+            C = cs + root
+            P[on] = -0.5 * math.pi * self.lam * C * C
+            with np.errstate(divide="ignore"):
+                dP[on] = np.where(root > 0, -math.pi * self.lam * C / np.where(root > 0, root, 1.0), -np.inf)
+        return P, dP
+
+    def nd_pull_off(self) -> dict[str, float]:
+        """As :meth:`.base.ContactModel.nd_pull_off`; under displacement control a law with a stable non-contact
+        part (``lam < 0.938``) jumps out at that part's fold ``C_*`` (``D = D_free - C_*^2 / 2``,
+        ``P = -(pi lam / 2) C_*^2``), not at the end point."""
+        out = super().nd_pull_off()
+        dg = self._dugdale()
+        if dg is not None and dg[1] > dg[0]:
+            cs, _, d_free = dg
+            out.update(D_jump_out=d_free - 0.5 * cs * cs, P_jump_out=-0.5 * math.pi * self.lam * cs * cs, A_jump_out=0.0)
+        return out
+
+    def nd_tail_knots(self, branch="loading") -> np.ndarray:
+        """The branch's ends (with the free side of its discontinuity) and 64 points uniform in ``C`` on its stable
+        part: a polyline of the tail resolves the fold near ``D(C_*)`` and the jump at ``D_free``."""
+        dg = self._dugdale()
+        if dg is None or dg[1] <= dg[0]:
+            return np.array([])
+        cs, c_on, d_free = dg
+        c_lo = 2.0 * cs if branch == "loading" else cs  # D(2 C_*) = D_free
+        if c_lo >= c_on:
+            return np.array([])
+        D = dugdale_noncontact(np.linspace(c_lo, c_on, 64), self.lam)[0]
+        D[0] = d_free if branch == "loading" else d_free - 0.5 * cs * cs
+        return np.concatenate([[np.nextafter(D[0], -np.inf)], D])
+
+    def nd_noncontact_path(self, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
+        """``(D_bar, P_bar)`` along the whole non-contact branch, its unstable part included, from the free state
+        (``C = 0``) to the first touch (``C_on``: the end point); for the equilibrium path of a force curve."""
+        dg = self._dugdale()
+        if dg is None:
+            return np.array([]), np.array([])
+        return dugdale_noncontact(np.linspace(0.0, dg[1], n), self.lam)
+
+
+@CONTACT_MODELS.register
+class MaugisDugdaleVdW(MaugisDugdale):
+    """The source's Maugis-Dugdale (2.24)-(2.35): the contact curve of :class:`MaugisDugdale` with the van der
+    Waals tail (2.33)-(2.34) grafted on at the end point instead of Maugis' own non-contact branch
+    (:meth:`.base.ContactModel.nd_tail`: the Hamaker law ``-H R / (6 d^2)``, ``H = 12 pi W zeta_0^2``, its gap
+    origin placed so that it equals ``P0`` (2.31) at ``D0`` (2.32); the print's
+    ``-I0 (D0 - z0)^2 / (D - z0)^2`` has that form, its sign conventions and ``z0_bar`` fixed as in
+    docs/contact.md). A long-range attraction beyond the Dugdale range: the model of the source's nano-placing
+    (chapter 4), where the tail recaptures a released sample."""
+
+    key: ClassVar[str] = "md-vdw"
+    title: ClassVar[str] = "Maugis-Dugdale with the source's van der Waals tail"
+    source: ClassVar[str] = "(2.24)-(2.35) as printed (tail 2.33-2.34), corrected: departure 7"
+
+    def nd_edge(self, branch="loading") -> float:
+        return ContactModel.nd_edge(self, branch)
+
+    def nd_tail(self, D, branch="loading"):
+        return ContactModel.nd_tail(self, D, branch)
+
+    def nd_tail_knots(self, branch="loading") -> np.ndarray:
+        return np.array([])
+
+    def nd_noncontact_path(self, n: int = 400):
+        return ContactModel.nd_noncontact_path(self, n)
+

@@ -3,7 +3,7 @@ Figs 4.22-4.23, with outcome maps as Dask sweeps.
 
 Model. The printed (4.42) is the sample's equation relative to the tip with a piecewise-linear
 contact ``k1 Delta + k0``. Here the contact is the **full** Maugis-Dugdale force of the contact
-registry (:class:`probedyn.schemes.contact.MaugisDugdale`: stable branch while in contact,
+registry (``md-vdw``, the source's :class:`probedyn.schemes.contact.maugis_dugdale.MaugisDugdaleVdW`: stable branch while in contact,
 van der Waals tail out of contact, with the jump-out at ``delta_min`` and the jump-in at
 ``delta_0`` that make the JKR-like curve of ``lambda = 2`` hysteretic), and the probe is not a
 prescribed motion but its retained flapwise modes (tip-normalised, :class:`.probe.PlacingProbe`),
@@ -97,7 +97,7 @@ def placing_contact(lam: float | None = None, H: float | None = None, **override
     else:
         kw["lam"] = float(TABLE["lambda"] if lam is None else lam)
     kw.update(overrides)
-    return get_contact_model("md", **kw)
+    return get_contact_model("md-vdw", **kw)  # the source's tail: it recaptures a released sample
 
 
 @dataclass
