@@ -93,11 +93,14 @@ def force_curve(model: Any, k: float, **path_kw: Any) -> dict[str, Any]:
     # the tail's gap (eq 2.23) is d = d0 + (D0 - D) in Maugis units, d0 = z0_bar sqrt(2 / -P0); on Maugis-Dugdale's
     # own non-contact branch the gap is the undeformed one, -delta
     d0 = sc.z0_bar * math.sqrt(2.0 / -P0) if P0 < 0 else 0.0
+    predicted, rule = tail_jump_gap(sc.H, sc.R, k), "(H R/3k)^(1/3)"
     if model.nd_noncontact_path(2)[0].size:
-        d0 = -D0
+        # the free state ends where the gap reaches the Dugdale range h0 = 2 / (pi lam) Maugis units, and the branch
+        # turns back there (dD/dC = -C_* < 0): the approach jumps at h0 whatever k is
+        d0, predicted, rule = -D0, 2.0 / (math.pi * model.lam) * sc.d_unit, "h0 = W/sigma_0 (Dugdale range)"
     gap_at = lambda delta: (d0 + D0) * sc.d_unit - delta  # noqa: E731
     out: dict[str, Any] = dict(k=k, delta=d, P=P, s=s, jump_in=None, jump_out=None,
-                               predicted_tail_jump_gap=tail_jump_gap(sc.H, sc.R, k),
+                               predicted_tail_jump_gap=predicted, predicted_jump_rule=rule,
                                tail_end_penetration=D0 * sc.d_unit, tail_end_gap=d0 * sc.d_unit)
     # approach: first local maximum of s along the path
     down = np.nonzero(ds < 0)[0]

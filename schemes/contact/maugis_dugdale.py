@@ -277,7 +277,7 @@ class MaugisDugdale(ContactModel):
 
     key: ClassVar[str] = "md"
     title: ClassVar[str] = "Maugis-Dugdale"
-    source: ClassVar[str] = "(2.24)-(2.35), corrected: departure 7"
+    source: ClassVar[str] = "(2.24)-(2.32), corrected: departure 7; out of contact Maugis' own Dugdale zone: departure 47"
 
     def nd_curve(self, A):
         D, P, dD, dP, _ = md_curve(A, self.lam)
