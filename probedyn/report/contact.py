@@ -16,6 +16,7 @@ from probedyn.plotting import pyplot, savefig
 from probedyn.report import coupling
 from probedyn.report._tables import markdown_table
 from probedyn.schemes.contact import JKR, MaugisDugdale
+from probedyn.schemes.contact.maugis_dugdale import MaugisDugdaleVdW
 from probedyn.schemes.contact.carpick import REFERENCE, pull_off_table
 
 #: lambdas of the reproduced Fig 2.19 (0 = DMT limit, inf = JKR)
@@ -55,12 +56,13 @@ def plot_load_penetration(res: dict[str, Any], path: Path) -> Path:
 
 def plot_fig_2_19(path: Path, lams=FIG_2_19_LAMBDAS, D_range=(-2.2, 3.0)) -> Path:
     """Fig 2.19 reproduced: normalised load vs penetration for several lambda, with the
-    unstable branches dashed and the continuous non-contact tails (2.33-2.34) dotted."""
+    unstable branches dashed, the source's continuous non-contact tails (2.33-2.34, ``md-vdw``) dotted and
+    Maugis' own non-contact branch (the Dugdale zone before the surfaces touch, ``md``, departure 47) dash-dotted."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
     cmap = plt.get_cmap("viridis")
     for i, lam in enumerate(lams):
-        m = JKR(W=1.0) if not math.isfinite(lam) else MaugisDugdale(lam=lam)
+        m = JKR(W=1.0) if not math.isfinite(lam) else MaugisDugdaleVdW(lam=lam)
         cv = m.nd_curves(D_range)
         col = cmap(i / max(1, len(lams) - 1))
         st = cv["stable"]
@@ -71,11 +73,15 @@ def plot_fig_2_19(path: Path, lams=FIG_2_19_LAMBDAS, D_range=(-2.2, 3.0)) -> Pat
             ax.plot(cv["D"][~st], cv["P"][~st], color=col, lw=1.0, ls="--")
         if len(cv["D_tail"]):
             ax.plot(cv["D_tail"], cv["P_tail"], color=col, lw=1.0, ls=":")
+        if math.isfinite(lam) and lam > 0:  # Maugis' own non-contact branch: from the free state to the end point
+            Dn, Pn = MaugisDugdale(lam=lam).nd_noncontact_path(200)
+            ax.plot(np.r_[D_range[0], Dn], np.r_[0.0, Pn], color=col, lw=0.9, ls="-.")
         ax.plot([cv["D0"]], [cv["P0"]], "o", color=col, ms=3)
     # line-style key (one entry per style, in black)
     ax.plot([], [], "k-", lw=1.6, label="stable branch")
     ax.plot([], [], "k--", lw=1.0, label="unstable branch")
-    ax.plot([], [], "k:", lw=1.0, label="non-contact tail")
+    ax.plot([], [], "k:", lw=1.0, label="van der Waals tail (2.33-2.34, md-vdw)")
+    ax.plot([], [], "k-.", lw=0.9, label="Dugdale zone out of contact (md)")
     ax.plot([], [], "ko", ms=3, label="contact transition")
     ax.set_xlim(*D_range)
     ax.set_ylim(-2.2, 3.0)
@@ -97,15 +103,20 @@ def section(outdir: Path, quick: bool) -> str:
         "Maugis–Dugdale contact (eqs 2.24–2.35 with departure 7: `Delta = A^2 - 4/3 lambda A sqrt(m^2-1)`,"
         " `atan(sqrt(m^2-1))`, `K` in 2.30), solved along the contact radius A (one bracketed root m per A),"
         " with a van der Waals tail that meets the contact curve at its A -> 0 end (2.31–2.32, departure 8), so the"
-        " force is continuous across the contact transition. DMT (2.20) and JKR (departure 9) are the lambda -> 0 and"
+        " force is continuous across the contact transition (`md-vdw`, the source's form; the nano-placing uses it)."
+        " The registry's `md` is Maugis' own model out of contact too (departure 47): the Dugdale stress on a disc"
+        " whose rim has the gap h0, over elastic half-spaces, from the free state (gap h0) to the first touch, which is"
+        " the end point (2.31–2.32) exactly. DMT (2.20) and JKR (departure 9) are the lambda -> 0 and"
         " lambda -> inf limits.",
         "",
         f"![Fig 2.19 reproduced]({fig.name})",
         "",
         "*Normalised load vs penetration of the Maugis–Dugdale model for lambda from 0 (DMT) to infinity (JKR); "
-        "solid: stable branch, dashed: unstable, dotted: non-contact tail, dot: contact transition.*",
+        "solid: stable branch, dashed: unstable, dotted: the source's van der Waals tail (2.33–2.34), dash-dotted: "
+        "Maugis' own non-contact branch (Dugdale zone, its unstable part included), dot: contact transition.*",
         "",
-        "Pull-off load (load control, minimum of P along the curve) and jump-out load (displacement control) in units"
+        "Pull-off load (load control, minimum of P along the curve) and jump-out load (displacement control; below"
+        " lambda = 0.938 at the fold of Maugis' own non-contact branch, where the Dugdale zone lets go) in units"
         f" of pi W R, against the fit of {REFERENCE} (largest difference {worst:.2f} %):",
         "",
         markdown_table(rows, [("lam", "lambda", "g"), ("pull_off", "P_c / (pi W R)", ".5f"),
