@@ -288,6 +288,19 @@ def test_dugdale_hysteresis_out_of_contact(lam):
         assert np.all(un[D < md._table()["D_min"]] == 0.0)
 
 
+def test_the_sources_form_keeps_its_tail_and_its_jump_out():
+    """``md-vdw`` (the source's van der Waals tail, used by the nano-placing) is the base law out of contact: its
+    DMT-like retract leaves the contact at the end point (2.31)-(2.32), continuous, with no fold of its own."""
+    from probedyn.schemes.contact.base import ContactModel
+
+    m = get_contact_model("md-vdw", lam=0.3)
+    assert m.nd_pull_off() == ContactModel.nd_pull_off(m)
+    assert m.nd_pull_off()["D_jump_out"] == pytest.approx(endpoint(0.3)[0], rel=1e-12)
+    assert m.nd_edge("loading") == endpoint(0.3)[0] and m.nd_noncontact_path()[0].size == 0
+    D = np.linspace(-4.0, endpoint(0.3)[0], 7)
+    assert np.array_equal(m.nd_tail(D, "unloading")[0], ContactModel.nd_tail(m, D)[0])
+
+
 def test_force_curve_on_maugis_own_branch_jumps_in_at_the_dugdale_range():
     """A stiff lever over the Dugdale law (lam = 0.3): the non-contact attraction's gradient, pi W R / h0 per
     Maugis unit... beats no lever near C = 0 (the branch turns there: dD/dC = -C_*), so the approach jumps at

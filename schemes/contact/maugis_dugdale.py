@@ -268,8 +268,9 @@ def touch_radius(lam: float) -> float:
 
 @CONTACT_MODELS.register
 class MaugisDugdale(ContactModel):
-    """Maugis–Dugdale contact (2.24–2.35, corrected per departure 7) with the
-    continuous van der Waals tail (2.33–2.34).
+    """Maugis–Dugdale contact (2.24–2.32, corrected per departure 7) and, out of contact, Maugis' own
+    Dugdale-zone branch (module doc, departure 47; :class:`MaugisDugdaleVdW` keeps the source's van der
+    Waals tail 2.33–2.34).
 
     Parameters: see :data:`.base.COMMON_PARAMS` (``lam`` sets the work of adhesion through
     2.24). ``lam = 0`` is the DMT limit (2.20), ``lam -> infinity`` the JKR limit.
@@ -277,6 +278,8 @@ class MaugisDugdale(ContactModel):
 
     key: ClassVar[str] = "md"
     title: ClassVar[str] = "Maugis-Dugdale"
+    #: out of contact: Maugis' own Dugdale zone (True) or the source's grafted van der Waals tail (``md-vdw``)
+    own_noncontact: ClassVar[bool] = True
     source: ClassVar[str] = "(2.24)-(2.32), corrected: departure 7; out of contact Maugis' own Dugdale zone: departure 47"
 
     def nd_curve(self, A):
@@ -293,9 +296,10 @@ class MaugisDugdale(ContactModel):
 
     # ------------------------------------------------------------------ the non-contact branch
     def _dugdale(self) -> tuple[float, float, float] | None:
-        """``(C_*, C_on, D_free)`` of the non-contact branch (module doc), None at lam = 0 (DMT: no range)."""
+        """``(C_*, C_on, D_free)`` of the non-contact branch (module doc); None at lam = 0 (DMT: no range) and for
+        the source's grafted tail (``md-vdw``)."""
         lam = self.lam
-        if lam == 0:
+        if lam == 0 or not self.own_noncontact:
             return None
         return 8.0 * lam / (3.0 * math.pi), touch_radius(lam), -2.0 / (math.pi * lam)
 
@@ -311,11 +315,12 @@ class MaugisDugdale(ContactModel):
         """``(P_bar, dP_bar/dD_bar)`` out of contact: the stable part of the Dugdale non-contact branch
         (``C >= C_*``, inverted as ``C = C_* + sqrt(C_*^2 + 2 (D + 2 / (pi lam)))``) where the branch is reached
         -- on loading from ``D_free`` on (the free state ends there), on unloading down to its fold ``D(C_*)``
-        -- and zero (free) elsewhere. ``lam = 0``: flat at ``P0 = -2`` (the DMT limit)."""
+        -- and zero (free) elsewhere. ``lam = 0``: flat at ``P0 = -2`` (the DMT limit); ``md-vdw``: the source's
+        van der Waals tail (:meth:`.base.ContactModel.nd_tail`)."""
         D = np.asarray(D, dtype=float)
         dg = self._dugdale()
-        if dg is None:
-            return np.full_like(D, self.nd_endpoint()[1]), np.zeros_like(D)
+        if dg is None:  # the van der Waals tail of the base class (flat at P0 = -2 for lam = 0)
+            return super().nd_tail(D, branch)
         cs, c_on, d_free = dg
         P, dP = np.zeros_like(D), np.zeros_like(D)
         if c_on <= cs:  # no stable non-contact state (lam >= 0.938): free up to the contact
@@ -360,7 +365,7 @@ class MaugisDugdale(ContactModel):
         (``C = 0``) to the first touch (``C_on``: the end point); for the equilibrium path of a force curve."""
         dg = self._dugdale()
         if dg is None:
-            return np.array([]), np.array([])
+            return super().nd_noncontact_path(n)
         return dugdale_noncontact(np.linspace(0.0, dg[1], n), self.lam)
 
 
@@ -377,16 +382,4 @@ class MaugisDugdaleVdW(MaugisDugdale):
     key: ClassVar[str] = "md-vdw"
     title: ClassVar[str] = "Maugis-Dugdale with the source's van der Waals tail"
     source: ClassVar[str] = "(2.24)-(2.35) as printed (tail 2.33-2.34), corrected: departure 7"
-
-    def nd_edge(self, branch="loading") -> float:
-        return ContactModel.nd_edge(self, branch)
-
-    def nd_tail(self, D, branch="loading"):
-        return ContactModel.nd_tail(self, D, branch)
-
-    def nd_tail_knots(self, branch="loading") -> np.ndarray:
-        return np.array([])
-
-    def nd_noncontact_path(self, n: int = 400):
-        return ContactModel.nd_noncontact_path(self, n)
-
+    own_noncontact: ClassVar[bool] = False
