@@ -695,3 +695,31 @@ def test_the_pull_off_alternative_is_the_exact_fold(law, k):
     assert np.max(np.abs(alt[after] - P_f)) < 1e-4 * Pu, (alt[after][:3] / Pu, P_f / Pu)
     if law == "jkr" and k < 1:
         assert P_f / Pu == pytest.approx(-1.5, abs=1e-3)
+
+
+@pytest.mark.parametrize("law", ["adhesion-dmt", "adhesion-md"])
+def test_the_adhesion_findings_state_where_the_lever_snaps_in(tmp_path, law):
+    """The jump to contact of the issue's catalog is reported with the law that makes it: ``snap_in_gap_m`` of
+    DMT is the gap where the van der Waals tail's gradient reaches k, of Maugis-Dugdale the Dugdale range h0 (its
+    approach jumps there, departure 47). Checked against the registry's force curve of the same law, lever and tip
+    (an equilibrium-path continuation, schemes.contact.force_curve), to the path's resolution (0.5 %)."""
+    from probedyn.diagnose.forcecurve import ForceCurveProblem, _z0_for_lambda
+    from probedyn.schemes.contact import get_contact_model
+    from probedyn.schemes.contact.force_curve import force_curve
+
+    path, truth = make_curve_case(tmp_path, 2003, "jump-to-contact")  # k 0.17 N/m: a long snap-in
+    prob = ForceCurveProblem(read_measurement(path))
+    cause = next(c for c in prob.causes if c.key == law)
+    E_star = 2e9
+    v = {"z_c": truth["z_c"], "b0": truth["b0"], "b1": truth["b1"], "E_star": E_star, "W": 0.03,
+         ("z0" if law == "adhesion-dmt" else "lam"): 0.3e-9 if law == "adhesion-dmt" else 0.4}
+    gap = cause.derived(v, prob)["snap_in_gap_m"]
+    E_t, nu_t = prob.data.E_tip, prob.data.nu_tip
+    E_s = (1 - 0.3**2) / (1 / E_star - (1 - nu_t**2) / E_t)
+    R, K = prob.data.tip_radius, 4 / 3 * E_star
+    z0 = v["z0"] if law == "adhesion-dmt" else _z0_for_lambda(0.4, 0.03, R, K)
+    m = get_contact_model("dmt" if law == "adhesion-dmt" else "md", E_t=E_t, nu_t=nu_t, E_s=E_s, nu_s=0.3, R_t=R,
+                          R_s=0.0, W=0.03, z0=z0)
+    ji = force_curve(m, prob.data.k)["jump_in"]
+    assert ji is not None and gap > 0
+    assert gap == pytest.approx(ji["gap_before"], rel=5e-3)

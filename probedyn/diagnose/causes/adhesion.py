@@ -59,9 +59,18 @@ class AdhesionDMT(_Adhesion):
         s.z0 = v.get("z0", _Z0.null)
 
     def derived(self, v, problem):
+        """With the Hamaker constant, the jump to contact: the lever of stiffness k becomes unstable in the tail
+        ``-H R / (6 d^2)`` where its gradient ``H R / (3 d^3)`` reaches k, at ``d* = (H R / (3 k))^(1/3)``
+        (schemes.contact.force_curve); below the tail's end gap zeta_0 the approach reaches the contact without a
+        jump (reported as 0)."""
         import math
 
-        return {**super().derived(v, problem), "hamaker_J": 12 * math.pi * v["W"] * v.get("z0", _Z0.null) ** 2}
+        from probedyn.schemes.contact.force_curve import tail_jump_gap
+
+        z0 = v.get("z0", _Z0.null)
+        H = 12 * math.pi * v["W"] * z0**2
+        d_star = tail_jump_gap(H, problem.state(v, (self,)).R, problem.data.k) if H > 0 else 0.0
+        return {**super().derived(v, problem), "hamaker_J": H, "snap_in_gap_m": d_star if d_star > z0 else 0.0}
 
 
 @CAUSES.register
@@ -94,3 +103,14 @@ class AdhesionMD(_Adhesion):
     def effect(self, v, s):
         super().effect(v, s)
         s.lam = v["lam"]
+
+    def derived(self, v, problem):
+        """With the pull-offs, the Dugdale range ``h0 = W / sigma_0 = 2 / (pi lam)`` Maugis length units
+        ``(pi^2 W^2 R / K^2)^(1/3)`` (K = 4/3 E*): Maugis' own non-contact branch (departure 47) lets the approach
+        jump to contact where the gap reaches h0, whatever the lever's stiffness."""
+        import math
+
+        st = problem.state(v, (self,))
+        K = 4.0 / 3.0 * st.E_star
+        d_unit = (math.pi**2 * v["W"] ** 2 * st.R / K**2) ** (1.0 / 3.0)
+        return {**super().derived(v, problem), "snap_in_gap_m": 2.0 / (math.pi * v["lam"]) * d_unit}
