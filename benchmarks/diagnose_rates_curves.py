@@ -12,7 +12,7 @@ nulls and the 2000-series rerun (:func:`calibration_cases`; parts merged with ``
 
 Truth (``tests/diagnose_truth_curves.py``, independent of the diagnosis): approach and retract of
 a lever over one of probedyn's contact registry laws (DMT with its van der Waals tail, JKR,
-Maugis-Dugdale with lambda drawn in [0.3, 3]) or Hertz, followed by continuation with the jumps
+Maugis-Dugdale with lambda drawn in [0.3, 3], its Dugdale zone out of contact since session 45) or Hertz, followed by continuation with the jumps
 where the force gradient exceeds k; recorded as an instrument does (z piezo; deflection in V with
 the sidecar's sensitivity, in m, or force; tilted and offset baseline; white noise 0.05-0.2 nN;
 sample modulus declared in half of the cases). Hidden effects cycle through

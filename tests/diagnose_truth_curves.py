@@ -10,7 +10,7 @@ plain Hertz; the lever's equilibrium along the ramp is followed here by **contin
 ends: the jump to contact where the force gradient exceeds k, the pull-off) -- a path
 independent of the diagnosis, which locates the equilibria on envelopes of the contact curve.
 
-Hidden effects: ``adhesion-dmt`` (the tail's range zeta_0 drawn, 0.15-0.5 nm), ``adhesion-jkr``, ``adhesion-md`` (lambda drawn), ``jump-to-
+Hidden effects: ``adhesion-dmt`` (the tail's range zeta_0 drawn, 0.15-0.5 nm), ``adhesion-jkr``, ``adhesion-md`` (lambda drawn; Maugis' own Dugdale zone out of contact since session 45, departure 47), ``jump-to-
 contact`` (DMT on a soft lever: the van der Waals gradient exceeds k well before contact),
 ``tip-radius-error`` (the declared radius is wrong; the sample modulus is declared),
 ``deflection-drift`` (a drift of the deflection in time), ``tip-shape`` (the registry's blunted cone,
