@@ -723,3 +723,27 @@ def test_the_adhesion_findings_state_where_the_lever_snaps_in(tmp_path, law):
     ji = force_curve(m, prob.data.k)["jump_in"]
     assert ji is not None and gap > 0
     assert gap == pytest.approx(ji["gap_before"], rel=5e-3)
+
+
+def test_contact_laws_tied_in_sample_are_confounded_whatever_the_heldout_evidence():
+    """engine._tied_alternative (docs/diagnose.md 9.31): two contact laws (one ``alternative`` component) whose
+    in-sample Akaike scores ``dchi2 / 2 - k`` are within the evidence margin are confounded on a force curve, even
+    where their held-out evidences are 8-12 nats apart (the held-out comparison next to a jump scatters: AR(1)
+    seeds 2032 and 2048, laws within 0.3-0.5 nats in sample). Not beyond the margin; not between a law and a
+    cause of another component; not on a problem that does not declare the scatter (modal records)."""
+    from probedyn.diagnose.causes.adhesion import AdhesionDMT, AdhesionMD
+    from probedyn.diagnose.causes.deflection_drift import DeflectionDrift
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN, _tied_alternative
+    from probedyn.diagnose.forcecurve import ForceCurveProblem
+
+    def row(c, dchi2):
+        return {"cause": c(), "dchi2": dchi2, "k": len(c.params)}
+
+    curve = ForceCurveProblem.__new__(ForceCurveProblem)  # the class attribute is all the rule reads
+    md, dmt = row(AdhesionMD, 6537.98), row(AdhesionDMT, 6537.00)  # AR(1) 2048: 0.49 nats in sample
+    assert _tied_alternative(curve, dmt, md, EVIDENCE_MARGIN)
+    far = row(AdhesionDMT, 6537.98 - 2 * EVIDENCE_MARGIN - 0.1)
+    assert not _tied_alternative(curve, far, md, EVIDENCE_MARGIN)
+    drift = {"cause": DeflectionDrift(), "dchi2": 6537.98, "k": len(DeflectionDrift.params)}
+    assert not _tied_alternative(curve, drift, md, EVIDENCE_MARGIN)
+    assert not _tied_alternative(object(), dmt, md, EVIDENCE_MARGIN)

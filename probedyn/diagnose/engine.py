@@ -1007,7 +1007,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         _score_in_order(cands, margin, lambda d: _evidence(d, base, cv, use_cv))
     for d in cands:
         if d["evidence"] is None and not use_cv and not d.get("pruned"):
-            d["evidence"] = 0.5 * d["dchi2"] - d["k"]
+            d["evidence"] = _akaike(d)
             d["method"] = "akaike (fewer than 3 groups)"
     claimed = [d for d in cands if significant and d["lr_pass"] and d["evidence"] is not None and d["evidence"] > 0]
     not_claimed: list[dict] = []
@@ -1031,7 +1031,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     if claimed:
         best = claimed[0]
         rivals = [d for d in claimed[1:] if not d.get("contains_leader")
-                  and (rank(d) >= rank(best) - margin or d.get("sibling_limit")
+                  and (rank(d) >= rank(best) - margin or d.get("sibling_limit") or _tied_alternative(problem, d, best, margin)
                        or (by_ho and _unresolved(best, d, cv, margin)))]
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
@@ -1246,6 +1246,21 @@ def _container_refits(F: Fitter, causes: list, fits: list) -> list:
     return fits
 
 
+def _akaike(d: dict) -> float:
+    """A candidate's in-sample Akaike score against the baseline, in nats: ``dchi2 / 2 - k``."""
+    return 0.5 * d["dchi2"] - d["k"]
+
+
+def _tied_alternative(problem, d: dict, best: dict, margin: float) -> bool:
+    """``d`` is an alternative to the leader ``best`` (another contact law: causes of one ``alternative``
+    component) whose in-sample Akaike score is within ``margin`` of the leader's, on a problem whose held-out
+    comparison of alternatives scatters (``insample_confounds_alternatives``: force curves, next to a jump):
+    confounded with it whatever the held-out evidence says (docs/diagnose.md 9.31)."""
+    alt = best["cause"].alternative
+    return (bool(getattr(problem, "insample_confounds_alternatives", False)) and alt is not None
+            and d["cause"].alternative == alt and _akaike(d) >= _akaike(best) - margin)
+
+
 def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict[str, Any] | None:
     """Occam between nested causes: when the leader *contains* a claimed cause as a limit (its
     ``limits``) and either that cause's evidence is within ``margin`` of the leader's or the
@@ -1297,13 +1312,10 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
     # sample by 3.7 over JKR, 2.7 nats behind it held out); for the same reason the other limit stays a
     # confounded rival when its evidence *or its in-sample Akaike score* is within the margin of the new
     # leader's (a JKR truth under AR(1) noise, seed 2001: DMT ahead by 1.2 nats in sample, 9 held out)
-    def akaike(d):
-        return 0.5 * d["dchi2"] - d["k"]
-
     siblings = [d for d in claimed[1:] if d["cause"].key in lims]
-    new = max(siblings, key=akaike)  # inner is among them
+    new = max(siblings, key=_akaike)  # inner is among them
     for d in siblings:
-        if d is not new and akaike(d) >= akaike(new) - margin:
+        if d is not new and _akaike(d) >= _akaike(new) - margin:
             d["sibling_limit"] = True
     claimed.remove(new)
     claimed.insert(0, new)
@@ -1341,7 +1353,7 @@ def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> No
                 d["evidence"] = e_plain
                 d["method"] = "cross-validation (plain held-out error: an extension of a claimed cause)"
     else:
-        d["evidence"] = 0.5 * d["dchi2"] - d["k"]
+        d["evidence"] = _akaike(d)
         d["method"] = "akaike (fewer than 3 groups)"
 
 
