@@ -52,9 +52,8 @@ def _human(res: dict[str, Any]) -> str:
     if fc:
         ji, jo = fc["jump_in"], fc["jump_out"]
         rows.append(dict(q="normal stiffness of the probe [N/m]", v=f"{fc['k']:.4g}"))
-        dugdale = fc["predicted_jump_rule"].startswith("h0")  # Maugis' own branch: a jump at h0 whatever k is
         rows.append(dict(q=f"predicted jump-in gap {fc['predicted_jump_rule']} [m]",
-                         v=f"{fc['predicted_tail_jump_gap']:.4e}" + ("" if dugdale or fc["predicted_tail_jump_gap"] > fc["tail_end_gap"]
+                         v=f"{fc['predicted_tail_jump_gap']:.4e}" + ("" if fc["jumps_at_range"] or fc["predicted_tail_jump_gap"] > fc["tail_end_gap"]
                                                                       else f" (< tail end {fc['tail_end_gap']:.3e}: no jump)")))
         rows.append(dict(q="jump-in: gap before [m] / load before, after [N]",
                          v="none (continuous approach)" if ji is None else

@@ -225,6 +225,12 @@ class ContactModel(Model, ABC):
         sharply); none for the Hamaker tail, which is smooth."""
         return np.array([])
 
+    @property
+    def has_noncontact_branch(self) -> bool:
+        """The law has a non-contact equilibrium branch of its own (:meth:`nd_noncontact_path`), not a tail that is
+        a function of the penetration."""
+        return False
+
     def nd_noncontact_path(self, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
         """``(D_bar, P_bar)`` along a non-contact equilibrium branch of the law's own, unstable parts included
         (Maugis-Dugdale's Dugdale zone); empty for a law whose tail is a function of the penetration."""

@@ -55,8 +55,8 @@ def equilibrium_path(model: Any, gap_max: float | None = None, n_tail: int = 400
     z0 = s.z0
     gap_max = 30.0 * z0 if gap_max is None else float(gap_max)
     delta_max = 30.0 * z0 if delta_max is None else float(delta_max)
-    Dn, Pn = model.nd_noncontact_path(n_tail)
-    if Dn.size:
+    if model.has_noncontact_branch:
+        Dn, Pn = model.nd_noncontact_path(n_tail)
         # a law with its own non-contact branch (Maugis-Dugdale): free (P = 0) out to the gap max, then the branch
         # in the Dugdale zone's radius, its unstable part included, to the end point
         Df = np.linspace(min(Dn[0], -gap_max / s.d_unit), Dn[0], n_tail)[:-1]
@@ -94,13 +94,16 @@ def force_curve(model: Any, k: float, **path_kw: Any) -> dict[str, Any]:
     # own non-contact branch the gap is the undeformed one, -delta
     d0 = sc.z0_bar * math.sqrt(2.0 / -P0) if P0 < 0 else 0.0
     predicted, rule = tail_jump_gap(sc.H, sc.R, k), "(H R/3k)^(1/3)"
-    if model.nd_noncontact_path(2)[0].size:
+    if model.has_noncontact_branch:
+        from .maugis_dugdale import dugdale_range
+
         # the free state ends where the gap reaches the Dugdale range h0 = 2 / (pi lam) Maugis units, and the branch
         # turns back there (dD/dC = -C_* < 0): the approach jumps at h0 whatever k is
-        d0, predicted, rule = -D0, 2.0 / (math.pi * model.lam) * sc.d_unit, "h0 = W/sigma_0 (Dugdale range)"
+        d0, predicted, rule = -D0, dugdale_range(model.lam) * sc.d_unit, "h0 = W/sigma_0 (Dugdale range)"
     gap_at = lambda delta: (d0 + D0) * sc.d_unit - delta  # noqa: E731
     out: dict[str, Any] = dict(k=k, delta=d, P=P, s=s, jump_in=None, jump_out=None,
                                predicted_tail_jump_gap=predicted, predicted_jump_rule=rule,
+                               jumps_at_range=model.has_noncontact_branch,
                                tail_end_penetration=D0 * sc.d_unit, tail_end_gap=d0 * sc.d_unit)
     # approach: first local maximum of s along the path
     down = np.nonzero(ds < 0)[0]

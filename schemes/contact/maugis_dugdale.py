@@ -48,6 +48,7 @@ contact.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -255,7 +256,7 @@ def dugdale_noncontact(C, lam: float):
     """``(D_bar, P_bar)`` on the Maugis-Dugdale non-contact branch at Dugdale-zone radius(es) ``C`` (module
     doc): ``D_bar = C^2 / 2 - 8 lam C / (3 pi) - 2 / (pi lam)``, ``P_bar = -(pi lam / 2) C^2``."""
     C = np.asarray(C, dtype=float)
-    return C * C / 2.0 - 8.0 * lam / (3.0 * math.pi) * C - 2.0 / (math.pi * lam), -0.5 * math.pi * lam * C * C
+    return C * C / 2.0 - 8.0 * lam / (3.0 * math.pi) * C - dugdale_range(lam), -0.5 * math.pi * lam * C * C
 
 
 def touch_radius(lam: float) -> float:
@@ -264,6 +265,38 @@ def touch_radius(lam: float) -> float:
     b = 4.0 * lam * (math.pi - 2.0) / (3.0 * math.pi)
     q = 4.0 / (math.pi * lam)
     return q / (b + math.sqrt(b * b + q))  # -b + sqrt(b^2 + q), rationalised
+
+
+def dugdale_range(lam: float) -> float:
+    """The Dugdale range ``h0 = W / sigma_0`` in Maugis length units, ``2 / (pi lam)`` (0.97 zeta_0, 2.24)."""
+    return 2.0 / (math.pi * lam)
+
+
+@dataclass(frozen=True)
+class DugdaleZone:
+    """Landmarks of the non-contact branch (module doc), in Maugis units: ``C_*`` (the branch turns, dD/dC = 0),
+    ``C_on`` (the first touch: the end point), ``D_free = -h0`` (the free state ends) and the fold
+    ``D(C_*) = D_free - C_*^2 / 2`` (the retract's jump-out); a stable part exists where ``C_on > C_*``."""
+
+    c_star: float
+    c_on: float
+    d_free: float
+
+    @classmethod
+    def of(cls, lam: float) -> "DugdaleZone":
+        return cls(8.0 * lam / (3.0 * math.pi), touch_radius(lam), -dugdale_range(lam))
+
+    @property
+    def stable(self) -> bool:
+        return self.c_on > self.c_star
+
+    @property
+    def d_fold(self) -> float:
+        return self.d_free - 0.5 * self.c_star**2
+
+    def entry(self, branch: str) -> float:
+        """Where the stable part is reached: from the free state's end on loading, down to the fold on unloading."""
+        return self.d_free if branch == "loading" else self.d_fold
 
 
 @CONTACT_MODELS.register
@@ -295,20 +328,23 @@ class MaugisDugdale(ContactModel):
         return endpoint(self.lam)
 
     # ------------------------------------------------------------------ the non-contact branch
-    def _dugdale(self) -> tuple[float, float, float] | None:
-        """``(C_*, C_on, D_free)`` of the non-contact branch (module doc); None at lam = 0 (DMT: no range) and for
-        the source's grafted tail (``md-vdw``)."""
-        lam = self.lam
-        if lam == 0 or not self.own_noncontact:
+    @property
+    def has_noncontact_branch(self) -> bool:
+        return self._dugdale() is not None
+
+    def _dugdale(self) -> DugdaleZone | None:
+        """The non-contact branch's landmarks (:class:`DugdaleZone`); None at lam = 0 (DMT: no range) and for the
+        source's grafted tail (``md-vdw``)."""
+        if self.lam == 0 or not self.own_noncontact:
             return None
-        return 8.0 * lam / (3.0 * math.pi), touch_radius(lam), -2.0 / (math.pi * lam)
+        return DugdaleZone.of(self.lam)
 
     def nd_edge(self, branch="loading") -> float:
         """Loading: the contact forms where the free state ends (``D_free``, the gap reaches ``h0``) if that is
         past the end point, else at the end point ``D0``; unloading: the contact curve's turning point."""
         dg = self._dugdale()
         if branch == "loading" and dg is not None:
-            return max(self.nd_endpoint()[0], dg[2])
+            return max(self.nd_endpoint()[0], dg.d_free)
         return super().nd_edge(branch)
 
     def nd_tail(self, D, branch="loading"):
@@ -321,14 +357,13 @@ class MaugisDugdale(ContactModel):
         dg = self._dugdale()
         if dg is None:  # the van der Waals tail of the base class (flat at P0 = -2 for lam = 0)
             return super().nd_tail(D, branch)
-        cs, c_on, d_free = dg
         P, dP = np.zeros_like(D), np.zeros_like(D)
-        if c_on <= cs:  # no stable non-contact state (lam >= 0.938): free up to the contact
+        if not dg.stable:  # no stable non-contact state (lam >= 0.938): free up to the contact
             return P, dP
-        lo = d_free if branch == "loading" else d_free - 0.5 * cs * cs
-        on = (D >= lo) & (D <= self.nd_endpoint()[0])
+        cs = dg.c_star
+        on = (D >= dg.entry(branch)) & (D <= self.nd_endpoint()[0])
         if np.any(on):
-            root = np.sqrt(np.maximum(cs * cs + 2.0 * (D[on] - d_free), 0.0))
+            root = np.sqrt(np.maximum(cs * cs + 2.0 * (D[on] - dg.d_free), 0.0))
             C = cs + root
             P[on] = -0.5 * math.pi * self.lam * C * C
             with np.errstate(divide="ignore"):
@@ -341,23 +376,21 @@ class MaugisDugdale(ContactModel):
         ``P = -(pi lam / 2) C_*^2``), not at the end point."""
         out = super().nd_pull_off()
         dg = self._dugdale()
-        if dg is not None and dg[1] > dg[0]:
-            cs, _, d_free = dg
-            out.update(D_jump_out=d_free - 0.5 * cs * cs, P_jump_out=-0.5 * math.pi * self.lam * cs * cs, A_jump_out=0.0)
+        if dg is not None and dg.stable:
+            out.update(D_jump_out=dg.d_fold, P_jump_out=-0.5 * math.pi * self.lam * dg.c_star**2, A_jump_out=0.0)
         return out
 
     def nd_tail_knots(self, branch="loading") -> np.ndarray:
         """The branch's ends (with the free side of its discontinuity) and 64 points uniform in ``C`` on its stable
         part: a polyline of the tail resolves the fold near ``D(C_*)`` and the jump at ``D_free``."""
         dg = self._dugdale()
-        if dg is None or dg[1] <= dg[0]:
+        if dg is None or not dg.stable:
             return np.array([])
-        cs, c_on, d_free = dg
-        c_lo = 2.0 * cs if branch == "loading" else cs  # D(2 C_*) = D_free
-        if c_lo >= c_on:
+        c_lo = 2.0 * dg.c_star if branch == "loading" else dg.c_star  # D(2 C_*) = D_free
+        if c_lo >= dg.c_on:
             return np.array([])
-        D = dugdale_noncontact(np.linspace(c_lo, c_on, 64), self.lam)[0]
-        D[0] = d_free if branch == "loading" else d_free - 0.5 * cs * cs
+        D = dugdale_noncontact(np.linspace(c_lo, dg.c_on, 64), self.lam)[0]
+        D[0] = dg.entry(branch)  # exactly (the formula's rounding aside)
         return np.concatenate([[np.nextafter(D[0], -np.inf)], D])
 
     def nd_noncontact_path(self, n: int = 400) -> tuple[np.ndarray, np.ndarray]:
@@ -366,7 +399,7 @@ class MaugisDugdale(ContactModel):
         dg = self._dugdale()
         if dg is None:
             return super().nd_noncontact_path(n)
-        return dugdale_noncontact(np.linspace(0.0, dg[1], n), self.lam)
+        return dugdale_noncontact(np.linspace(0.0, dg.c_on, n), self.lam)
 
 
 @CONTACT_MODELS.register

@@ -105,12 +105,11 @@ class AdhesionMD(_Adhesion):
         s.lam = v["lam"]
 
     def derived(self, v, problem):
-        """With the pull-offs, the Dugdale range ``h0 = W / sigma_0 = 2 / (pi lam)`` Maugis length units
-        ``(pi^2 W^2 R / K^2)^(1/3)`` (K = 4/3 E*): Maugis' own non-contact branch (departure 47) lets the approach
-        jump to contact where the gap reaches h0, whatever the lever's stiffness."""
-        import math
+        """With the pull-offs, the Dugdale range ``h0 = W / sigma_0 = 2 / (pi lam)`` Maugis length units of the
+        registry law the fit evaluates: Maugis' own non-contact branch (departure 47) lets the approach jump to
+        contact where the gap reaches h0, whatever the lever's stiffness."""
+        from probedyn.diagnose.forcecurve import _interaction
+        from probedyn.schemes.contact.maugis_dugdale import dugdale_range
 
-        st = problem.state(v, (self,))
-        K = 4.0 / 3.0 * st.E_star
-        d_unit = (math.pi**2 * v["W"] ** 2 * st.R / K**2) ** (1.0 / 3.0)
-        return {**super().derived(v, problem), "snap_in_gap_m": 2.0 / (math.pi * v["lam"]) * d_unit}
+        law = _interaction(problem.state(v, (self,)), problem.E_t, problem.nu_t)[2]
+        return {**super().derived(v, problem), "snap_in_gap_m": dugdale_range(v["lam"]) * law.scales.d_unit}
