@@ -45,6 +45,22 @@ def test_csv_errors_name_line_and_column(tmp_path, csv, where, what):
     assert where in msg and what in msg and "\n" not in msg
 
 
+@pytest.mark.parametrize("sep", [";", "\t", " ", "   "])
+def test_instrument_separators_read_as_the_comma_file(tmp_path, sep):
+    """Semicolon (spreadsheet exports with a decimal comma locale), tab and blank-aligned exports read exactly
+    as the comma file; the separator is the header's."""
+    ref = read_measurement(_write(tmp_path, CSV))
+    other = read_measurement(_write(tmp_path, CSV.replace(",", sep)))
+    assert list(other.family) == list(ref.family) and list(other.order) == list(ref.order)
+    assert list(other.freq) == list(ref.freq)
+
+
+def test_a_decimal_comma_is_refused_not_reinterpreted(tmp_path):
+    with pytest.raises(DataFormatError) as e:
+        read_measurement(_write(tmp_path, CSV.replace(",", ";").replace("6.2e5", "6,2e5")))
+    assert "line 2, column 3" in str(e.value) and "cannot read '6,2e5'" in str(e.value)
+
+
 @pytest.mark.parametrize("side, what", [
     (SIDE.replace("thickness = 10e-6", "thickness = 2"), "outside the plausible range"),  # 2 m thick
     (SIDE.replace("thickness = 10e-6", "thicknes = 10e-6"), "did you mean 'thickness'"),

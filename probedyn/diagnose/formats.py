@@ -105,19 +105,33 @@ def _did_you_mean(name: str, known) -> str:
     return f" (did you mean '{close[0]}'?)" if close else f" (known: {', '.join(known)})"
 
 
+#: field separators an instrument export uses, in the order they are looked for in the header line (none of
+#: them: fields separated by runs of blanks, as a space-aligned text export)
+SEPARATORS = (",", ";", "\t")
+
+
+def _separator(header_line: str) -> str | None:
+    return next((c for c in SEPARATORS if c in header_line), None)
+
+
 def read_csv(path: Path, required: list[str], optional: list[str], text_cols: tuple[str, ...] = ()) -> dict[str, Any]:
     """Read a numeric CSV with a header; '#' lines are comments. Columns as arrays (text columns
-    as lists); every error names file, line and column."""
+    as lists); every error names file, line and column. The field separator is the header's: a comma,
+    else a semicolon, else a tab, else runs of blanks (:data:`SEPARATORS`); the decimal mark is a point
+    (a decimal comma is refused as an unreadable number, never reinterpreted)."""
     # a regular file of bounded size, UTF-8 (FIFOs, devices and folders refused before opening)
     lines = read_text(path, what="data file", max_bytes=MAX_DATA_BYTES).splitlines()
     header = None
     hline = 0
+    sep: str | None = ","
     rows: list[tuple[int, list[str]]] = []
     for i, raw in enumerate(lines, start=1):
         s = raw.strip()
         if not s or s.startswith("#"):
             continue
-        cells = [c.strip() for c in s.split(",")]
+        if header is None:
+            sep = _separator(s)
+        cells = [c.strip() for c in s.split(sep)]
         if header is None:
             header, hline = cells, i
             continue
