@@ -55,6 +55,15 @@ K_B = 1.380649e-23
 #: depend on the unrecorded history, e.g. a previous retrace) are not used (FrictionProblem.use)
 PREROLL = 2.0
 START_PERIODS = 1.5  # lattice periods at the start of a scan left out (unknown history before the scan)
+#: corrugation above which a slip can carry the tip past the next well (Medyanik et al., PRL 97, 136106
+#: (2006): multiple slips need eta > 4.6); there the stick-slip pattern of a scan is one of several
+#: coexisting periodic patterns (the tip slips two wells at a time, over the even or the odd ones), and
+#: which one a scan follows is set by its unrecorded history: the well the tip starts the pre-roll in
+#: is then profiled per scan with the registry (FrictionProblem.nuisance)
+MULTISLIP_ETA = 4.6
+#: wells tried besides the one under the support: the tip starts at rest up to this many periods
+#: behind or ahead of it (a slip pattern of period up to 2 MULTISLIP_WELLS + 1 lattice periods)
+MULTISLIP_WELLS = 1
 #: integrator tolerance (relative, and absolute in units of the force scale / k and the speed): the
 #: lateral force of stick-slip traces (interval means) agrees with rtol = 1e-7 to 0.15 sigma at the slips and
 #: ~1e-15 N elsewhere (tests/test_diagnose_friction.py); 1e-3 misplaces slips by up to 10 sigma
@@ -289,17 +298,31 @@ def _barrier_table(U0: float, a: float, k: float, n: int = 400):
 def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: float) -> tuple[float, Any]:
     """Median support position of a thermally activated slip before the athermal instability:
     the hazard ``int f0 exp(-dE(X) / k_B T) dX / V`` reaches ln 2 (Kramers rate with attempt frequency
-    f0; Gnecco et al. 2000, Sang et al. 2001). Returns ``(X_c - X*, table)`` (0 if the slip stays athermal)."""
+    f0; Gnecco et al. 2000, Sang et al. 2001). Returns ``(X_c - X*, table)`` (0 where the median slip is the instability: the hazard below ln 2 there)."""
     tab = _barrier_table(U0, a, k)
     if tab is None or T <= 0 or f0 <= 0:
         return 0.0, tab
-    X, dE, Xc, xs, _ = tab
-    rate = f0 * np.exp(-dE / (K_B * T)) / V
-    H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+    X, Xc = tab[0], tab[2]
+    H = thermal_hazard(tab, V, T, f0)
     if H[-1] < math.log(2.0):
         return 0.0, tab
     Xs = float(np.interp(math.log(2.0), H, X))
     return max(Xc - Xs, 0.0), tab
+
+
+#: total hazard of an activated slip over a stick branch (up to the athermal instability) below which the
+#: slips are taken as athermal: at most this fraction of the slips comes early. Above it the slips are
+#: activated even where the median is still the instability (the hazard below ln 2: a fast scan or a
+#: low temperature), their scatter then being that of the early fraction
+THERMAL_MIN_HAZARD = 1e-3
+
+
+def thermal_hazard(tab, V: float, T: float, f0: float) -> np.ndarray:
+    """Cumulative hazard ``H(X) = int f0 exp(-dE / k_B T) dX / V`` of an activated slip along the stick
+    branch of a barrier table (:func:`_barrier_table`), from its start to each support position."""
+    X, dE = tab[0], tab[1]
+    rate = f0 * np.exp(-dE / (K_B * T)) / V
+    return np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
 
 
 #: quantiles of the activated slip point carried per slip (the mean and variance of every sample
@@ -316,8 +339,7 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     motion, and the force drop k (x_after - x_before) at the median (the tip lands in the next
     well)."""
     X, dE, Xc, xs, xm = tab
-    rate = f0 * np.exp(-dE / (K_B * T)) / V
-    H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+    H = thermal_hazard(tab, V, T, f0)
     C = np.append(1.0 - np.exp(-H), 1.0)
     Xe = np.append(X, Xc)
     keep = np.concatenate([[True], np.diff(C) > 0])
@@ -385,9 +407,10 @@ def _centre(scan: FrictionScan) -> float:
 def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
                   train: int = 0, var_out: list | None = None) -> np.ndarray:
     """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
-    the scan's samples, for lattice registry ``phis[train]``. With thermally activated slips the
-    force is the mean over the slip points' distribution and ``var_out`` (a list) receives its
-    variance per sample (the stochastic slip-position scatter)."""
+    the scan's samples, for lattice registry ``phis[train]``; ``phis[2]`` (if given) is the well the tip
+    starts the pre-roll in, in lattice periods from the support (0: under it; at rest). With thermally
+    activated slips the force is the mean over the slip points' distribution and ``var_out`` (a list)
+    receives its variance per sample (the stochastic slip-position scatter)."""
     X = scan.position
     Xc = _centre(scan)
     if st.bow:
@@ -407,14 +430,15 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     starts = np.concatenate([[0], cuts])
     ends = np.concatenate([cuts, [len(X)]])
     turns = [Xl[0] - d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
+    x0 = turns[0] + (round(phis[2]) * st.a if len(phis) > 2 else 0.0)
     # resolve the stick branches between samples: the step at most half a sample interval
     dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
     hmax = hmax_frac * dX / max(V, 1e-30)
     slips = None
     if st.thermal is not None and U0 > 0:
-        res, slips, scat = _thermal_path(ffm, turns, V, st, hmax)
+        res, slips, scat = _thermal_path(ffm, turns, V, st, hmax, x0)
     else:
-        res = line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+        res = line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
     F = np.empty(len(X))
     # split the model output into its monotone segments
     seg_model = _segments(res, len(turns) - 2)  # the pre-roll runs on into the first segment
@@ -466,25 +490,61 @@ def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]
     return out
 
 
-def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax):
+#: median advance of an activated slip (in lattice periods) from which the tip is placed over the saddle at
+#: the median slip point (:func:`_thermal_path`); below it the slips are the athermal path's, scattered
+#: about the instability (the stick branch's slope over the advance neglected: a relative error of the
+#: order of the advance over a period)
+THERMAL_PLACE_ADVANCE = 0.05
+
+
+def _athermal_slips(res, n_seg: int, a: float, k: float, Xc: float) -> list[tuple[int, float, float]]:
+    """The slips of an athermal path as (data segment, support position of the instability, direction):
+    every change of the tip's well in the direction of motion starts a slip at the instability of the well
+    it leaves, ``n a + d X_c`` (a slip over several wells counts once: the changes within a tenth of a
+    period of support travel of the first)."""
+    out = []
+    for j, (b, f, _) in enumerate(_segments(res, n_seg)):
+        if len(b) < 2:
+            continue
+        d = 1.0 if b[-1] > b[0] else -1.0
+        well = np.round((b - f / k) / a)
+        last = None
+        for c in np.nonzero(np.diff(well) * d > 0)[0]:
+            if last is not None and abs(b[c] - last) < 0.1 * a:
+                continue
+            last = float(b[c])
+            out.append((j, float(well[c]) * a + d * Xc, d))
+    return out
+
+
+def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None = None):
     """Trace/retrace with thermally activated slips: between slips the FFM integration runs as
     usual; when the support reaches the median activated slip point of the current well, the tip
-    is placed just over the saddle (at rest) and the FFM dynamics carries out the slip."""
+    is placed just over the saddle (at rest) and the FFM dynamics carries out the slip. The tip starts at
+    rest at ``x0`` (default: under the support, ``turns[0]``)."""
     from probedyn.schemes.ffm import ScanResult
+
+    x0 = turns[0] if x0 is None else x0
 
     T, f0 = st.thermal
     fv = ffm.friction.values
     U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
     adv, tab = thermal_slip_advance(U0, a, k, V, T, f0)
-    if adv <= 0 or tab is None:
-        return (line_scan_path(ffm, turns, speed=V, y0=(turns[0], 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
+    if tab is None or T <= 0 or f0 <= 0 or thermal_hazard(tab, V, T, f0)[-1] < THERMAL_MIN_HAZARD:
+        return (line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
                                atol_v=100 * abs(V)), None, None)
     Xtab, _, Xc, xs_tab, _ = tab
     scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0)
+    if adv < THERMAL_PLACE_ADVANCE * a:
+        # activated slips close to the instability: the athermal path (its slips resolved by the
+        # integrator, the saddle-node delay included) with every slip's scatter about the instability
+        res = line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
+                             atol_v=100 * abs(V))
+        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1])
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
     xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
-    y = np.array([turns[0], 0.0, 0.0])
+    y = np.array([x0, 0.0, 0.0])
     parts = []
     for Xa, Xb in zip(turns[:-1], turns[1:]):
         d = 1.0 if Xb > Xa else -1.0
@@ -940,13 +1000,13 @@ class FrictionProblem:
         th = st.thermal
         if th is not None:
             # the hazard of an activated slip before the instability is below f0 / V times the stick
-            # branch's support span (< 3a/4 + F0/k; the Boltzmann factor <= 1): below ln 2 on every
-            # scan the slips stay athermal (thermal_slip_advance), the model is the athermal one
+            # branch's support span (< 3a/4 + F0/k; the Boltzmann factor <= 1): below THERMAL_MIN_HAZARD
+            # on every scan the slips stay athermal (_thermal_path), the model is the athermal one
             ws = [math.cos(st.theta)] + ([math.sin(st.theta)] if st.theta > 1e-6 else [])
             k = self.data.k_x
             bound = max(th[1] * (0.75 * st.a + 2 * math.pi * st.u0 * max(s.load + st.n_adh, 0.0) / (k * st.a))
                         / max(s.speed * w, 1e-300) for s in self.data.scans for w in ws)
-            th = (float(th[0]), float(th[1])) if bound >= math.log(2.0) else None
+            th = (float(th[0]), float(th[1])) if bound >= THERMAL_MIN_HAZARD else None
         return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.offset), float(st.drift),
                 float(st.bow), float(st.theta), float(st.gain), th)
 
@@ -1009,24 +1069,25 @@ class FrictionProblem:
         mk = self._mask_key()
         out = []
         for i, s in enumerate(self.data.scans):
-            phis = [0.0, 0.0]
-            for tr in trains:
-                m0 = simulate_scan(self.data, st, s, [0.0, 0.0], train=tr)
-                phis[tr] = self._align(i, st, tr, m0, s.force)
-            # least-squares polish (parabolas through three registries, twice): the phase of the
-            # fundamental is biased by the reversal transients at the level of a few 1e-3 a
             if len(trains) == 1:
-                mask = self._fit_mask(i)
-                for h in (4e-3 * st.a, 1e-3 * st.a):
-                    sse = []
-                    for dph in (-h, 0.0, h):
-                        ph = [phis[0] + dph, 0.0]
-                        F = st.gain * simulate_scan(self.data, st, s, ph) + self._zero(i, st)
-                        sse.append(float(np.sum((s.force - F)[mask] ** 2)))
-                    den = sse[0] - 2 * sse[1] + sse[2]
-                    if den > 0:
-                        phis[0] += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
+                phis = self._profile_one_train(i, st, 0)
+                if self._multislip(i, st):
+                    # coexisting slip patterns: the start well whose pattern fits the scan best, tried
+                    # only where the one under the support leaves the scan beyond its noise
+                    c2 = self._scan_chi2(i, *self._scan_model(i, st, phis))
+                    n_fit = int(np.sum(self._fit_mask(i)))
+                    if c2 > n_fit + 4.0 * math.sqrt(2.0 * n_fit):
+                        for well in range(-MULTISLIP_WELLS, MULTISLIP_WELLS + 1):
+                            if well:
+                                ph = self._profile_one_train(i, st, well)
+                                cw = self._scan_chi2(i, *self._scan_model(i, st, ph))
+                                if cw < c2:
+                                    phis, c2 = ph, cw
             else:
+                phis = [0.0, 0.0]
+                for tr in trains:
+                    m0 = simulate_scan(self.data, st, s, [0.0, 0.0], train=tr)
+                    phis[tr] = self._align(i, st, tr, m0, s.force)
                 phis = self._profile_two_trains(i, st, phis)
             known = self._registry.get((mkey, i, mk)) if mkey is not None else None
             if known is not None:
@@ -1037,6 +1098,31 @@ class FrictionProblem:
                     self._remember((mkey, i, mk), phis, c2)
             out.append(phis)
         return out
+
+    def _profile_one_train(self, i: int, st: FrictionState, well: int) -> list[float]:
+        """Registry of an aligned scan with the tip starting the pre-roll ``well`` periods from the support:
+        the model at registry 0 aligned with the data by the phase of the fundamental, then a least-squares
+        polish (parabolas through three registries, twice: the phase of the fundamental is biased by the
+        reversal transients at the level of a few 1e-3 a)."""
+        s = self.data.scans[i]
+        tail = [float(well)] if well else []
+        m0 = simulate_scan(self.data, st, s, [0.0, 0.0, *tail])
+        phi = self._align(i, st, 0, m0, s.force)
+        mask = self._fit_mask(i)
+        for h in (4e-3 * st.a, 1e-3 * st.a):
+            sse = []
+            for dph in (-h, 0.0, h):
+                F = st.gain * simulate_scan(self.data, st, s, [phi + dph, 0.0, *tail]) + self._zero(i, st)
+                sse.append(float(np.sum((s.force - F)[mask] ** 2)))
+            den = sse[0] - 2 * sse[1] + sse[2]
+            if den > 0:
+                phi += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
+        return [phi, 0.0, *tail]
+
+    def _multislip(self, i: int, st: FrictionState) -> bool:
+        """Whether scan i's corrugation allows slips past the next well (eta > MULTISLIP_ETA)."""
+        U0 = st.u0 * max(self.data.scans[i].load + st.n_adh, 0.0)
+        return (2 * math.pi / st.a) ** 2 * U0 / self.data.k_x > MULTISLIP_ETA
 
     def _profile_two_trains(self, i: int, st: FrictionState, phis) -> list[float]:
         """Registries of the two lattice trains of a misaligned scan. The y train has the period
