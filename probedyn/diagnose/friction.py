@@ -302,12 +302,14 @@ def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: 
     tab = _barrier_table(U0, a, k)
     if tab is None or T <= 0 or f0 <= 0:
         return 0.0, tab
-    X, Xc = tab[0], tab[2]
-    H = thermal_hazard(tab, V, T, f0)
+    return _median_advance(tab, thermal_hazard(tab, V, T, f0)), tab
+
+
+def _median_advance(tab, H: np.ndarray) -> float:
+    """``X_c - X*`` for the cumulative hazard ``H`` along a barrier table: 0 where it stays below ln 2."""
     if H[-1] < math.log(2.0):
-        return 0.0, tab
-    Xs = float(np.interp(math.log(2.0), H, X))
-    return max(Xc - Xs, 0.0), tab
+        return 0.0
+    return max(tab[2] - float(np.interp(math.log(2.0), H, tab[0])), 0.0)
 
 
 #: total hazard of an activated slip over a stick branch (up to the athermal instability) below which the
@@ -330,16 +332,17 @@ def thermal_hazard(tab, V: float, T: float, f0: float) -> np.ndarray:
 SLIP_QUANTILES = 32
 
 
-def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float, f0: float):
+def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float, f0: float,
+                         H: np.ndarray | None = None):
     """The distribution of a thermally activated slip point around its median (the stochastic
     slip-position scatter): the survival ``exp(-H(X))`` of the stick state with the hazard of
     :func:`thermal_slip_advance` gives the slip point's CDF ``1 - exp(-H)`` (the athermal
     instability ends the branch: the rest of the probability slips there). Returns the
     ``SLIP_QUANTILES`` mid-quantiles of the slip point relative to the median, in the direction of
     motion, and the force drop k (x_after - x_before) at the median (the tip lands in the next
-    well)."""
+    well). ``H``: the hazard along the table if already computed."""
     X, dE, Xc, xs, xm = tab
-    H = thermal_hazard(tab, V, T, f0)
+    H = thermal_hazard(tab, V, T, f0) if H is None else H
     C = np.append(1.0 - np.exp(-H), 1.0)
     Xe = np.append(X, Xc)
     keep = np.concatenate([[True], np.diff(C) > 0])
@@ -438,7 +441,7 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     if st.thermal is not None and U0 > 0:
         res, slips, scat = _thermal_path(ffm, turns, V, st, hmax, x0)
     else:
-        res = line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+        res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
     F = np.empty(len(X))
     # split the model output into its monotone segments
     seg_model = _segments(res, len(turns) - 2)  # the pre-roll runs on into the first segment
@@ -468,6 +471,11 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     if var_out is not None:
         var_out.append(var)
     return F
+
+
+def _ffm_path(ffm: FFM, turns, V: float, hmax: float, y0):
+    """The FFM line scan along ``turns`` from state ``y0`` at the diagnosis' tolerances."""
+    return line_scan_path(ffm, turns, speed=V, y0=y0, hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
 
 
 def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -529,17 +537,17 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
     T, f0 = st.thermal
     fv = ffm.friction.values
     U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
-    adv, tab = thermal_slip_advance(U0, a, k, V, T, f0)
-    if tab is None or T <= 0 or f0 <= 0 or thermal_hazard(tab, V, T, f0)[-1] < THERMAL_MIN_HAZARD:
-        return (line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
-                               atol_v=100 * abs(V)), None, None)
+    tab = _barrier_table(U0, a, k)
+    H = thermal_hazard(tab, V, T, f0) if tab is not None and T > 0 and f0 > 0 else None
+    if H is None or H[-1] < THERMAL_MIN_HAZARD:
+        return _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0)), None, None
+    adv = _median_advance(tab, H)
     Xtab, _, Xc, xs_tab, _ = tab
-    scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0)
+    scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0, H)
     if adv < THERMAL_PLACE_ADVANCE * a:
         # activated slips close to the instability: the athermal path (its slips resolved by the
         # integrator, the saddle-node delay included) with every slip's scatter about the instability
-        res = line_scan_path(ffm, turns, speed=V, y0=(x0, 0.0, 0.0), hmax=hmax, rtol=RTOL, atol_rel=RTOL,
-                             atol_v=100 * abs(V))
+        res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
         return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1])
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
@@ -558,7 +566,7 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
                 Xs = Xcur
             Xend = Xs if (Xb - Xs) * d > 0 else Xb
             if (Xend - Xcur) * d > 1e-12 * a:
-                r = line_scan_path(ffm, [Xcur, Xend], speed=V, y0=y, hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
+                r = _ffm_path(ffm, [Xcur, Xend], V, hmax, y)
                 seg.append(r)
                 y = np.array([r.x[-1], r.v[-1], r.z[-1]])
                 Xcur = Xend
@@ -1070,19 +1078,7 @@ class FrictionProblem:
         out = []
         for i, s in enumerate(self.data.scans):
             if len(trains) == 1:
-                phis = self._profile_one_train(i, st, 0)
-                if self._multislip(i, st):
-                    # coexisting slip patterns: the start well whose pattern fits the scan best, tried
-                    # only where the one under the support leaves the scan beyond its noise
-                    c2 = self._scan_chi2(i, *self._scan_model(i, st, phis))
-                    n_fit = int(np.sum(self._fit_mask(i)))
-                    if c2 > n_fit + 4.0 * math.sqrt(2.0 * n_fit):
-                        for well in range(-MULTISLIP_WELLS, MULTISLIP_WELLS + 1):
-                            if well:
-                                ph = self._profile_one_train(i, st, well)
-                                cw = self._scan_chi2(i, *self._scan_model(i, st, ph))
-                                if cw < c2:
-                                    phis, c2 = ph, cw
+                phis = self._start_well(i, st, self._profile_one_train(i, st, 0))
             else:
                 phis = [0.0, 0.0]
                 for tr in trains:
@@ -1119,10 +1115,24 @@ class FrictionProblem:
                 phi += float(np.clip(0.5 * h * (sse[0] - sse[2]) / den, -2 * h, 2 * h))
         return [phi, 0.0, *tail]
 
-    def _multislip(self, i: int, st: FrictionState) -> bool:
-        """Whether scan i's corrugation allows slips past the next well (eta > MULTISLIP_ETA)."""
+    def _start_well(self, i: int, st: FrictionState, phis) -> list[float]:
+        """Coexisting slip patterns (scan i's corrugation above MULTISLIP_ETA): the registry ``phis`` of the tip
+        starting under the support, or the start well whose pattern fits the scan best, tried only where
+        the one under the support leaves the scan beyond its noise."""
         U0 = st.u0 * max(self.data.scans[i].load + st.n_adh, 0.0)
-        return (2 * math.pi / st.a) ** 2 * U0 / self.data.k_x > MULTISLIP_ETA
+        if not (2 * math.pi / st.a) ** 2 * U0 / self.data.k_x > MULTISLIP_ETA:
+            return phis
+        c2 = self._scan_chi2(i, *self._scan_model(i, st, phis))
+        n_fit = int(np.sum(self._fit_mask(i)))
+        if c2 <= n_fit + 4.0 * math.sqrt(2.0 * n_fit):
+            return phis
+        for well in range(-MULTISLIP_WELLS, MULTISLIP_WELLS + 1):
+            if well:
+                ph = self._profile_one_train(i, st, well)
+                cw = self._scan_chi2(i, *self._scan_model(i, st, ph))
+                if cw < c2:
+                    phis, c2 = ph, cw
+        return phis
 
     def _profile_two_trains(self, i: int, st: FrictionState, phis) -> list[float]:
         """Registries of the two lattice trains of a misaligned scan. The y train has the period

@@ -74,7 +74,7 @@ class ThermalActivation(Cause):
         too low by the lowering (up to 40 %) and its slips misplaced, too far from this basin."""
         import math
 
-        from probedyn.diagnose.friction import K_B, _barrier_table
+        from probedyn.diagnose.friction import _barrier_table, thermal_hazard
 
         L = problem.loop
         d = problem.data
@@ -104,9 +104,8 @@ class ThermalActivation(Cause):
             t = tabs[i][j]
             if t is None:
                 return 0.0
-            X, dE, Fb = t
-            rate = f0 * np.exp(-dE / (K_B * T)) / problem.speeds[i]
-            H = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(X))])
+            Fb = t[2]
+            H = thermal_hazard(t, problem.speeds[i], T, f0)
             return float(Fb[-1] if H[-1] < math.log(2.0) else np.interp(math.log(2.0), H, Fb))
 
         scored = []
