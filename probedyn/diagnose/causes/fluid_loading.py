@@ -1,9 +1,11 @@
 """Fluid loading: added mass and damping of a surrounding fluid (Sader's hydrodynamic function).
 
 If the measurement declares its medium ([medium]), the baseline already carries that medium's
-loading, air and vacuum fix density and viscosity, and the cause means an *excess* hydrodynamic
+loading. Air and vacuum fix density and viscosity, and the cause means an *excess* hydrodynamic
 load (a squeeze film near a surface, a meniscus, a denser gas): one factor on the declared load
-(null 1). In a declared vacuum the cause is a **residual gas**: air at a pressure p (null 0, at most
+(null 1). A declared liquid (density >= ``LIQUID_MIN_DENSITY``) is fitted with its density and viscosity, nulls
+at the declared values: a liquid's viscosity is far less certain than a gas's (temperature, composition), and
+the same factor on both is the excess load. In a declared vacuum the cause is a **residual gas**: air at a pressure p (null 0, at most
 1.2 bar: a chamber is not pumped above the ambient pressure), its density ``rho_air p / p_atm``, its viscosity
 air's (independent of the pressure in continuum flow, Knudsen number lambda / w below ~0.1: above ~10 mbar for
 levers wider than 20 um; below that the continuum hydrodynamic function overstates the damping). Only an
@@ -16,6 +18,8 @@ from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 from probedyn.diagnose.hydrodynamics import MEDIA
 
 P_ATM = 101325.0  # Pa: the pressure of MEDIA["air"]
+#: a declared medium this dense is a liquid (a gas at 100 bar is ~120 kg/m^3; the lightest common liquids ~600)
+LIQUID_MIN_DENSITY = 300.0
 
 
 @CAUSES.register
@@ -47,6 +51,18 @@ class FluidLoading(Cause):
             return FluidLoading((CauseParam("p_gas", "Pa", 0.0, 1.2 * P_ATM, 0.0, "residual gas (air) pressure",
                                             starts=(1e3, P_ATM)),),
                                 note="vacuum declared: the cause is a residual gas, air at pressure p (continuum flow)")
+        if med[0] >= LIQUID_MIN_DENSITY:
+            # declared liquid: its density and viscosity, nulls at the declared values (a liquid's viscosity is
+            # its least certain property: water's falls 2 % per kelvin, a 15 % glycerol solution's is 1.6 x
+            # water's at 3.7 % more density -- a load factor on both cannot follow that; the same factor on both
+            # keeps the Reynolds number and scales the load, so the excess load is inside this pair)
+            rho, eta = med
+            return FluidLoading((CauseParam("rho_f", "kg/m^3", 0.0, 3000.0, rho, "liquid density",
+                                            starts=(rho,)),
+                                 CauseParam("eta_f", "Pa s", 1e-6, 0.1, eta, "liquid viscosity", scale="log",
+                                            starts=(2.0 * eta, 0.5 * eta))),
+                                note=f"liquid declared ({problem.medium_name}): its density and viscosity, "
+                                     "nulls at the declared values")
         c = FluidLoading((CauseParam("load_factor", "1", 0.0, 30.0, 1.0,
                                      "hydrodynamic load / that of the declared medium", starts=(3.0,)),),
                          note=f"medium declared ({problem.medium_name}): the cause is an excess load on it")
