@@ -53,12 +53,14 @@ def _balance(L, A, mu, d, theta):
 
 def make_loop_case(folder: Path, seed: int, effect: str | None,
                    load_factors: tuple[float, ...] | None = None,
-                   adhesion_ratio: float | None = None) -> tuple[Path, dict]:
+                   adhesion_ratio: float | None = None, drift_rate: float = 0.0) -> tuple[Path, dict]:
     """One loop record. ``load_factors``: the scans' loads as multiples of the drawn load ``L`` (cycled over
     the scans, at least one scan each; default: every scan at ``L``, the draws of earlier sessions).
     ``adhesion_ratio``: the adhesion load as a multiple of ``L`` instead of the drawn 0-0.5 (0: none).
     ``effect``: None (flat surface), ``"surface-slope"`` (relief), ``"adhesion-load"`` (flat; the adhesion
-    is the hidden effect, which scans at two loads can show)."""
+    is the hidden effect, which scans at two loads can show). ``drift_rate`` [N/s]: the lateral channel's zero
+    drifts linearly in time on one clock through the record (trace, retrace, next line; a ``time_s`` column is
+    then written, each sample at the middle of its interval); 0: no drift and no time column, as before."""
     rng = np.random.default_rng([seed, 23])
     n_scans = int(rng.integers(1, 4))
     factors = tuple(load_factors) if load_factors else (1.0,)
@@ -82,6 +84,8 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     dx = x[1] - x[0]
     sub = (np.arange(8) + 0.5) / 8 - 0.5
     rows = []
+    clock = 0.0
+    dt = (length / (n - 1)) / speed
     flat = effect in (None, "adhesion-load")
     tilt = rng.uniform(-0.01, 0.01)
     loads = [L * factors[(sid - 1) % len(factors)] for sid in range(1, n_scans + 1)]
@@ -100,19 +104,27 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
                 hrec[:lag] = h_pts[:lag] if d > 0 else hrec[:lag]
                 hrec[-lag:] = h_pts[-lag:] if d < 0 else hrec[-lag:]
             hrec = hrec + h_noise * rng.standard_normal(n)
-            order = range(n) if d > 0 else range(n - 1, -1, -1)
-            rows += [(sid, x[j], sig[j], hrec[j]) for j in order]
+            order = list(range(n) if d > 0 else range(n - 1, -1, -1))
+            t_rec = clock + (np.arange(n) + 0.5) * dt
+            clock += n * dt
+            rows += [(sid, x[j], sig[j] + drift_rate * t_rec[k], hrec[j], t_rec[k]) for k, j in enumerate(order)]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     name = f"loop_{seed}"
     with open(folder / f"{name}.csv", "w") as fh:
-        fh.write("scan,position_m,lateral_force_N,height_m\n")
-        fh.writelines(f"{s},{xx:.9e},{f:.9e},{h:.9e}\n" for s, xx, f, h in rows)
+        if drift_rate:
+            fh.write("scan,position_m,lateral_force_N,height_m,time_s\n")
+            fh.writelines(f"{s},{xx:.9e},{f:.9e},{h:.9e},{t:.9e}\n" for s, xx, f, h, t in rows)
+        else:
+            fh.write("scan,position_m,lateral_force_N,height_m\n")
+            fh.writelines(f"{s},{xx:.9e},{f:.9e},{h:.9e}\n" for s, xx, f, h, _ in rows)
     scans = "".join(f"[[scans]]\nid = {s}\nspeed = {speed:.6e}\nload = {loads[s - 1]:.6e}\n" for s in range(1, n_scans + 1))
     (folder / f"{name}.toml").write_text(
         f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "interval-mean"\n'
         f"[lever]\nk_x = {k_x:.6g}\n[medium]\nname = \"air\"\n{scans}")
     params = {"c_slope": g} if effect == "surface-slope" else {"n_adh": A} if effect == "adhesion-load" else {}
-    truth = {"effect": effect, "params": params, "g": g, "mu": mu0, "A": A, "L": L,
+    if drift_rate:
+        params = {**params, "drift": drift_rate * (2 * n - 1) * dt}  # over one scan, its first to its last sample
+    truth = {"effect": effect, "params": params, "drift_rate": drift_rate, "g": g, "mu": mu0, "A": A, "L": L,
              "contrast": contrast, "sigma": sigma, "loads": loads, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
     return folder / f"{name}.toml", truth

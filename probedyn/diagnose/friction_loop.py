@@ -45,7 +45,7 @@ import numpy as np
 from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData
-from probedyn.diagnose.friction import RTOL, _ffm, _scatter, bind_scans, clipped_starts, scan_groups
+from probedyn.diagnose.friction import RTOL, _ffm, _scatter, bind_scans, clipped_starts, drift_clock, scan_groups
 from probedyn.schemes.ffm import line_scan_path
 
 __all__ = ["FrictionLoopProblem", "LoopState", "steady_friction", "slope_force"]
@@ -65,6 +65,7 @@ class LoopState:
     slope_c: float = 0.0  # coupling of the surface slope (surface-slope cause; 0: none)
     contrast: float = 0.0  # relative friction change from the lowest to the highest relief (friction-contrast)
     n_adh: float = 0.0  # the adhesion load of Derjaguin's law [N] (adhesion-load cause)
+    drift: float = 0.0  # the lateral channel's drift over the longest scan [N] (force-offset-drift cause)
     transforms: list = field(default_factory=list)  # f(problem, F) -> F, applied last
     #: the load scales the friction (Amontons), not the FFM's corrugation (adhesion-load reads this)
     corrugation_follows_load: ClassVar[bool] = False
@@ -229,6 +230,13 @@ class FrictionLoopProblem:
                 self.relief, self.relief_range = (rel - lo) / (hi - lo), float(hi - lo)
         self.slices, self.groups, labels = scan_groups(sc)
         self.group_labels = labels
+        # the lateral channel's drift, linear in time on the record's clock (as for stick-slip records,
+        # :func:`~probedyn.diagnose.friction.drift_clock`): the drift parameter is its change over the longest scan
+        self.drift_clock, t_drift = drift_clock(sc)
+        self.t_ref = max(max(float(s.time[-1] - s.time[0]), 1e-12) for s in sc)
+        self.drift_x = np.empty(self.n)
+        for i, sl in enumerate(self.slices):
+            self.drift_x[sl] = t_drift[i] / self.t_ref
         # each line's trace and retrace as recorded, against the stated noise (:mod:`probedyn.diagnose.noise`)
         self.sequences = [np.arange(sl.start, sl.stop) for sl in self.slices]
         self.noise_stated = bool(data.noise_stated)
@@ -379,6 +387,8 @@ class FrictionLoopProblem:
         else:
             F = self.direction * Fk
         F = F + st.offset
+        if st.drift != 0.0:
+            F = F + st.drift * self.drift_x
         for tf in st.transforms:
             F = tf(self, F)
         return F
