@@ -1099,6 +1099,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     # matched modes); the labels may come from a hypothesis with its own scale s
     s_nominal = scored[0][3]
     prob.peaks = {"log_scatter": s_log, "resolution_Hz": df, "frequency_scale": s_nominal, "peaks": table,
+                  "line_shape": shape.name, "joint_fits": sum(1 for t in table if t.get("joint_with")),
                   "labels_from": {"hypothesis": best["cause"] or "nominal probe", "values": best["values"], "scale": s,
                                   "hypotheses_tried": len(hyps), "labellings_compared": len(options),
                                   "labelling_scores": [x[0] for x in scores] or None,

@@ -102,7 +102,10 @@ def summary(res: dict[str, Any]) -> str:
     if res.get("peaks"):
         rej = [p for p in res["peaks"]["peaks"] if not p["accepted"]]
         acc = [p for p in res["peaks"]["peaks"] if p["accepted"]]
-        lines.append("peaks: " + ", ".join(f"{p['family']} {p['order']} at {p['f0_Hz']:.6g} Hz" for p in acc))
+        shape = res["peaks"].get("line_shape", "SHO")
+        lines.append("peaks: " + ", ".join(f"{p['family']} {p['order']} at {p['f0_Hz']:.6g} Hz" for p in acc)
+                     + (f" ({shape} lines" + (", fitted together" if res["peaks"].get("joint_fits") else "") + ")"
+                        if shape != "SHO" or res["peaks"].get("joint_fits") else ""))
         for p in rej:
             lines.append(f"  rejected peak at {p['f0_Hz']:.6g} Hz: {'; '.join(p['reasons'])}")
         for p in acc:
