@@ -102,6 +102,11 @@ def bin_width(freq: np.ndarray, f: float) -> float:
     return float(np.median(d)) if len(d) else float(np.median(np.diff(freq)))
 
 
+def _amplitude(ft: dict) -> float:
+    """The low-frequency level ``A`` of a fitted line (its area is ``A pi f0 Q / 2``)."""
+    return ft["area_m2"] * 2 / (math.pi * ft["f0_Hz"] * ft["Q"])
+
+
 def log_scatter(psd: np.ndarray, averages: int | None) -> float:
     """Standard deviation of ln(PSD) of an averaged periodogram: about 1/sqrt(n_avg); without
     the number of averages, from the point-to-point scatter (robust)."""
@@ -258,13 +263,13 @@ def fit_line(freq: np.ndarray, psd: np.ndarray, i: int, s_log: float, averages: 
         lo[1] = math.log10(f0 / (NARROW_MAX_BINS * df))
         hi[1] = max(hi[1], lo[1] + 1)
     tails = 0.0 if lines is None else lines[sel]
-    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails, shape)
+    r = _line_fit(fw, pw, u0, lo, hi, [fwhm, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails, shape)
     return _line_result(r, fw, freq, (fw[0], fw[-1]))
 
 
-def _sho_fit(fw, pw, u0, lo, hi, x_scale, s_log: float, averages: int | None, tails=0.0, shape=SHO):
-    """One SHO line ``u = (f0, log10 Q, log10 A, log10 white, log10 1/f at fw[0])`` on a white + 1/f background
-    (plus fixed ``tails``) fitted to the periodogram ``pw`` at ``fw``: Gamma deviance with the number of averages,
+def _line_fit(fw, pw, u0, lo, hi, x_scale, s_log: float, averages: int | None, tails=0.0, shape=SHO):
+    """One line of ``shape`` (the SHO by default), ``u = (f0, log10 Q, log10 A, log10 white, log10 1/f at fw[0])``,
+    on a white + 1/f background (plus fixed ``tails``) fitted to the periodogram ``pw`` at ``fw``: Gamma deviance with the number of averages,
     else log-space least squares with the scatter ``s_log``."""
     wf0 = fw[0]
 
@@ -298,17 +303,17 @@ def _refit_line(freq, psd, first: dict, s_log: float, averages: int | None, othe
         wo = 3 * o["f0_Hz"] / o["Q"] if wide else 6 * dfo
         keep &= np.abs(fw - o["f0_Hz"]) > max(wo, 3 * dfo)
         if wide:
-            tails += shape.psd(fw, o["f0_Hz"], o["Q"], o["area_m2"] * 2 / (math.pi * o["f0_Hz"] * o["Q"]))
+            tails += shape.psd(fw, o["f0_Hz"], o["Q"], _amplitude(o))
     # only the core of this line must stay (+- 2 widths, at least 12 bins): else the first fit stands
     if not near or np.count_nonzero(keep & (np.abs(fw - f0) <= 2 * fwhm)) < 12:
         return first
     fw, pw, tails = fw[keep], pw[keep], tails[keep]
-    A0 = first["area_m2"] * 2 / (math.pi * f0 * Q0)
+    A0 = _amplitude(first)
     B0, B1 = first["white_floor"], max(first["one_over_f_at_window_start"], 1e-300)
     u0 = np.array([f0, math.log10(Q0), math.log10(A0), math.log10(B0), math.log10(B1)])
     lo = [f0 - 2 * fwhm, math.log10(0.5), u0[2] - 8, u0[3] - 8, u0[4] - 8]
     hi = [f0 + 2 * fwhm, u0[1] + 4, u0[2] + 8, u0[3] + 4, u0[4] + 4]
-    r = _sho_fit(fw, pw, u0, lo, hi, [fwhm / 4, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails, shape)
+    r = _line_fit(fw, pw, u0, lo, hi, [fwhm / 4, 0.3, 0.3, 0.3, 0.3], s_log, averages, tails, shape)
     return _line_result(r, fw, freq, first["window_Hz"], others_masked=True)
 
 
@@ -349,7 +354,7 @@ def fit_lines(freq: np.ndarray, psd: np.ndarray, peaks: list[tuple[int, str]], s
                 first[i] = fit_line(freq, clean if kind == "broad" else psd, i, s_log, averages, shape=shape)
             except ValueError:
                 continue
-    lines = sum((shape.psd(freq, b["f0_Hz"], b["Q"], b["area_m2"] * 2 / (math.pi * b["f0_Hz"] * b["Q"]))
+    lines = sum((shape.psd(freq, b["f0_Hz"], b["Q"], _amplitude(b))
                  for b in first.values() if np.isfinite(b["Q"])), np.zeros(len(freq)))
     fits = []
     for i, kind in peaks:
@@ -378,11 +383,6 @@ def refit_with_neighbours(freq, psd, fits: list[dict], s_log: float, averages: i
         except ValueError:
             out.append(ft)
     return out
-
-
-def _amplitude(ft: dict) -> float:
-    """The low-frequency level ``A`` of a fitted line (its area is ``A pi f0 Q / 2``)."""
-    return ft["area_m2"] * 2 / (math.pi * ft["f0_Hz"] * ft["Q"])
 
 
 def coupled_groups(fits: list[dict], shape=SHO) -> list[list[int]]:
@@ -570,8 +570,8 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     tails = np.zeros(len(fw))
     for o in others or ():
         if o is not single and np.isfinite(o.get("Q", math.nan)) and abs(o["f0_Hz"] - f0) >= fwhm:
-            tails += shape.psd(fw, o["f0_Hz"], o["Q"], o["area_m2"] * 2 / (math.pi * o["f0_Hz"] * o["Q"]))
-    A0 = single["area_m2"] * 2 / (math.pi * f0 * Q0)  # sho_psd amplitude of the single line
+            tails += shape.psd(fw, o["f0_Hz"], o["Q"], _amplitude(o))
+    A0 = _amplitude(single)  # the line's amplitude
     B0, B1 = single["white_floor"], single["one_over_f_at_window_start"]
 
     def model(u):
