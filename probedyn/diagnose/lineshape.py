@@ -72,7 +72,6 @@ class FluidLine:
         g = sader_gamma(2 * math.pi * np.exp(self._lnf), width, rho_f, eta_f)
         self._gr, self._gi = np.asarray(g.real, float), np.asarray(g.imag, float)
         self.a = float(a)
-        self.width, self.rho_f, self.eta_f = float(width), float(rho_f), float(eta_f)
 
     def gamma(self, f):
         lf = np.log(np.asarray(f, float))
@@ -84,8 +83,8 @@ class FluidLine:
         gr0, gi0 = self.gamma(f0)
         mu0 = 1.0 + self.a * float(gr0)
         fv2 = f0**2 * mu0  # the unloaded (vacuum) frequency squared, [Hz^2]
-        # damping rate per unit modal mass, in Hz: c(f) / (2 pi m) = (f mu0 / (Q f0 Gamma_i(f0))) f Gamma_i(f) / f ...
-        # written so that c(f0) / (2 pi m) = f0 mu0 / Q
+        # the damping per unit modal mass in Hz, c(f) / (2 pi m), proportional to f Gamma_i(f) (the fluid's) and
+        # scaled so that c(f0) / (2 pi m) = f0 mu0 / Q (the definition of Q)
         c = (mu0 / (Q * float(gi0))) * f * gi
         c0 = f0 * mu0 / Q
         mu = 1.0 + self.a * gr
