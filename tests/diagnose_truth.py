@@ -670,9 +670,9 @@ def _langevin_kernel():
     from numba import njit
 
     @njit(cache=True)
-    def run(U0, a, k, m, gam, gvisc, kT, Vx, Vy, turns_t, turns_X, X0, Y0, x0, y0, dt, t_samp, mode, seed):
-        """Langevin tip in -U0[cos(q x) + cos(q y)] (Vy = 0: the y axis is inert), pulled by an
-        isotropic spring k from a support moving piecewise linearly in time along the scan direction
+    def run(U0, a, k, kt, m, gam, gvisc, kT, Vx, Vy, turns_t, turns_X, X0, Y0, x0, y0, dt, t_samp, mode, seed):
+        """Langevin tip in -U0[cos(q x) + cos(q y)] (Vy = 0: the y axis is inert), pulled by a
+        spring k along the scan and kt across it (the lever's two lateral stiffnesses) from a support moving piecewise linearly in time along the scan direction
         (turning times turns_t, positions turns_X along the scan); friction gam (the lever's
         damping, on the velocity relative to the support) + gvisc (the hidden viscous tip-substrate term), both with their thermal noise
         (fluctuation-dissipation, <xi xi> = 2 (gam + gvisc) k_B T). Integrator: Gronbech-Jensen &
@@ -712,11 +712,14 @@ def _langevin_kernel():
         # the lever's damping gam acts on the tip's velocity relative to the support (-gam (v - V_support),
         # as in eq. 2.13): the support's part is the force gam V_support; gvisc acts on the velocity
         # relative to the substrate
-        fx = k * (Xb - x) - U0 * q * np.sin(q * x) + gam * dirn * Vn * ux
-        fy = k * (Yb - y) - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0) + gam * dirn * Vn * uy
+        # the spring: k along the scan direction (ux, uy), kt across it (-uy, ux)
+        ds = (Xb - x) * ux + (Yb - y) * uy
+        dn = -(Xb - x) * uy + (Yb - y) * ux
+        fx = k * ds * ux - kt * dn * uy - U0 * q * np.sin(q * x) + gam * dirn * Vn * ux
+        fy = k * ds * uy + kt * dn * ux - (U0 * q * np.sin(q * y) if Vy != 0.0 else 0.0) + gam * dirn * Vn * uy
         for it in range(nsteps):
             # record the scan-direction spring force at time t
-            Fs = k * (Xb - x) * ux + k * (Yb - y) * uy
+            Fs = k * ((Xb - x) * ux + (Yb - y) * uy)
             while cur < n and t >= edges[cur + 1]:
                 cur += 1
             if cur < n and t >= edges[cur]:
@@ -738,8 +741,10 @@ def _langevin_kernel():
             s_pos = turns_X[seg] + dirn * (t - turns_t[seg]) * Vn
             Xb = X0 + s_pos * ux
             Yb = Y0 + s_pos * uy
-            fxn = k * (Xb - xn) - U0 * q * np.sin(q * xn) + gam * dirn * Vn * ux
-            fyn = k * (Yb - yn) - (U0 * q * np.sin(q * yn) if Vy != 0.0 else 0.0) + gam * dirn * Vn * uy
+            ds = (Xb - xn) * ux + (Yb - yn) * uy
+            dn = -(Xb - xn) * uy + (Yb - yn) * ux
+            fxn = k * ds * ux - kt * dn * uy - U0 * q * np.sin(q * xn) + gam * dirn * Vn * ux
+            fyn = k * ds * uy + kt * dn * ux - (U0 * q * np.sin(q * yn) if Vy != 0.0 else 0.0) + gam * dirn * Vn * uy
             vx = aa * vx + dt / (2.0 * m) * (aa * fx + fxn) + bb / m * bx
             vy = aa * vy + dt / (2.0 * m) * (aa * fy + fyn) + bb / m * by
             x, y, fx, fy = xn, yn, fxn, fyn
@@ -759,8 +764,9 @@ LANGEVIN_STEPS_PER_PERIOD = 60
 
 
 def langevin_scan(*, U0, a, k, m, Q, speed, length, n_per_period=40, T=0.0, gvisc=0.0, theta=0.0, bow=0.0,
-                  sampling="interval-mean", seed=0, phase=None):
-    """Trace and retrace of a Langevin PT tip. Returns (nominal support positions, force, times,
+                  sampling="interval-mean", seed=0, phase=None, ky_ratio=1.0):
+    """Trace and retrace of a Langevin PT tip (``ky_ratio``: the lever's stiffness across the scan over ``k``;
+    the damping is isotropic, on the velocity relative to the support). Returns (nominal support positions, force, times,
     direction). The support runs 2 periods backwards first (like the end of a previous retrace),
     then traces ``length`` and retraces it. ``bow``: the true support position is the nominal one
     bowed by the scanner nonlinearity (the written positions are the nominal ones)."""
@@ -770,7 +776,7 @@ def langevin_scan(*, U0, a, k, m, Q, speed, length, n_per_period=40, T=0.0, gvis
     rng = np.random.default_rng(seed)
     gam = math.sqrt(m * k) / Q
     eta = 4 * math.pi**2 * U0 / (k * a * a)
-    T0 = 2 * math.pi * math.sqrt(m / (k * (1 + eta)))
+    T0 = 2 * math.pi * math.sqrt(m / (k * (max(ky_ratio, 1.0) + eta)))
     dt = T0 / LANGEVIN_STEPS_PER_PERIOD
     n = int(round(length / a * n_per_period))
     Xn = np.linspace(0.0, length, n)  # nominal support positions of the samples (trace)
@@ -796,7 +802,7 @@ def langevin_scan(*, U0, a, k, m, Q, speed, length, n_per_period=40, T=0.0, gvis
     x0 = round(start[0] / a) * a
     y0 = round(start[1] / a) * a if theta else 0.0
     kT = 1.380649e-23 * T
-    F = _LANGEVIN(U0, a, k, m, gam, gvisc, kT, vx, vy if theta else 0.0, tt, s_turns, X0, 0.0, x0, y0, dt, t_samp,
+    F = _LANGEVIN(U0, a, k, ky_ratio * k, m, gam, gvisc, kT, vx, vy if theta else 0.0, tt, s_turns, X0, 0.0, x0, y0, dt, t_samp,
                   1 if sampling == "interval-mean" else 0, int(seed) % (2**31))
     pos = np.concatenate([Xn, Xn[::-1][1:]])
     direction = np.concatenate([np.ones(n), -np.ones(n - 1)])
@@ -816,7 +822,10 @@ def draw_friction_effect(effect: str | None, rng) -> dict:
     if effect == "scanner-nonlinearity":
         return {"bow": float(rng.choice([-1, 1]) * rng.uniform(0.03, 0.2))}
     if effect == "lattice-misalignment":
-        return {"theta_deg": float(rng.uniform(6.0, 35.0))}
+        # the lever's stiffness across the scan: ~0.65 k_x for a rectangular lever scanned across its axis,
+        # higher where the tip and contact are stiffer across than the torsion along (session 48: the blind
+        # friction set's 2D tips have 15 k_x)
+        return {"theta_deg": float(rng.uniform(6.0, 35.0)), "ky_ratio": float(10 ** rng.uniform(np.log10(0.5), np.log10(20.0)))}
     if effect == "force-calibration":
         return {"g": float(10 ** (rng.choice([-1, 1]) * rng.uniform(0.05, 0.3)))}
     return {}
@@ -850,7 +859,8 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
         U0 = u0 * (N + params.get("n_adh", 0.0))
         runs.append(langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
                                   gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
-                                  bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid))
+                                  bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid,
+                                  ky_ratio=params.get("ky_ratio", 1.0)))
     # the detector drifts at one rate, drift / (the longest scan's duration); each scan's clock restarts (its
     # times written from 0), so the drift is about each scan's middle (session 30: before, the same amount over
     # every scan, a scan ten times faster drifting ten times faster -- the diagnosis' own old model)

@@ -41,7 +41,8 @@ Tables:
   probe's declared length, for a load at its free end along the thickness (a reference lever, a force
   standard; not a thermal tune, which infers it from mode 1), ``sigma`` [N/m] its 1-sigma uncertainty
   (default :data:`STATIC_K_REL_DEFAULT` = 5 % of it).
-* friction: ``[lever]`` ``k_x`` [N/m], ``m_x`` [kg], ``c_x`` [N s/m] or ``Q_x``; ``[sample]``
+* friction: ``[lever]`` ``k_x`` [N/m], optionally ``k_y`` [N/m] (the stiffness across the scan), ``m_x`` [kg],
+  ``c_x`` [N s/m] or ``Q_x``; ``[sample]``
   ``lattice`` [m]; ``[measurement] sampling`` = ``point`` or ``interval-mean``.
 * force: ``[lever]`` ``k`` [N/m], ``sensitivity`` [m/V] (for deflection_V); ``[tip]``
   ``radius`` [m], ``E``, ``nu``; ``[sample]`` ``E``, ``nu``.
@@ -86,7 +87,7 @@ TABLES: dict[str, dict[str, tuple[str, ...]]] = {
               "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force", "correlation"),
               "force": ("force", "deflection", "correlation")},
     "baseline": {"*": ("free",)},
-    "lever": {"friction": ("k_x", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
+    "lever": {"friction": ("k_x", "k_y", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
     "sample": {"friction": ("lattice",), "force": ("E", "nu")},
     "tip": {"force": ("radius", "E", "nu")},
     "static": {"*": ("spring_constant", "sigma")},
@@ -249,6 +250,7 @@ class FrictionScan:
 class FrictionData(Measurement):
     scans: list[FrictionScan] = field(default_factory=list)
     k_x: float = 1.0
+    k_y: float | None = None  # the lever's lateral stiffness across the scan [N/m], where declared
     m_x: float | None = None
     c_x: float | None = None
     Q_x: float | None = None

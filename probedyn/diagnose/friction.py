@@ -94,6 +94,7 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
     d = read_csv(csv, ["scan", "position_m", "lateral_force_N"], ["time_s", "height_m"])
     lev = meta.get("lever", {})
     k_x = _num(meta, "lever", "k_x", side, positive=True, lo=1e-4, hi=1e4, unit="N/m")
+    k_y = _num(meta, "lever", "k_y", side, positive=True, lo=1e-4, hi=1e6, unit="N/m") if "k_y" in lev else None
     m_x = _num(meta, "lever", "m_x", side, default=0.0, lo=0.0, hi=1e-3, unit="kg") or None
     c_x = _num(meta, "lever", "c_x", side, default=-1.0) if "c_x" in lev else None
     if c_x is not None and c_x < 0:
@@ -174,8 +175,8 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
     regime = _regime(scans, lattice, sampling, side)
     if not stated:
         sig = _scatter(scans)
-    return FrictionData(**common, scans=scans, k_x=k_x, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice, sigma_force=sig,
-                        sampling=sampling, noise_stated=stated, regime=regime)
+    return FrictionData(**common, scans=scans, k_x=k_x, k_y=k_y, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice,
+                        sigma_force=sig, sampling=sampling, noise_stated=stated, regime=regime)
 
 
 #: the most support travel between samples, in lattice periods, for a record the stick-slip baseline can be
@@ -235,6 +236,7 @@ class FrictionState:
     drift: float = 0.0  # [N over the longest scan: the detector's drift rate times that scan's duration]
     bow: float = 0.0  # scanner nonlinearity
     theta: float = 0.0  # scan angle to the lattice rows [rad]
+    ky_ratio: float = 1.0  # the lever's stiffness across the scan over k_x (1: the lattice axes decouple)
     gain: float = 1.0  # lateral-force calibration factor
     thermal: tuple[float, float] | None = None  # (T [K], attempt frequency [Hz])
     transforms: list = field(default_factory=list)  # f(problem, scan, F) -> F, applied last
@@ -425,50 +427,40 @@ def _centre(scan: FrictionScan) -> float:
     return 0.5 * (float(scan.position.min()) + float(scan.position.max()))
 
 
-def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
-                  train: int = 0, var_out: list | None = None) -> np.ndarray:
-    """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
-    the scan's samples, for lattice registry ``phis[train]``; ``phis[2]`` (if given) is the well the tip
-    starts the pre-roll in, in lattice periods from the support (0: under it; at rest). With thermally
-    activated slips the force is the mean over the slip points' distribution and ``var_out`` (a list)
-    receives its variance per sample (the stochastic slip-position scatter)."""
-    X = scan.position
-    Xc = _centre(scan)
-    if st.bow:
-        # the bow's displacement less its value at the centre (a constant shift is a registry change,
-        # and the registry is profiled at the centre: referred to the ends, bow and registry trade off
-        # and the alternating fit stalls in another basin)
-        x0, x1 = X.min(), X.max()
-        X = X + st.bow * ((X - x0) * (x1 - X) / max(x1 - x0, 1e-30) - 0.25 * (x1 - x0))
-    w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
-    Xl = (X - Xc) * w - phis[train]  # the registry is the lattice's offset at the scan's centre
-    V = scan.speed * w
-    N = max(scan.load + st.n_adh, 0.0)
-    U0 = st.u0 * N
-    ffm = _ffm(data, U0, st.a, st.gamma)
-    d0 = scan.direction[0]
-    cuts = np.nonzero(np.diff(scan.direction) != 0)[0] + 1
-    starts = np.concatenate([[0], cuts])
-    ends = np.concatenate([cuts, [len(X)]])
-    turns = [Xl[0] - d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
-    x0 = turns[0] + (round(phis[2]) * st.a if len(phis) > 2 else 0.0)
-    # resolve the stick branches between samples: the step at most half a sample interval
-    dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
-    hmax = hmax_frac * dX / max(V, 1e-30)
-    slips = None
-    if st.thermal is not None and U0 > 0:
-        res, slips, scat = _thermal_path(ffm, turns, V, st, hmax, x0)
-    else:
-        res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
-    F = np.empty(len(X))
-    # split the model output into its monotone segments
-    seg_model = _segments(res, len(turns) - 2)  # the pre-roll runs on into the first segment
+def _coupled(st: FrictionState) -> bool:
+    """A misaligned scan whose lever holds the tip across the scan with another stiffness than along it: the
+    lattice axes do not decouple (:func:`simulate_scan_2d`)."""
+    return st.theta > 1e-6 and st.ky_ratio != 1.0
+
+
+def _polish(fun, x: float, cx: float, steps) -> tuple[float, float]:
+    """Minimise a rugged 1D ``fun`` from ``x`` (value ``cx``): a parabola through three points per step size,
+    accepted where it lowers the value (else the better neighbour)."""
+    for h in steps:
+        cm, cp = fun(x - h), fun(x + h)
+        den = cm - 2 * cx + cp
+        if den > 0:
+            xn = x + float(np.clip(0.5 * h * (cm - cp) / den, -2 * h, 2 * h))
+            cn = fun(xn)
+            if cn < cx:
+                x, cx = xn, cn
+        elif min(cm, cp) < cx:
+            x, cx = (x - h, cm) if cm < cp else (x + h, cp)
+    return x, cx
+
+
+def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str) -> np.ndarray:
+    """The model's lateral force at a scan's samples from a path result along the support coordinate ``Xl``:
+    the value at the sample's position (``sampling = "point"``) or its mean over the sample's interval, per
+    monotone segment (``starts``/``ends``: the data's segments; the pre-roll runs on into the first)."""
+    F = np.empty(len(Xl))
+    seg_model = _segments(res, n_seg)
     for j, (s0, e0) in enumerate(zip(starts, ends)):
         mb, mf, mt = seg_model[j]
         xs = Xl[s0:e0]
         order = np.argsort(mb)
         b, fz = mb[order], mf[order]
-        if data.sampling == "point" or len(xs) < 2:
+        if sampling == "point" or len(xs) < 2:
             F[s0:e0] = np.interp(xs, b, fz)
         else:
             cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
@@ -479,6 +471,86 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
             Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
             with np.errstate(invalid="ignore", divide="ignore"):
                 F[s0:e0] = np.where(np.abs(width) > 0, (Ihi - Ilo) / np.where(width == 0, 1.0, width), np.interp(xs, b, fz))
+    return F
+
+
+def _support(scan: FrictionScan, st: FrictionState) -> np.ndarray:
+    """The support's true positions at a scan's samples: the recorded ones bowed by the scanner (``st.bow``)."""
+    X = scan.position
+    if st.bow:
+        # the bow's displacement less its value at the centre (a constant shift is a registry change,
+        # and the registry is profiled at the centre: referred to the ends, bow and registry trade off
+        # and the alternating fit stalls in another basin)
+        x0, x1 = X.min(), X.max()
+        X = X + st.bow * ((X - x0) * (x1 - X) / max(x1 - x0, 1e-30) - 0.25 * (x1 - x0))
+    return X
+
+
+def _segment_edges(scan: FrictionScan):
+    """First and one-past-last sample of each monotone segment (trace, retrace, ...) of a scan."""
+    cuts = np.nonzero(np.diff(scan.direction) != 0)[0] + 1
+    return np.concatenate([[0], cuts]), np.concatenate([cuts, [len(scan.position)]])
+
+
+def simulate_scan_2d(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5
+                     ) -> np.ndarray:
+    """Model lateral force of a misaligned scan whose lever holds the tip with ``k_y = st.ky_ratio k_x`` across
+    the scan: the two lattice axes coupled through the lever (:func:`probedyn.schemes.ffm_lattice2d.lattice2d_path`;
+    for ``k_y = k_x`` they decouple into the two trains of :func:`simulate_scan`). ``phis[0]``, ``phis[1]``: the
+    lattice's registry along its two axes at the scan's centre, as the trains'. The damping across the scan is
+    the one along it, ``c_y = c_x``, as in the source's Table 2.1 (c_x = c_y = 7e-9 N s/m with k_y = k_x / 2):
+    the dissipation is the contact's and the medium's, not the lever's bending. Athermal: a 2D tip's activated
+    slips are not modelled."""
+    from probedyn.schemes.ffm_lattice2d import lattice2d_path
+
+    Xs = _support(scan, st) - _centre(scan)
+    V = scan.speed
+    N = max(scan.load + st.n_adh, 0.0)
+    U0 = max(st.u0 * N, 1e-30)
+    cp = _ffm(data, U0, st.a, st.gamma).cantilever
+    k, m, c = cp["k_x"], cp["m_x"], cp["c_x"]
+    ky = st.ky_ratio * k
+    starts, ends = _segment_edges(scan)
+    d0 = scan.direction[0]
+    # the pre-roll carries each lattice axis through PREROLL periods of its own, as the decoupled trains' do
+    # (the y axis's a / sin(theta) along the scan): the model is then continuous into theirs at k_y = k_x
+    pre = PREROLL * st.a / max(min(math.sin(st.theta), math.cos(st.theta)), 1e-3)
+    turns = [Xs[0] - d0 * pre, Xs[0]] + [Xs[e - 1] for e in ends]
+    dX = float(np.median(np.abs(np.diff(Xs)))) if len(Xs) > 1 else st.a
+    res = lattice2d_path(U0=U0, a=st.a, theta=st.theta, k_x=k, k_y=ky, m=m, c_x=c, c_y=c, turns=turns, speed=V,
+                         phases=(phis[0], phis[1]), gamma=max(st.gamma, 0.0), hmax=hmax_frac * dX / max(V, 1e-30),
+                         rtol=RTOL, atol_rel=RTOL, atol_v=100 * V)
+    return _sample_path(res, Xs, starts, ends, len(turns) - 2, data.sampling)
+
+
+def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
+                  train: int = 0, var_out: list | None = None) -> np.ndarray:
+    """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
+    the scan's samples, for lattice registry ``phis[train]``; ``phis[2]`` (if given) is the well the tip
+    starts the pre-roll in, in lattice periods from the support (0: under it; at rest). With thermally
+    activated slips the force is the mean over the slip points' distribution and ``var_out`` (a list)
+    receives its variance per sample (the stochastic slip-position scatter)."""
+    X = _support(scan, st)
+    Xc = _centre(scan)
+    w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
+    Xl = (X - Xc) * w - phis[train]  # the registry is the lattice's offset at the scan's centre
+    V = scan.speed * w
+    N = max(scan.load + st.n_adh, 0.0)
+    U0 = st.u0 * N
+    ffm = _ffm(data, U0, st.a, st.gamma)
+    d0 = scan.direction[0]
+    starts, ends = _segment_edges(scan)
+    turns = [Xl[0] - d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
+    x0 = turns[0] + (round(phis[2]) * st.a if len(phis) > 2 else 0.0)
+    # resolve the stick branches between samples: the step at most half a sample interval
+    dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
+    hmax = hmax_frac * dX / max(V, 1e-30)
+    slips = None
+    if st.thermal is not None and U0 > 0:
+        res, slips, scat = _thermal_path(ffm, turns, V, st, hmax, x0)
+    else:
+        res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
+    F = _sample_path(res, Xl, starts, ends, len(turns) - 2, data.sampling)
     var = np.zeros(len(X))
     if slips:
         seg_of = np.zeros(len(X), int)
@@ -988,6 +1060,8 @@ class FrictionProblem:
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
         st = FrictionState(u0=values["u0"], a=values["a"])
+        if self.data.k_y:
+            st.ky_ratio = self.data.k_y / self.data.k_x  # declared: the lever's own
         for c in causes:
             c.effect(values, st)
         return st
@@ -1034,7 +1108,7 @@ class FrictionProblem:
                         / max(s.speed * w, 1e-300) for s in self.data.scans for w in ws)
             th = (float(th[0]), float(th[1])) if bound >= THERMAL_MIN_HAZARD else None
         return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.offset), float(st.drift),
-                float(st.bow), float(st.theta), float(st.gain), th)
+                float(st.bow), float(st.theta), float(st.gain), th, float(st.ky_ratio) if _coupled(st) else 1.0)
 
     def _mask_key(self):
         return None if self.train_mask is None else hash(np.asarray(self.train_mask, bool).tobytes())
@@ -1043,6 +1117,9 @@ class FrictionProblem:
         """Model lateral force of scan i at registry ``phis`` (both lattice trains, gain, offset,
         drift and transforms applied) and its variance from stochastic slip points."""
         s = self.data.scans[i]
+        if _coupled(st):
+            return self._combine(i, st, [simulate_scan_2d(self.data, st, s, phis)], [np.zeros(len(s.force))],
+                                 weights=(1.0,))
         trains = [0] + ([1] if st.theta > 1e-6 else [])
         parts = []
         vs: list = []
@@ -1050,12 +1127,12 @@ class FrictionProblem:
             parts.append(simulate_scan(self.data, st, s, phis, train=tr, var_out=vs))
         return self._combine(i, st, parts, vs)
 
-    def _combine(self, i: int, st: FrictionState, parts, vs) -> tuple[np.ndarray, np.ndarray]:
+    def _combine(self, i: int, st: FrictionState, parts, vs, weights=None) -> tuple[np.ndarray, np.ndarray]:
         """Lateral force of scan i and its variance from the simulated trains ``parts`` (x, then y
-        for a misaligned scan) and their slip-point variances ``vs``: weights cos/sin theta, gain,
-        offset, drift and transforms."""
+        for a misaligned scan) and their slip-point variances ``vs``: weights cos/sin theta (``weights``: others,
+        e.g. 1 for the coupled trains' force along the scan), gain, offset, drift and transforms."""
         s = self.data.scans[i]
-        w = [math.cos(st.theta), math.sin(st.theta)]
+        w = [math.cos(st.theta), math.sin(st.theta)] if weights is None else list(weights)
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
         F = F + self._zero(i, st)
@@ -1102,7 +1179,8 @@ class FrictionProblem:
                 for tr in trains:
                     m0 = simulate_scan(self.data, st, s, [0.0, 0.0], train=tr)
                     phis[tr] = self._align(i, st, tr, m0, s.force)
-                phis = self._profile_two_trains(i, st, phis)
+                phis = self._profile_two_trains(i, replace(st, ky_ratio=1.0), phis)
+                phis = self._profile_coupled(i, st, phis)
             known = self._registry.get((mkey, i, mk)) if mkey is not None else None
             if known is not None:
                 c2 = self._scan_chi2(i, *self._scan_model(i, st, phis))
@@ -1183,27 +1261,36 @@ class FrictionProblem:
         def chi2(fx, fy) -> float:
             return self._scan_chi2(i, *self._combine(i, st, (fx[0], fy[0]), (fx[1], fy[1])))
 
-        def polish(fun, x: float, cx: float, steps) -> tuple[float, float]:
-            for h in steps:
-                cm, cp = fun(x - h), fun(x + h)
-                den = cm - 2 * cx + cp
-                if den > 0:
-                    xn = x + float(np.clip(0.5 * h * (cm - cp) / den, -2 * h, 2 * h))
-                    cn = fun(xn)
-                    if cn < cx:
-                        x, cx = xn, cn
-                elif min(cm, cp) < cx:
-                    x, cx = (x - h, cm) if cm < cp else (x + h, cp)
-            return x, cx
-
         fx = train(0, phis[0])
         grid = phis[1] + a * np.arange(Y_GRID) / Y_GRID
         fys = [train(1, g) for g in grid]
         c = [chi2(fx, fy) for fy in fys]
         j = int(np.argmin(c))
-        p1, c1 = polish(lambda x: chi2(fx, train(1, x)), float(grid[j]), c[j], (a / (2 * Y_GRID), a / (8 * Y_GRID), 1e-3 * a))
+        p1, c1 = _polish(lambda x: chi2(fx, train(1, x)), float(grid[j]), c[j], (a / (2 * Y_GRID), a / (8 * Y_GRID), 1e-3 * a))
         fy = train(1, p1)
-        p0, _ = polish(lambda x: chi2(train(0, x), fy), float(phis[0]), c1, (4e-3 * a, 1e-3 * a))
+        p0, _ = _polish(lambda x: chi2(train(0, x), fy), float(phis[0]), c1, (4e-3 * a, 1e-3 * a))
+        return [p0, p1]
+
+    def _profile_coupled(self, i: int, st: FrictionState, phis) -> list[float]:
+        """Registries of a misaligned scan from the decoupled trains' (``phis``, :meth:`_profile_two_trains`): the
+        best of ``Y_GRID`` registries of the y axis over one period with the x axis's held, then both polished by
+        parabolas, on the scan's own model (the lattice axes coupled where ``k_y != k_x``). On an isotropic lever
+        too, so that the profile is one procedure on either side of ``k_y = k_x`` (the coupled model is
+        continuous into the decoupled one; the trains' profile, polishing the x registry last on a short step,
+        leaves it up to a tenth of a period from the joint optimum)."""
+        s = self.data.scans[i]
+        a = st.a
+
+        def chi2(p0: float, p1: float) -> float:
+            return self._scan_chi2(i, *self._scan_model(i, st, [p0, p1]))
+
+        p0 = float(phis[0])
+        grid = float(phis[1]) + a * np.arange(Y_GRID) / Y_GRID
+        c = [chi2(p0, g) for g in grid]
+        j = int(np.argmin(c))
+        p1, c1 = _polish(lambda x: chi2(p0, x), float(grid[j]), c[j], (a / (2 * Y_GRID), a / (8 * Y_GRID), 1e-3 * a))
+        p0, c0 = _polish(lambda x: chi2(x, p1), p0, c1, (a / (2 * Y_GRID), a / (8 * Y_GRID), 1e-3 * a))
+        p1, _ = _polish(lambda x: chi2(p0, x), p1, c0, (a / (8 * Y_GRID), 1e-3 * a))
         return [p0, p1]
 
     def _fit_mask(self, i: int) -> np.ndarray:
