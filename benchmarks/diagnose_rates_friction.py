@@ -10,8 +10,9 @@ change of the diagnosis only reruns the diagnosis.
 
 Truth (``tests/diagnose_truth.py``, its own code path, not the diagnosis integrator): a Langevin
 Prandtl-Tomlinson tip with inertia and thermal noise (Gronbech-Jensen-Farago integrator, 60
-steps per well period), pulled by the lever spring k = 1 N/m (m = 1e-12 kg, Q = 1, damping on the
-velocity relative to the support) over -U0 [cos(q x) + cos(q y)], trace and retrace of 8 lattice
+steps per well period), pulled by the lever spring k = 1 N/m along the scan (m = 1e-12 kg, Q = 1, damping on the
+velocity relative to the support; across the scan k_y = k on aligned scans, drawn 0.5-20 k on misaligned ones,
+since session 48) over -U0 [cos(q x) + cos(q y)], trace and retrace of 8 lattice
 periods (40 interval-mean samples per period), three scans (speed v, 10 v at load N; v at 2 N),
 eta = 3-6, 5 pN white measurement noise. Hidden effects: ``FRICTION_EFFECTS`` in turn (thermal
 activation at 300 K; the other cases at 0.01 K, declared, where activation stays within the noise:
