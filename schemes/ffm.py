@@ -346,6 +346,37 @@ def line_scan(ffm: FFM, length: float | None = None, rtol: float = 1e-5, atol_re
                                  friction=dict(fm.values), length=L, rtol=rtol, atol_rel=atol_rel))
 
 
+def along_turns(turns, speed: float, y, hmax: float | None, segment, what: str, max_steps: int):
+    """Integrate a scan segment by segment along a piecewise-linear support path ``turns`` visited at ``speed``,
+    the state carried over: ``segment(V, T, y, hmax, X_a)`` integrates ``X = X_a + V t`` for ``0 <= t <= T`` and
+    returns ``(t, states, extra, n_steps, n_rejected)`` (``extra``: a per-step array or None); ``hmax`` is capped
+    at a fiftieth of a segment. Returns the concatenated ``(t, base, states, extra, n_steps, n_rejected)``."""
+    t_off = 0.0
+    parts_t, parts_b, parts_y, parts_e = [], [], [], []
+    steps = rej = 0
+    for Xa, Xb in zip(turns[:-1], turns[1:]):
+        if Xb == Xa:
+            continue
+        V = speed if Xb > Xa else -speed
+        T = abs(Xb - Xa) / speed
+        hm = T / 50.0 if hmax is None else min(hmax, T / 50.0)
+        ts, ys, extra, nst, nrej = segment(V, T, y, hm, Xa)
+        if nst < 0:
+            raise SolverError(f"{what}: more than {max_steps} steps in one segment")
+        first = 0 if not parts_t else 1
+        parts_t.append(ts[first:] + t_off)
+        parts_b.append(Xa + V * ts[first:])
+        parts_y.append(ys[first:])
+        if extra is not None:
+            parts_e.append(extra[first:])
+        y = ys[-1].copy()
+        t_off += T
+        steps += int(nst)
+        rej += int(nrej)
+    return (np.concatenate(parts_t), np.concatenate(parts_b), np.concatenate(parts_y),
+            np.concatenate(parts_e) if parts_e else None, steps, rej)
+
+
 def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: float = 1e-6,
                    atol_rel: float = 1e-7, hmax: float | None = None, max_steps: int = 2_000_000,
                    atol_v: float | None = None) -> ScanResult:
@@ -371,33 +402,15 @@ def line_scan_path(ffm: FFM, turns, speed: float | None = None, y0=None, rtol: f
     atol = _atol(ffm, atol_rel)
     atol[1] = atol_rel * V0 if atol_v is None else atol_v
     y = np.array([turns[0], 0.0, 0.0]) if y0 is None else np.asarray(y0, float).copy()
-    t_off = 0.0
-    parts_t, parts_b, parts_y, parts_F = [], [], [], []
-    steps = rej = 0
-    for Xa, Xb in zip(turns[:-1], turns[1:]):
-        if Xb == Xa:
-            continue
-        V = V0 if Xb > Xa else -V0
-        T = abs(Xb - Xa) / V0
-        h0 = 1e-3 * math.sqrt(m / k)
-        hm = T / 50.0 if hmax is None else min(hmax, T / 50.0)
+    h0 = 1e-3 * math.sqrt(m / k)
+
+    def segment(V, T, y, hm, Xa):
         ts, ys, Fr, nst, nrej = _ros23(fm.kernel, p, m, c, k, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
-        if nst < 0:
-            raise SolverError(f"FFM scan path: more than {max_steps} steps in one segment")
-        first = 0 if not parts_t else 1
-        parts_t.append(ts[first:] + t_off)
-        parts_b.append(Xa + V * ts[first:])
-        parts_y.append(ys[first:])
-        parts_F.append(Fr[first:])
-        y = ys[-1].copy()
-        t_off += T
-        steps += int(nst)
-        rej += int(nrej)
-    t = np.concatenate(parts_t)
-    base = np.concatenate(parts_b)
-    ys = np.concatenate(parts_y)
+        return ts, ys, Fr, nst, nrej
+
+    t, base, ys, Fr, steps, rej = along_turns(turns, V0, y, hmax, segment, "FFM scan path", max_steps)
     return ScanResult(t=t, base=base, x=ys[:, 0], v=ys[:, 1], z=ys[:, 2], lateral_force=k * (base - ys[:, 0]),
-                      friction=np.concatenate(parts_F), n_steps=steps, n_rejected=rej,
+                      friction=Fr, n_steps=steps, n_rejected=rej,
                       setup=dict(preset=ffm.preset, model=fm.name, cantilever=dict(cp), friction=dict(fm.values),
                                  turns=turns, speed=V0, rtol=rtol, atol_rel=atol_rel))
 

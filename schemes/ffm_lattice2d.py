@@ -36,8 +36,8 @@ import math
 import numpy as np
 from numba import njit
 
-from probedyn.core.errors import ParameterError, SolverError
-from probedyn.schemes.ffm import ScanResult, lu_solve_small
+from probedyn.core.errors import ParameterError
+from probedyn.schemes.ffm import ScanResult, along_turns, lu_solve_small
 
 
 @njit(cache=True)
@@ -164,29 +164,12 @@ def lattice2d_path(*, U0: float, a: float, theta: float, k_x: float, k_y: float,
     atol = np.array([atol_rel * F0 / kmin, atol_rel * F0 / kmin, av, av])
     y = np.array([turns[0], 0.0, 0.0, 0.0]) if y0 is None else np.asarray(y0, float).copy()
     h0 = 1e-3 * math.sqrt(m / max(k_x, k_y))
-    t_off = 0.0
-    parts_t, parts_b, parts_y = [], [], []
-    steps = rej = 0
-    for Xa, Xb in zip(turns[:-1], turns[1:]):
-        if Xb == Xa:
-            continue
-        V = speed if Xb > Xa else -speed
-        T = abs(Xb - Xa) / speed
-        hm = T / 50.0 if hmax is None else min(hmax, T / 50.0)
+
+    def segment(V, T, y, hm, Xa):
         ts, ys, nst, nrej = _ros23_2d(p, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
-        if nst < 0:
-            raise SolverError(f"2D lattice scan: more than {max_steps} steps in one segment")
-        first = 0 if not parts_t else 1
-        parts_t.append(ts[first:] + t_off)
-        parts_b.append(Xa + V * ts[first:])
-        parts_y.append(ys[first:])
-        y = ys[-1].copy()
-        t_off += T
-        steps += int(nst)
-        rej += int(nrej)
-    t = np.concatenate(parts_t)
-    base = np.concatenate(parts_b)
-    ys = np.concatenate(parts_y)
+        return ts, ys, None, nst, nrej
+
+    t, base, ys, _, steps, rej = along_turns(turns, speed, y, hmax, segment, "2D lattice scan", max_steps)
     s, n = ys[:, 0], ys[:, 1]
     u = math.cos(theta) * s - math.sin(theta) * n - phases[0]
     v = math.sin(theta) * s + math.cos(theta) * n - phases[1]
@@ -194,5 +177,5 @@ def lattice2d_path(*, U0: float, a: float, theta: float, k_x: float, k_y: float,
     return ScanResult(t=t, base=base, x=s, v=ys[:, 2], z=n, lateral_force=k_x * (base - s), friction=-Fs,
                       n_steps=steps, n_rejected=rej,
                       setup=dict(model="pt-square-2d", U0=U0, a=a, theta=theta, k_x=k_x, k_y=k_y, m=m, c_x=c_x,
-                                 c_y=c_y, gamma=gamma, phases=[float(phases[0]), float(phases[1])], turns=turns, speed=speed,
-                                 rtol=rtol, atol_rel=atol_rel))
+                                 c_y=c_y, gamma=gamma, phases=[float(phases[0]), float(phases[1])], turns=turns,
+                                 speed=speed, rtol=rtol, atol_rel=atol_rel))
