@@ -249,6 +249,51 @@ def test_a_lever_stiffer_across_the_scan_couples_the_lattice_axes(tmp_path):
     assert float(np.sum(declared.residuals(v, (mis_d,)) ** 2)) == pytest.approx(coupled, rel=1e-9)
 
 
+def test_a_coupled_scan_past_the_multislip_threshold_starts_in_the_well_that_fits(tmp_path):
+    """Own study seed 2019 (a Langevin truth at 10.2 deg to the rows, k_y = 2.56 k_x, eta 5.9): its double-load scan is
+    at eta 12, where slips carry the tip past the next well and the slip pattern depends on where the tip started
+    (Medyanik et al. 2006). As for an aligned scan, the coupled model's registry profile then tries the tip starting
+    a well away along the lattice's x axis: at the truth's parameters the chosen start well fits that scan more than
+    a hundredfold better than the support's own, at the same registry polished again (measured 2.4e4 against 4.4e6
+    on 577 samples; the rest is the registry's rugged basins, not the well)."""
+    path, truth = make_friction_case(tmp_path, 2019, "lattice-misalignment")
+    prob = make_problem(path)
+    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
+    v = {"u0": truth["u0"], "a": truth["a"], **truth["params"]}
+    st = prob.state(v, (mis,))
+    nu = prob.nuisance(v, (mis,))
+    assert len(nu[2]) == 3 and abs(nu[2][2]) == 1.0, nu[2]
+    with_well = prob._scan_chi2(2, *prob._scan_model(2, st, nu[2]))
+    under = prob._profile_coupled(2, st, nu[2][:2])
+    assert with_well < 0.01 * prob._scan_chi2(2, *prob._scan_model(2, st, under))
+
+
+def test_a_data_start_that_moves_the_period_profiles_the_corrugation_at_its_eta(tmp_path):
+    """Own study seed 2025 (a scanner bow of -0.095, eta 5.5 and 11; missed in session 48): the scanner's start from
+    the slip positions has the bow and the period right, but the baseline's U0 has absorbed part of the bow, and the
+    basin in U0 is a few per cent wide. The problem's corrugation ridge (``friction.eta_ridge``: eta kept, U0 on a
+    1 % grid) gives the fit a start in the truth's basin: chi^2 below 1/100 of the data start's at the baseline's U0
+    (measured 2.5e3 against 9.6e5, n = 1709), and its U0 within 2 % of the truth's (measured 0.9 %: the ridge's step)."""
+    from probedyn.diagnose.friction import eta_ridge
+
+    path, truth = make_friction_case(tmp_path, 2025, "scanner-nonlinearity")
+    prob = make_problem(path)
+    prob.workers = 1
+    base = Fitter(prob).baseline()
+    ref = dict(base.values)
+    scanner = {c.key: c for c in prob.causes}["scanner-nonlinearity"]
+    (data_start,) = scanner.data_starts(prob, ref)
+    assert len(eta_ridge(data_start, ref)) == 13 and eta_ridge({"bow": 0.1}, ref) == []
+
+    def c2(v):
+        return float(np.sum(prob.residuals({**ref, **v}, (scanner,)) ** 2))
+
+    starts = prob.nested_starts(ref, (), (scanner,))
+    best = min(starts, key=c2)
+    assert c2(best) < 0.01 * c2(data_start)
+    assert best["u0"] == pytest.approx(truth["u0"], rel=0.02)
+
+
 @pytest.mark.slow
 def test_a_misaligned_scan_on_an_anisotropic_lever_is_named_with_its_angle_and_stiffness(tmp_path):
     """The diagnosis (the misalignment cause only, for time) on the truth above: the angle within 3 % and the
