@@ -1070,14 +1070,12 @@ class FrictionProblem:
         if mask is None:  # a cause's ridge of starts (parameters that trade), ranked by the whole model's chi^2
             causes = tuple(ref_causes) + tuple(new)
             for c in new:
-                ridges = []
-                if hasattr(c, "ridge_starts"):
-                    ridges.append(lambda cc, c=c: cc.ridge_starts(self, dict(ref_values)) if cc is c else [])
+                ridges = [c.ridge_starts(self, dict(ref_values))] if hasattr(c, "ridge_starts") else []
                 if hasattr(c, "data_starts"):  # data starts that move the period: their corrugation ridge
-                    ridges += [lambda cc, c=c, st=st: eta_ridge(st, ref_values) if cc is c else []
-                               for st in c.data_starts(self, dict(ref_values)) if eta_ridge(st, ref_values)]
+                    ridges += [r for st in c.data_starts(self, dict(ref_values)) if (r := eta_ridge(st, ref_values))]
                 for ridge in ridges:
-                    cands = clipped_starts(self.base_params, ref_values, new, ridge)
+                    cands = clipped_starts(self.base_params, ref_values, new,
+                                           lambda cc, c=c, ridge=ridge: ridge if cc is c else [])
                     scored = sorted(((float(np.sum(self.residuals(v, causes) ** 2)), i) for i, v in enumerate(cands)))
                     out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
         return out
