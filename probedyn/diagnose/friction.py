@@ -1065,14 +1065,14 @@ class FrictionProblem:
         start a factor of 1.9 is not found (the baseline's corrugation has absorbed it)."""
         if self.loop is None:
             return []
-        out = clipped_starts(self.base_params, ref_values, new,
-                             lambda c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [])
+        data = {c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [] for c in new}
+        out = clipped_starts(self.base_params, ref_values, new, lambda c: data[c])
         if mask is None:  # a cause's ridge of starts (parameters that trade), ranked by the whole model's chi^2
             causes = tuple(ref_causes) + tuple(new)
             for c in new:
                 ridges = [c.ridge_starts(self, dict(ref_values))] if hasattr(c, "ridge_starts") else []
-                if hasattr(c, "data_starts"):  # data starts that move the period: their corrugation ridge
-                    ridges += [r for st in c.data_starts(self, dict(ref_values)) if (r := eta_ridge(st, ref_values))]
+                # the data starts that move the period: their corrugation ridges
+                ridges += [r for st in data[c] if (r := eta_ridge(st, ref_values))]
                 for ridge in ridges:
                     cands = clipped_starts(self.base_params, ref_values, new,
                                            lambda cc, c=c, ridge=ridge: ridge if cc is c else [])
