@@ -5,7 +5,9 @@
 * the held-out evidence never exceeds what the data carry (Delta chi^2 / 2);
 * probedyn/diagnose holds no second beam model and no second Prandtl-Tomlinson model: the modal
   baseline is the probe's FEM, friction runs on the FFM integrator of ``schemes/``, adhesion
-  laws come from the contact registry (a static check that fails if a copy is reintroduced).
+  laws come from the contact registry (a static check that fails if a copy is reintroduced);
+* the optimiser's properties (the screening of multi-start fits, a bound's gain, the extension order) are checked
+  where their answer is known exactly: on one-parameter landscapes and linear models.
 """
 
 from __future__ import annotations
@@ -245,3 +247,51 @@ def test_a_baseline_modulus_run_to_the_rigid_limit_is_not_refused(tmp_path):
     lo, hi = _u_bounds(base.plist[j])
     assert hi - base.u[j] < 1e-3 * (hi - lo)  # at the rigid limit
     _check_baseline_identifiable(base)  # no DataFormatError
+
+
+def test_a_screened_runner_up_within_the_margin_is_continued_and_can_win():
+    """The engine's screening (``Fitter._fit``, friction's ``SCREEN_MARGIN``): a start whose screened chi^2 is
+    within ``screen_margin`` of the best's is also run to convergence, and the lower optimum is kept. On a
+    one-parameter chi^2 of three wells with floors 1.0, 0.55, 0.1 (an optimiser property, so a landscape whose
+    optima are known exactly): screened with one evaluation, the start on the shallow well's flank ranks first
+    (1.026), the deep well's runner-up second (1.046, within 5 %), the middle well's third (1.151, beyond it).
+    Continuing the best alone ends in the shallow well; continuing the runner-up too reaches the deep one; a margin
+    of 1 % or a keep of one reproduce the best-only rule. The middle start is never continued."""
+    from probedyn.diagnose.causes import CauseParam
+    from probedyn.diagnose.friction import SCREEN_KEEP, SCREEN_MARGIN
+
+    class Wells:
+        base_params = (CauseParam("x", "1", -1.0, 5.0, 0.0),)
+        causes = ()
+
+        def __init__(self, keep, margin):
+            self.screen_nfev, self.screen_keep, self.screen_margin = 1, keep, margin
+            self.continued = []
+
+        def residuals(self, v, causes):
+            x = v["x"]
+            return np.array([np.sqrt(1.0 - 0.45 * x + 1.0 - np.cos(2 * np.pi * x))])
+
+    starts = [{"x": 0.05}, {"x": 2.26}, {"x": 1.2}]
+
+    def run(keep, margin):
+        prob = Wells(keep, margin)
+        F = Fitter(prob)
+        orig = F._fit
+
+        def spy(causes, st, mask, fixed, max_nfev, plist, free, rounds=3):
+            if max_nfev is None and len(st) == 1:
+                prob.continued.append(float(st[0]["x"]))
+            return orig(causes, st, mask, fixed, max_nfev, plist, free, rounds)
+
+        F._fit = spy
+        return F.fit((), starts), prob.continued
+
+    f, cont = run(SCREEN_KEEP, SCREEN_MARGIN)
+    assert SCREEN_KEEP >= 2 and SCREEN_MARGIN >= 0.02  # the friction setting continues a runner-up 2 % behind
+    floor_deep = 1.0 - 0.45 * 2.0
+    assert f.values["x"] == pytest.approx(2.0, abs=0.05) and f.chi2 < floor_deep and f.start == "1"
+    assert sorted(cont) == pytest.approx([0.05, 2.26])
+    for keep, margin in ((1, SCREEN_MARGIN), (SCREEN_KEEP, 0.01)):
+        f, cont = run(keep, margin)
+        assert f.values["x"] == pytest.approx(0.0, abs=0.05) and f.chi2 > 0.9 and cont == pytest.approx([0.05])

@@ -288,21 +288,32 @@ class Fitter:
 
         Screening (a problem declaring ``screen_nfev``, e.g. friction, where one evaluation is an
         integration): with several starts, each start first gets ``screen_nfev`` evaluations (one
-        round), and only the best of them is run to convergence; the null start is among the
-        screened ones, so the nested-fit guarantee is unchanged."""
+        round), and the best of them is run to convergence; so is every runner-up, up to
+        ``screen_keep`` starts in all, whose screened chi^2 is within the fraction ``screen_margin``
+        of the best's (a screen of a few evaluations cannot rank starts that close: friction
+        seed 2047). The null start is among the screened ones, so the nested-fit guarantee is
+        unchanged."""
         prob = self.problem
         screen = getattr(prob, "screen_nfev", None)
         if screen and len(starts) > 1 and free and max_nfev is None:
             scored = [self._fit(causes, [st], mask, fixed, screen, plist, free, rounds=1) for st in starts]
             for si, f in enumerate(scored):
                 f.start = str(si)
-            f_s = min(scored, key=lambda f: f.chi2)
-            st = dict(f_s.values)
-            if f_s.nuisance is not None:
-                st["__nuisance__"] = f_s.nuisance
-            g = self._fit(causes, [st], mask, fixed, None, plist, free, rounds)
-            g.start = f_s.start
-            return g if g.chi2 <= f_s.chi2 else f_s
+            ranked = sorted(scored, key=lambda f: f.chi2)
+            margin = getattr(prob, "screen_margin", 0.0)
+            kept = [f for f in ranked[: max(1, getattr(prob, "screen_keep", 1))]
+                    if f.chi2 <= (1.0 + margin) * ranked[0].chi2]
+            best_g: Fit | None = None
+            for f_s in kept:
+                st = dict(f_s.values)
+                if f_s.nuisance is not None:
+                    st["__nuisance__"] = f_s.nuisance
+                g = self._fit(causes, [st], mask, fixed, None, plist, free, rounds)
+                g.start = f_s.start
+                g = g if g.chi2 <= f_s.chi2 else f_s
+                if best_g is None or g.chi2 < best_g.chi2:
+                    best_g = g
+            return best_g
         has_nu = hasattr(prob, "nuisance")
         diff_step = getattr(prob, "diff_step", 1e-5)
         cap = max_nfev or getattr(prob, "nfev_per_param", 100) * (len(free) + 1)
