@@ -22,7 +22,8 @@ the y-transient (about c_y/k_y = 70 ns).
 Fast integrator: the system is stiff (sigma0 / m_x ~ 5e21 s^-2, (c + F_v)/m ~ 5e10 s^-1 against a
 5 ms scan), so it is integrated by a numba-compiled linearly implicit Rosenbrock method of order
 2(3) (the W-method of Shampine & Reichelt 1997, MATLAB ode23s; L-stable) with the analytic
-Jacobian from the friction model's kernel, adaptive steps and an embedded error estimate. The
+Jacobian from the friction model's kernel, adaptive steps and an embedded error estimate
+(:mod:`probedyn.schemes.rosenbrock`, shared with the N-mode and 2D-lattice scans). The
 source used MATLAB ode23tb with rtol 1e-2 and atol 1e-15.
 
 Presets: ``mica`` (Table 2.1; F_nu in N s/m, departure 10; scan 10 nm at 2 um/s,
@@ -50,6 +51,7 @@ from probedyn.schemes.friction import FrictionModel, model_class
 from probedyn.schemes.friction.bristle import bristle2d_eval
 from probedyn.schemes.friction.prandtl_tomlinson import MICA_LATTICE
 from probedyn.schemes.probe_hooks import ffm_cantilever
+from probedyn.schemes.rosenbrock import ros23
 from probedyn.schemes.stickslip_analysis import analyze
 
 # ------------------------------------------------------------------------------------------
@@ -154,134 +156,41 @@ class FFM:
 
 
 # ------------------------------------------------------------------------------------------
-# Numba Rosenbrock (ode23s) integrator for the 1D FFM model with the model's own kernel
+# The 1D FFM model (2.13), (2.15) as a system of the shared Rosenbrock integrator
 # ------------------------------------------------------------------------------------------
 # ``kern`` is the friction model's numba kernel, passed as an argument: numba compiles (and
 # caches on disk, see friction.base._stable_identity) one specialisation per model, with the
 # kernel inlined, so a new model runs at the speed of the built-in ones.
 
 @njit(cache=True)
-def _rhs_jac(kern, p, m, c, k, V, X0, t, y, f, J):
+def _system(kern, ctx, t, y, f, J, Tt, want_j):
+    """``y = (x, x', z)``, ``ctx = (p, m, c, k, V, X0)``: the support at ``X0 + V t``; returns the friction."""
+    p, m, c, k, V, X0 = ctx
     x, v, z = y[0], y[1], y[2]
     F, zd, dFx, dFv, dFz, dzx, dzv, dzz = kern(p, x, v, z)
     f[0] = v
     f[1] = (c * (V - v) + k * (X0 + V * t - x) - F) / m
     f[2] = zd
-    J[0, 0] = 0.0
-    J[0, 1] = 1.0
-    J[0, 2] = 0.0
-    J[1, 0] = (-k - dFx) / m
-    J[1, 1] = (-c - dFv) / m
-    J[1, 2] = -dFz / m
-    J[2, 0] = dzx
-    J[2, 1] = dzv
-    J[2, 2] = dzz
+    if want_j:
+        J[0, 0] = 0.0
+        J[0, 1] = 1.0
+        J[0, 2] = 0.0
+        J[1, 0] = (-k - dFx) / m
+        J[1, 1] = (-c - dFv) / m
+        J[1, 2] = -dFz / m
+        J[2, 0] = dzx
+        J[2, 1] = dzv
+        J[2, 2] = dzz
+        Tt[0] = 0.0
+        Tt[1] = k * V / m
+        Tt[2] = 0.0
     return F
 
 
-@njit(cache=True)
-def _rhs(kern, p, m, c, k, V, X0, t, y, f):
-    x, v, z = y[0], y[1], y[2]
-    r = kern(p, x, v, z)
-    f[0] = v
-    f[1] = (c * (V - v) + k * (X0 + V * t - x) - r[0]) / m
-    f[2] = r[1]
-
-
-@njit(cache=True)
-def lu_solve_small(A, b):
-    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting); compiled,
-    for the Rosenbrock kernels of the FFM models."""
-    n = A.shape[0]
-    M = A.copy()
-    x = b.copy()
-    for i in range(n):
-        piv = i
-        best = abs(M[i, i])
-        for r in range(i + 1, n):
-            if abs(M[r, i]) > best:
-                best = abs(M[r, i])
-                piv = r
-        if piv != i:
-            for cc in range(n):
-                tmp = M[i, cc]
-                M[i, cc] = M[piv, cc]
-                M[piv, cc] = tmp
-            tmp = x[i]
-            x[i] = x[piv]
-            x[piv] = tmp
-        for r in range(i + 1, n):
-            fct = M[r, i] / M[i, i]
-            for cc in range(i, n):
-                M[r, cc] -= fct * M[i, cc]
-            x[r] -= fct * x[i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for cc in range(i + 1, n):
-            s -= M[i, cc] * x[cc]
-        x[i] = s / M[i, i]
-    return x
-
-
-@njit(cache=True)
 def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):
-    d = 1.0 / (2.0 + math.sqrt(2.0))
-    e32 = 6.0 + math.sqrt(2.0)
-    n = 3
-    ts = np.empty(max_steps + 1)
-    ys = np.empty((max_steps + 1, n))
-    Fs = np.empty(max_steps + 1)
-    y = y0.copy()
-    t = 0.0
-    f0 = np.empty(n)
-    f1 = np.empty(n)
-    f2 = np.empty(n)
-    J = np.empty((n, n))
-    W = np.empty((n, n))
-    Tt = np.zeros(n)
-    Tt[1] = k * V / m
-    Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
-    ts[0] = 0.0
-    ys[0] = y
-    Fs[0] = Fr
-    h = h0
-    i = 0
-    n_rej = 0
-    while t < T:
-        if i >= max_steps:
-            return ts[: i + 1], ys[: i + 1], Fs[: i + 1], -1, n_rej
-        if t + h > T:
-            h = T - t
-        for a in range(n):
-            for b in range(n):
-                W[a, b] = -h * d * J[a, b]
-            W[a, a] += 1.0
-        k1 = lu_solve_small(W, f0 + h * d * Tt)
-        ym = y + 0.5 * h * k1
-        _rhs(kern, p, m, c, k, V, X0, t + 0.5 * h, ym, f1)
-        k2 = lu_solve_small(W, f1 - k1) + k1
-        yn = y + h * k2
-        _rhs(kern, p, m, c, k, V, X0, t + h, yn, f2)
-        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
-        err = 0.0
-        for a in range(n):
-            sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
-            e = h / 6.0 * (k1[a] - 2.0 * k2[a] + k3[a]) / sc
-            err = max(err, abs(e))
-        if err <= 1.0 or h < 1e-22:
-            t = t + h
-            y = yn
-            Fr = _rhs_jac(kern, p, m, c, k, V, X0, t, y, f0, J)
-            i += 1
-            ts[i] = t
-            ys[i] = y
-            Fs[i] = Fr
-            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * err ** (-1.0 / 3.0)))
-            h = min(h * fac, hmax)
-        else:
-            n_rej += 1
-            h = h * max(0.1, 0.8 * err ** (-1.0 / 3.0))
-    return ts[: i + 1], ys[: i + 1], Fs[: i + 1], i, n_rej
+    """One support segment ``X = X0 + V t``, ``0 <= t <= T`` (:func:`probedyn.schemes.rosenbrock.ros23`)."""
+    return ros23(_system, kern, (p, float(m), float(c), float(k), float(V), float(X0)), float(T), y0, rtol, atol,
+                 float(h0), float(hmax), int(max_steps))
 
 
 @dataclass

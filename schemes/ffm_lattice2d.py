@@ -25,7 +25,7 @@ the speeds ``V cos(theta)`` and ``V sin(theta)``, the recorded force being ``cos
 the 1D scan's whatever ``k_y``; at a slow scan the tip sits on the quasi-static branch, a minimum of
 ``U + k_x (X - s)^2 / 2 + k_y n^2 / 2``.
 
-Integrator: the numba Rosenbrock W-method of order 2(3) of :mod:`probedyn.schemes.ffm` (Shampine &
+Integrator: the numba Rosenbrock W-method of order 2(3) of :mod:`probedyn.schemes.rosenbrock` (Shampine &
 Reichelt 1997) with the analytic Jacobian, four states ``(s, n, s', n')``.
 """
 
@@ -37,13 +37,16 @@ import numpy as np
 from numba import njit
 
 from probedyn.core.errors import ParameterError
-from probedyn.schemes.ffm import ScanResult, along_turns, lu_solve_small
+from probedyn.schemes.ffm import ScanResult, along_turns
+from probedyn.schemes.rosenbrock import ros23
 
 
 @njit(cache=True)
-def _rhs_jac2(p, V, X0, t, y, f, J, want_j):
-    """Right-hand side (and Jacobian if ``want_j``) of the two-spring PT tip; returns the potential's
-    force along the scan. ``p = (U0, q, cos, sin, phi_u, phi_v, m, c_x, c_y, k_x, k_y, gamma)``."""
+def _system(kern, ctx, t, y, f, J, Tt, want_j):
+    """The two-spring PT tip, ``y = (s, n, s', n')``, ``ctx = (p, V, X0)`` with
+    ``p = (U0, q, cos, sin, phi_u, phi_v, m, c_x, c_y, k_x, k_y, gamma)`` (``kern`` unused: the substrate is
+    written out). Returns the potential's force along the scan."""
+    p, V, X0 = ctx
     U0, q, ct, st, pu, pv, m, cx, cy, kx, ky = p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], p[8], p[9], p[10]
     g = p[11]
     s, n, vs, vn = y[0], y[1], y[2], y[3]
@@ -74,66 +77,11 @@ def _rhs_jac2(p, V, X0, t, y, f, J, want_j):
         J[3, 0] = dsn / m
         J[3, 1] = (-ky + dnn) / m
         J[3, 3] = -(cy + g) / m
+        Tt[0] = 0.0
+        Tt[1] = 0.0
+        Tt[2] = kx * V / m
+        Tt[3] = 0.0
     return Fs
-
-
-@njit(cache=True)
-def _ros23_2d(p, V, T, y0, rtol, atol, h0, hmax, max_steps, X0):
-    """One support segment ``X = X0 + V t``, ``0 <= t <= T``: the W-method of :func:`schemes.ffm._ros23`."""
-    d = 1.0 / (2.0 + math.sqrt(2.0))
-    e32 = 6.0 + math.sqrt(2.0)
-    n = 4
-    ts = np.empty(max_steps + 1)
-    ys = np.empty((max_steps + 1, n))
-    y = y0.copy()
-    t = 0.0
-    f0 = np.empty(n)
-    f1 = np.empty(n)
-    f2 = np.empty(n)
-    J = np.empty((n, n))
-    W = np.empty((n, n))
-    Tt = np.zeros(n)
-    Tt[2] = p[9] * V / p[6]
-    _rhs_jac2(p, V, X0, t, y, f0, J, True)
-    ts[0] = 0.0
-    ys[0] = y
-    h = h0
-    i = 0
-    n_rej = 0
-    while t < T:
-        if i >= max_steps:
-            return ts[: i + 1], ys[: i + 1], -1, n_rej
-        if t + h > T:
-            h = T - t
-        for a in range(n):
-            for b in range(n):
-                W[a, b] = -h * d * J[a, b]
-            W[a, a] += 1.0
-        k1 = lu_solve_small(W, f0 + h * d * Tt)
-        ym = y + 0.5 * h * k1
-        _rhs_jac2(p, V, X0, t + 0.5 * h, ym, f1, J, False)
-        k2 = lu_solve_small(W, f1 - k1) + k1
-        yn = y + h * k2
-        _rhs_jac2(p, V, X0, t + h, yn, f2, J, False)
-        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
-        err = 0.0
-        for a in range(n):
-            sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
-            e = h / 6.0 * (k1[a] - 2.0 * k2[a] + k3[a]) / sc
-            err = max(err, abs(e))
-        if err <= 1.0 or h < 1e-22:
-            t = t + h
-            y = yn
-            _rhs_jac2(p, V, X0, t, y, f0, J, True)
-            i += 1
-            ts[i] = t
-            ys[i] = y
-            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * err ** (-1.0 / 3.0)))
-            h = min(h * fac, hmax)
-        else:
-            n_rej += 1
-            h = h * max(0.1, 0.8 * err ** (-1.0 / 3.0))
-    return ts[: i + 1], ys[: i + 1], i, n_rej
 
 
 def lattice2d_path(*, U0: float, a: float, theta: float, k_x: float, k_y: float, m: float, c_x: float,
@@ -166,7 +114,8 @@ def lattice2d_path(*, U0: float, a: float, theta: float, k_x: float, k_y: float,
     h0 = 1e-3 * math.sqrt(m / max(k_x, k_y))
 
     def segment(V, T, y, hm, Xa):
-        ts, ys, nst, nrej = _ros23_2d(p, V, T, y, rtol, atol, h0, hm, max_steps, Xa)
+        ts, ys, _, nst, nrej = ros23(_system, None, (p, float(V), float(Xa)), float(T), y, rtol, atol, h0, float(hm),
+                                     int(max_steps))
         return ts, ys, None, nst, nrej
 
     t, base, ys, _, steps, rej = along_turns(turns, speed, y, hmax, segment, "2D lattice scan", max_steps)

@@ -16,8 +16,8 @@ frequency would be spurious).  With it the static compliance of the N-mode chain
 for every N.  The measured FFM signal is the static-equivalent spring force ``k_s (V t - x)``
 (``k_s`` the probe's static scan stiffness), the one-mode model's ``k (V t - x)``.
 
-Integrator: the linearly implicit Rosenbrock 2(3) W-method of :mod:`probedyn.schemes.ffm`
-generalised to ``2N + 1`` states, with the analytic Jacobian from the friction model's kernel
+Integrator: the linearly implicit Rosenbrock 2(3) W-method of :mod:`probedyn.schemes.rosenbrock`
+on ``2N + 1`` states, with the analytic Jacobian from the friction model's kernel
 (``kernel(p, x, v, z)``), numba-compiled.  The rate states are ``s_i = u_i' + V r_i`` (``r_i``
 the oscillator's share of the static compliance), whose sum is the tip velocity: they vanish
 while the tip sticks, so the relative error control resolves the slow pre-sliding creep as the
@@ -37,13 +37,15 @@ from numba import njit
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.lumped.reduced import ReducedProbe
-from probedyn.schemes.ffm import lu_solve_small
+from probedyn.schemes.rosenbrock import ros23
 
 
 @njit(cache=True)
-def _rhs_jac(kern, p, m, c, k, sh, V, t, y, f, J, Tt):
-    # states: u_i (deflections), s_i = u_i' + V sh_i (rates relative to the static share of the
-    # base motion: sum_i s_i is the tip velocity, ~0 while sticking), z
+def _system(kern, ctx, t, y, f, J, Tt, want_j):
+    """States ``u_i`` (deflections), ``s_i = u_i' + V sh_i`` (rates relative to the static share of the base
+    motion: ``sum_i s_i`` is the tip velocity, ~0 while sticking), ``z``; ``ctx = (p, m, c, k, sh, V)``.
+    Returns the friction."""
+    p, m, c, k, sh, V = ctx
     n = m.shape[0]
     x = V * t
     vt = 0.0
@@ -52,102 +54,29 @@ def _rhs_jac(kern, p, m, c, k, sh, V, t, y, f, J, Tt):
         vt += y[n + i]
     z = y[2 * n]
     F, zd, dFx, dFv, dFz, dzx, dzv, dzz = kern(p, x, vt, z)
-    for a in range(2 * n + 1):
-        for b in range(2 * n + 1):
-            J[a, b] = 0.0
     for i in range(n):
         f[i] = y[n + i] - V * sh[i]
         f[n + i] = (-c[i] * (y[n + i] - V * sh[i]) - k[i] * y[i] - F) / m[i]
-        J[i, n + i] = 1.0
-        for j in range(n):
-            J[n + i, j] = -dFx / m[i]
-            J[n + i, n + j] = -dFv / m[i]
-        J[n + i, i] -= k[i] / m[i]
-        J[n + i, n + i] -= c[i] / m[i]
-        J[n + i, 2 * n] = -dFz / m[i]
-        J[2 * n, i] = dzx
-        J[2 * n, n + i] = dzv
-        Tt[i] = 0.0
-        Tt[n + i] = -dFx * V / m[i]
     f[2 * n] = zd
-    J[2 * n, 2 * n] = dzz
-    Tt[2 * n] = dzx * V
+    if want_j:
+        for a in range(2 * n + 1):
+            for b in range(2 * n + 1):
+                J[a, b] = 0.0
+        for i in range(n):
+            J[i, n + i] = 1.0
+            for j in range(n):
+                J[n + i, j] = -dFx / m[i]
+                J[n + i, n + j] = -dFv / m[i]
+            J[n + i, i] -= k[i] / m[i]
+            J[n + i, n + i] -= c[i] / m[i]
+            J[n + i, 2 * n] = -dFz / m[i]
+            J[2 * n, i] = dzx
+            J[2 * n, n + i] = dzv
+            Tt[i] = 0.0
+            Tt[n + i] = -dFx * V / m[i]
+        J[2 * n, 2 * n] = dzz
+        Tt[2 * n] = dzx * V
     return F
-
-
-@njit(cache=True)
-def _rhs(kern, p, m, c, k, sh, V, t, y, f):
-    n = m.shape[0]
-    x = V * t
-    vt = 0.0
-    for i in range(n):
-        x += y[i]
-        vt += y[n + i]
-    r = kern(p, x, vt, y[2 * n])
-    for i in range(n):
-        f[i] = y[n + i] - V * sh[i]
-        f[n + i] = (-c[i] * (y[n + i] - V * sh[i]) - k[i] * y[i] - r[0]) / m[i]
-    f[2 * n] = r[1]
-
-
-@njit(cache=True)
-def _ros23(kern, p, m, c, k, sh, V, T, y0, rtol, atol, h0, hmax, max_steps):
-    d = 1.0 / (2.0 + math.sqrt(2.0))
-    e32 = 6.0 + math.sqrt(2.0)
-    ns = y0.shape[0]
-    ts = np.empty(max_steps + 1)
-    ys = np.empty((max_steps + 1, ns))
-    Fs = np.empty(max_steps + 1)
-    y = y0.copy()
-    t = 0.0
-    f0 = np.empty(ns)
-    f1 = np.empty(ns)
-    f2 = np.empty(ns)
-    J = np.empty((ns, ns))
-    W = np.empty((ns, ns))
-    Tt = np.zeros(ns)
-    Fr = _rhs_jac(kern, p, m, c, k, sh, V, t, y, f0, J, Tt)
-    ts[0] = 0.0
-    ys[0] = y
-    Fs[0] = Fr
-    h = h0
-    i = 0
-    n_rej = 0
-    while t < T:
-        if i >= max_steps:
-            return ts[: i + 1], ys[: i + 1], Fs[: i + 1], -1, n_rej
-        if t + h > T:
-            h = T - t
-        for a in range(ns):
-            for b in range(ns):
-                W[a, b] = -h * d * J[a, b]
-            W[a, a] += 1.0
-        k1 = lu_solve_small(W, f0 + h * d * Tt)
-        ym = y + 0.5 * h * k1
-        _rhs(kern, p, m, c, k, sh, V, t + 0.5 * h, ym, f1)
-        k2 = lu_solve_small(W, f1 - k1) + k1
-        yn = y + h * k2
-        _rhs(kern, p, m, c, k, sh, V, t + h, yn, f2)
-        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
-        err = 0.0
-        for a in range(ns):
-            sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
-            e = h / 6.0 * (k1[a] - 2.0 * k2[a] + k3[a]) / sc
-            err = max(err, abs(e))
-        if err <= 1.0 or h < 1e-22:
-            t = t + h
-            y = yn
-            Fr = _rhs_jac(kern, p, m, c, k, sh, V, t, y, f0, J, Tt)
-            i += 1
-            ts[i] = t
-            ys[i] = y
-            Fs[i] = Fr
-            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * err ** (-1.0 / 3.0)))
-            h = min(h * fac, hmax)
-        else:
-            n_rej += 1
-            h = h * max(0.1, 0.8 * err ** (-1.0 / 3.0))
-    return ts[: i + 1], ys[: i + 1], Fs[: i + 1], i, n_rej
 
 
 @dataclass
@@ -262,8 +191,8 @@ def line_scan(ffm: ModalFFM, length: float, rtol: float = 1e-5, atol_rel: float 
     y0 = np.zeros(2 * n + 1)
     if start == "moving":
         y0[n:2 * n] = V * share
-    ts, ys, Fr, nst, nrej = _ros23(fm.kernel, fm.pack(), ffm.masses, ffm.dampings, ffm.stiffnesses, share, V, T,
-                                   y0, rtol, atol, h0, T / 50.0, max_steps)
+    ctx = (fm.pack(), ffm.masses, ffm.dampings, ffm.stiffnesses, share, V)
+    ts, ys, Fr, nst, nrej = ros23(_system, fm.kernel, ctx, T, y0, rtol, atol, h0, T / 50.0, int(max_steps))
     if nst < 0:
         raise SolverError(f"modal FFM line scan: more than {max_steps} steps (shorten the scan or loosen rtol)")
     u = ys[:, :n].T

@@ -1,0 +1,132 @@
+"""The stiff integrator of the FFM line-scan models: a linearly implicit Rosenbrock W-method of order 2(3).
+
+One step of ``y' = f(t, y)`` (Shampine & Reichelt 1997, the method of MATLAB's ode23s; L-stable), with
+``W = I - h d J``, ``d = 1 / (2 + sqrt 2)``, ``J = df/dy`` and ``T = df/dt`` at the step's start::
+
+    W k1 = f(t, y) + h d T
+    W (k2 - k1) = f(t + h/2, y + h k1 / 2) - k1
+    y_new = y + h k2
+    W k3 = f(t + h, y_new) - e32 (k2 - f1) - 2 (k1 - f0) + h d T,   e32 = 6 + sqrt 2
+
+and the embedded error estimate ``h (k1 - 2 k2 + k3) / 6`` scaled by ``atol + rtol |y|`` (max norm). A step is
+accepted below 1 (or at a step below 1e-22 s, where round-off decides) and the next step is scaled by
+``0.8 err^(-1/3)`` within [0.2, 5] (after a rejection within [0.1, 1]). The Jacobian is evaluated once per
+accepted step, analytically, by the model (a W-method stays of order 2 with an approximate J).
+
+Each model is one ``system(kern, ctx, t, y, f, J, Tt, want_j)``, numba-compiled: it writes ``f(t, y)`` into
+``f`` and, if ``want_j``, ``df/dy`` into ``J`` and ``df/dt`` into ``Tt``, and returns the force it records at
+this state. ``kern`` is the friction model's numba kernel (or None) and ``ctx`` a tuple of the model's
+parameters; numba compiles (and caches on disk) one specialisation per system and kernel, so a new model
+runs at the speed of the built-in ones. Users: :mod:`probedyn.schemes.ffm` (one mode, any friction model),
+:mod:`probedyn.schemes.ffm_modal` (N modes), :mod:`probedyn.schemes.ffm_lattice2d` (two lateral springs
+over a square lattice). The nano-placing release (:mod:`probedyn.schemes.placing._kernel`) keeps a variant of
+its own: it locates contact transitions inside a step and factorises ``W`` once per step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def lu_solve_small(A, b):
+    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting); compiled,
+    for the Rosenbrock steps of the FFM models."""
+    n = A.shape[0]
+    M = A.copy()
+    x = b.copy()
+    for i in range(n):
+        piv = i
+        best = abs(M[i, i])
+        for r in range(i + 1, n):
+            if abs(M[r, i]) > best:
+                best = abs(M[r, i])
+                piv = r
+        if piv != i:
+            for cc in range(n):
+                tmp = M[i, cc]
+                M[i, cc] = M[piv, cc]
+                M[piv, cc] = tmp
+            tmp = x[i]
+            x[i] = x[piv]
+            x[piv] = tmp
+        for r in range(i + 1, n):
+            fct = M[r, i] / M[i, i]
+            for cc in range(i, n):
+                M[r, cc] -= fct * M[i, cc]
+            x[r] -= fct * x[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for cc in range(i + 1, n):
+            s -= M[i, cc] * x[cc]
+        x[i] = s / M[i, i]
+    return x
+
+
+@njit(cache=True)
+def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
+    """Integrate ``system`` (module docstring) from ``y0`` at ``t = 0`` to ``T`` [s], first step ``h0``, steps at
+    most ``hmax``; ``atol`` per state. Returns ``(t, y, F, n_steps, n_rejected)`` on the accepted steps (``F``
+    the force ``system`` records); ``n_steps`` is -1 if ``max_steps`` were taken before ``T``."""
+    d = 1.0 / (2.0 + math.sqrt(2.0))
+    e32 = 6.0 + math.sqrt(2.0)
+    n = y0.shape[0]
+    ts = np.empty(max_steps + 1)
+    ys = np.empty((max_steps + 1, n))
+    Fs = np.empty(max_steps + 1)
+    y = y0.copy()
+    t = 0.0
+    f0 = np.empty(n)
+    f1 = np.empty(n)
+    f2 = np.empty(n)
+    J = np.empty((n, n))
+    W = np.empty((n, n))
+    Tt = np.zeros(n)
+    Fr = system(kern, ctx, t, y, f0, J, Tt, True)
+    ts[0] = 0.0
+    ys[0] = y
+    Fs[0] = Fr
+    h = h0
+    i = 0
+    n_rej = 0
+    while t < T:
+        if i >= max_steps:
+            return ts[: i + 1], ys[: i + 1], Fs[: i + 1], -1, n_rej
+        if t + h > T:
+            h = T - t
+        for a in range(n):
+            for b in range(n):
+                W[a, b] = -h * d * J[a, b]
+            W[a, a] += 1.0
+        k1 = lu_solve_small(W, f0 + h * d * Tt)
+        ym = y + 0.5 * h * k1
+        system(kern, ctx, t + 0.5 * h, ym, f1, J, Tt, False)
+        k2 = lu_solve_small(W, f1 - k1) + k1
+        yn = y + h * k2
+        system(kern, ctx, t + h, yn, f2, J, Tt, False)
+        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
+        err = 0.0
+        for a in range(n):
+            sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
+            e = h / 6.0 * (k1[a] - 2.0 * k2[a] + k3[a]) / sc
+            err = max(err, abs(e))
+        if err <= 1.0 or h < 1e-22:
+            t = t + h
+            y = yn
+            Fr = system(kern, ctx, t, y, f0, J, Tt, True)
+            i += 1
+            ts[i] = t
+            ys[i] = y
+            Fs[i] = Fr
+            fac = 5.0 if err == 0.0 else min(5.0, max(0.2, 0.8 * err ** (-1.0 / 3.0)))
+            h = min(h * fac, hmax)
+        else:
+            n_rej += 1
+            h = h * max(0.1, 0.8 * err ** (-1.0 / 3.0))
+    return ts[: i + 1], ys[: i + 1], Fs[: i + 1], i, n_rej
+
+
+__all__ = ["lu_solve_small", "ros23"]

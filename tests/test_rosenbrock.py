@@ -1,0 +1,57 @@
+"""The shared Rosenbrock W-method (:mod:`probedyn.schemes.rosenbrock`) on the Prothero-Robinson problem
+``y' = lam (y - g(t)) + g'(t)``, ``g = sin``, whose solution from ``y(0) = g(0) + y0`` is
+``g(t) + y0 exp(lam t)``: a stiff decay onto a smooth solution with the exact answer known."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numba import njit
+
+from probedyn.schemes.rosenbrock import ros23
+
+
+@njit(cache=True)
+def _prothero_robinson(kern, ctx, t, y, f, J, Tt, want_j):
+    lam = ctx[0]
+    f[0] = lam * (y[0] - math.sin(t)) + math.cos(t)
+    if want_j:
+        J[0, 0] = lam
+        Tt[0] = -lam * math.cos(t) - math.sin(t)
+    return y[0]
+
+
+def _run(lam, rtol, y0=0.0, T=2.0):
+    ts, ys, F, n, rej = ros23(_prothero_robinson, None, (lam,), T, np.array([y0]), rtol, np.array([rtol]), 1e-6,
+                              T / 20, 1_000_000)
+    exact = np.sin(ts) + y0 * np.exp(lam * ts)
+    return ts, ys[:, 0], F, n, exact
+
+
+@pytest.mark.parametrize("lam", [-1.0, -1e3, -1e7])
+def test_the_error_follows_the_tolerance_at_any_stiffness(lam):
+    """The global error is at most the sum of the local errors the step control admits (each step's below
+    ``atol + rtol |y| <= 2 rtol`` here; on the mild problem nothing damps them, on the stiff ones the decay does),
+    and it falls with the tolerance as the method's order says (local error ~ h^3 with h ~ tol^(1/3): global
+    error ~ tol^(2/3) or better), whatever the stiffness. The stiff problem takes under 2000 steps: a linearly
+    implicit, L-stable method is limited by accuracy, not stability (an explicit one would need |lam| T / 2 = 1e7)."""
+    errs, steps = [], []
+    for rtol in (1e-4, 1e-6):
+        ts, y, F, n, exact = _run(lam, rtol)
+        assert n > 0 and ts[-1] == pytest.approx(2.0, rel=1e-12)
+        assert np.array_equal(F, y)  # the recorded quantity is the system's return value at each accepted step
+        errs.append(np.max(np.abs(y - exact)))
+        steps.append(n)
+    assert errs[0] < steps[0] * 2e-4 and errs[1] < steps[1] * 2e-6
+    assert errs[0] / errs[1] > 100 ** (2 / 3) / 3  # 100x tighter tolerance: error down by ~21x or more
+    assert steps[1] < 2000
+
+
+def test_a_stiff_transient_decays_without_oscillation():
+    """L-stability: an initial offset on a stiff mode (lam h ~ -1e4 after the first steps) is damped at once, not
+    carried as a slowly decaying, sign-alternating error (as the trapezoidal rule would)."""
+    ts, y, F, n, exact = _run(-1e7, 1e-6, y0=1.0)
+    late = ts > 1e-5  # 100 time constants
+    assert np.max(np.abs(y[late] - exact[late])) < 20e-6
