@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+from scipy.constants import k as K_B  # Boltzmann constant [J/K]
 
 from probedyn.core.errors import DataFormatError, ProbedynError
 from probedyn.diagnose.causes import CauseParam, catalog
@@ -50,7 +51,6 @@ from probedyn.schemes.ffm import FFM, line_scan_path
 
 __all__ = ["FrictionProblem", "FrictionState", "read_friction", "simulate_scan"]
 
-K_B = 1.380649e-23
 #: lattice periods of support travel before the data start, in the direction of the first segment: the
 #: model enters the data on its steady stick-slip cycle; the data before their own first slip (which
 #: depend on the unrecorded history, e.g. a previous retrace) are not used (FrictionProblem.use)

@@ -27,8 +27,21 @@ depth, i.e. an added mass ``rho_f delta / 2`` per unit face area and a damping `
 0.5 MHz) and the edges' pressure left out (their share of the load is about ``t^2 / (w delta)``: a few % in
 air, ~10 % for a 2 um lever in water).
 
+**A rarefied gas** (a residual gas in a vacuum chamber): where the gas's mean free path is not small against the
+width (Knudsen number ``lambda / w``; air: lambda ~ 68 nm at 1 bar, 0.1 mm at 60 Pa) the continuum functions
+above do not hold: their damping does not vanish with the pressure (it depends on the viscosity, not the density,
+at low Re), while a rarefied gas's does, in proportion. In the free-molecular limit each molecule exchanges
+momentum with the plate alone (:func:`free_molecular_damping`): a force per unit area ``b_n v`` on a plate moving
+normal to itself, ``b_t v`` per face moving in its own plane, both proportional to the pressure and independent of
+the frequency, with no added mass. Between the limits the continuum load (added mass and damping alike) is scaled
+by ``c_fm / (c_fm + c_cont)``, ``c`` the two dampings (:func:`rarefied_factor`): the damping is their harmonic
+sum, which is Cunningham's slip correction in its first-order form, ``F_cont / (1 + A Kn)``, with its constant
+fixed by the free-molecular limit; the added mass vanishes with it. Exact in both limits; between them an
+interpolation (Bidkar et al., Appl. Phys. Lett. 94, 163117 (2009), solve the Boltzmann equation there).
+
 Used by the modal diagnosis (:mod:`probedyn.diagnose.modal_model`): the declared medium loads
-the baseline's flapwise, torsion and lateral modes, and the fluid cause fits an unknown medium.
+the baseline's flapwise, torsion and lateral modes, and the fluid cause fits an unknown medium (in a declared
+vacuum, a residual gas at its pressure, rarefied).
 """
 
 from __future__ import annotations
@@ -38,13 +51,19 @@ import math
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+from scipy.constants import R as R_GAS
 from scipy.special import kve
 
-__all__ = ["sader_gamma", "torsion_gamma", "stokes_layer_mass", "MEDIA"]
+__all__ = ["sader_gamma", "torsion_gamma", "stokes_layer_mass", "free_molecular_damping", "rarefied_factor",
+           "MEDIA", "M_AIR", "ROOM_TEMPERATURE"]
 
 #: media a sidecar may name: (density kg/m^3, dynamic viscosity Pa s) at about 20-25 C
 MEDIA = {"vacuum": (0.0, 1.8e-5), "air": (1.18, 1.85e-5), "nitrogen": (1.14, 1.76e-5),
          "water": (997.0, 8.9e-4), "ethanol": (789.0, 1.07e-3)}
+#: the temperature of MEDIA and of a record that declares none [K]
+ROOM_TEMPERATURE = 295.0
+#: molar mass of dry air [kg/mol]
+M_AIR = 0.028965
 
 _RE_RANGE = (1e-6, 1e4)  # validity range of eq 21
 
@@ -217,3 +236,30 @@ def stokes_layer_mass(omega, rho_f: float, eta_f: float):
 
 _TORSION_SPLINES = tuple(CubicSpline(_TORSION_LOG10_RE, np.log(np.maximum(_TORSION_TABLE[:, j], 1e-300)))
                          for j in (0, 1))
+
+
+def free_molecular_damping(p: float, T: float = ROOM_TEMPERATURE, M: float = M_AIR) -> tuple[float, float]:
+    """Damping per unit area [N s / m^3] of a thin plate in a gas at pressure ``p`` [Pa] and temperature ``T`` [K]
+    (molar mass ``M``) in the free-molecular limit: ``(b_n, b_t)``, ``b_n`` for the plate moving normal to itself
+    (both faces together), ``b_t`` for one face moving in its own plane.
+
+    Derivation (linear in ``v / c``, ``c = sqrt(2 R T / M)``; molecules re-emitted diffusely at the plate's
+    temperature, full accommodation): the molecules that strike a face moving into the gas at ``v`` carry the
+    momentum flux ``p / 2 + 2 p v sqrt(M / (2 pi R T))`` and number flux ``n (sqrt(R T / (2 pi M)) + v / 2)``;
+    re-emitted, they leave with the momentum flux ``p / 2 + (p v / 2) sqrt(pi M / (2 R T))``; the face behind loses
+    the same. Net: ``b_n = (4 + pi) p sqrt(M / (2 pi R T))``. In its own plane a face returns the struck molecules
+    with its own velocity: ``b_t = p sqrt(M / (2 pi R T))`` (the number flux times the molecular mass).
+    Specular reflection would give ``b_n = 8 p sqrt(M / (2 pi R T))`` (12 % more, Christian's Q =
+    (pi/2)^(3/2) rho t f sqrt(RT/M) / p for a plate) and no ``b_t``. Edges (``t << w``) are left out."""
+    g = math.sqrt(M / (2.0 * math.pi * R_GAS * T))
+    return (4.0 + math.pi) * p * g, p * g
+
+
+def rarefied_factor(c_fm: float, c_cont: float) -> float:
+    """The factor on a continuum load (added mass and damping) of a gas whose free-molecular damping is ``c_fm``
+    and continuum damping ``c_cont`` (same mode, same units): ``c_fm / (c_fm + c_cont)``, 1 in a continuum
+    (``c_fm`` infinite), -> ``c_fm / c_cont`` rarefied (module docstring)."""
+    if not math.isfinite(c_fm):
+        return 1.0
+    tot = c_fm + c_cont
+    return c_fm / tot if tot > 0 else 0.0

@@ -536,7 +536,8 @@ class ModalProblem:
         return f, Q
 
     def _residuals(self, f, Q, intrinsic_only: bool = False, k: float | None = None, fluid: bool = False,
-                   gap: np.ndarray | None = None, q_thickness: np.ndarray | None = None) -> np.ndarray:
+                   gap: np.ndarray | None = None, q_thickness: np.ndarray | None = None,
+                   q_share: np.ndarray | None = None) -> np.ndarray:
         d = self.data
         offset, dirs = self.mf_offset, self.mf_dirs
         if self.gap_col is not None and gap is not None:
@@ -579,8 +580,16 @@ class ModalProblem:
                 # section's thickness (q_thickness, _hydro_setup) -- and its lateral ones by the faces' Stokes layers
                 # (held alike); an axial mode's damping is the one Q_int, held within the intrinsic scatter as in a vacuum
                 qt = 0.0 if q_thickness is None else q_thickness[i]
-                sig = np.where(self.q_fluid, np.sqrt(sig**2 + self.hydro_q**2 + qt**2),
-                               np.sqrt(sig**2 + Q_INT_SCATTER**2))
+                if q_share is None:
+                    sig_f = np.sqrt(sig**2 + self.hydro_q**2 + qt**2)
+                else:
+                    # a rarefied gas damps about as much as the intrinsic loss (s = Q / Q_int its share of the
+                    # mode's damping): d ln Q is s times the intrinsic scatter plus (1 - s) times the fluid
+                    # model's error -- the intrinsic-only baseline's sigma at the null (p -> 0, s -> 1), so the
+                    # cause nests it; in a liquid or a gas at 1 bar s ~ 0.01-0.05 and this is the fluid's sigma
+                    sf = 1.0 - q_share
+                    sig_f = np.sqrt(sig**2 + sf**2 * (self.hydro_q**2 + qt**2) + (q_share * Q_INT_SCATTER) ** 2)
+                sig = np.where(self.q_fluid, sig_f, np.sqrt(sig**2 + Q_INT_SCATTER**2))
             r = np.concatenate([r, (np.log(d.Q[i]) - np.log(Q[i])) / sig])
         r = np.concatenate([r, a])
         return np.where(np.isfinite(r), r, 1e6)
@@ -615,8 +624,9 @@ class ModalProblem:
         k = self._static_model(values, causes) if self.static is not None else None
         gap = np.zeros(self.n) if self.gap_col is not None else None
         qt = np.zeros(self.n) if len(self.q_idx) else None
-        r = self._residuals(*self.predict(values, causes, gap=gap, q_thickness=qt), self._intrinsic_only(values, causes),
-                            k, self._fluid(values, causes), gap, qt)
+        f, Q = self.predict(values, causes, gap=gap, q_thickness=qt)
+        r = self._residuals(f, Q, self._intrinsic_only(values, causes), k, self._fluid(values, causes), gap, qt,
+                            self._q_share(values, causes, Q))
         if self.defect is not None:
             r = r + self.defect
         return r
@@ -625,8 +635,17 @@ class ModalProblem:
         k = self._static_model(values, causes, full=True) if self.static is not None else None
         gap = np.zeros(self.n) if self.gap_col is not None else None
         qt = np.zeros(self.n) if len(self.q_idx) else None
-        return self._residuals(*self.predict(values, causes, full=True, gap=gap, q_thickness=qt),
-                               self._intrinsic_only(values, causes), k, self._fluid(values, causes), gap, qt)
+        f, Q = self.predict(values, causes, full=True, gap=gap, q_thickness=qt)
+        return self._residuals(f, Q, self._intrinsic_only(values, causes), k, self._fluid(values, causes), gap, qt,
+                               self._q_share(values, causes, Q))
+
+    def _q_share(self, values, causes, Q: np.ndarray) -> np.ndarray | None:
+        """The intrinsic loss's share ``Q / Q_int`` of each Q row's damping in a model whose fluid is a rarefied
+        gas (a residual gas in a declared vacuum, ``ModalState.gas``); None otherwise (a continuum fluid's damping
+        dominates, or there is no fluid)."""
+        if not len(self.q_idx) or "Q_int" not in values or self.state(values, causes, self.lengths[0]).gas is None:
+            return None
+        return np.clip(Q[self.q_idx] / values["Q_int"], 0.0, 1.0)
 
     def inactive_rows(self, values, causes) -> int:
         """The fluid-gap direction's prior pseudo-residual in a model without a fluid: its column and amplitude

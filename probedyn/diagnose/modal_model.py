@@ -51,7 +51,9 @@ Extended model (:class:`ModalState`): what the causes change --
 * ``medium``: fluid density and viscosity loading the flapwise modes through Sader's
   hydrodynamic function (:mod:`probedyn.diagnose.hydrodynamics`), applied per mode by the
   Rayleigh quotient with the (reduced or FEM) mode shape and iterated to the loaded frequency;
-  ``fluid_factor`` scales that load (e.g. squeeze film near a surface);
+  ``fluid_factor`` scales that load (e.g. squeeze film near a surface); ``gas`` makes the medium a rarefied gas
+  at its pressure and temperature (a residual gas in a vacuum: the continuum load scaled by the free-molecular
+  damping, :mod:`probedyn.diagnose.hydrodynamics`);
 * ``Q_int``: the intrinsic quality factor (one loss factor for every mode), ``1/Q = 1/Q_int + 1/Q_fluid``;
 * ``terms``: any other FEM matrix a cause brings (:class:`Term`: a builder of a sparse K or M
   term, a factor and how it scales with the stretch).
@@ -85,7 +87,8 @@ from scipy.optimize import brentq
 from probedyn.core.errors import DataFormatError, GeometryError, ProbedynError, SolverError
 from probedyn.diagnose.fem_terms import (axial_gradient_matrix, directional, face_mass_scalar, face_normal,
                                          reduced_stiffness_split, stretch_sensitivity)
-from probedyn.diagnose.hydrodynamics import sader_gamma, stokes_layer_mass, torsion_gamma
+from probedyn.diagnose.hydrodynamics import (free_molecular_damping, rarefied_factor, sader_gamma,
+                                             stokes_layer_mass, torsion_gamma)
 from probedyn.diagnose.overlap import bond_stiffness, segment_matrices
 from probedyn.fem.modes import FAMILY_COLUMNS, classify_shapes, section_slices
 from probedyn.fem.eigen import factorize, shift_invert_eigsh
@@ -131,10 +134,16 @@ class ModalState:
     axial_stress: float = 0.0  # Pa
     medium: tuple[float, float] = (0.0, 1.8e-5)  # rho_f, eta_f
     fluid_factor: float = 1.0
+    gas: tuple[float, float] | None = None  # a rarefied gas: (pressure Pa, temperature K); None: a continuum medium
     Q_int: float = math.inf
     terms: list = field(default_factory=list)
     axes: dict = field(default_factory=lambda: {"length": 0, "width": 1, "thickness": 2})
     length: float = 1.0  # nominal free length of this state's model [m] (for offsets such as dL)
+
+    def free_molecular(self) -> tuple[float, float]:
+        """The medium's free-molecular damping per unit area ``(b_n, b_t)``
+        (:func:`~probedyn.diagnose.hydrodynamics.free_molecular_damping`); infinite for a continuum medium."""
+        return (math.inf, math.inf) if self.gas is None else free_molecular_damping(*self.gas)
 
     def copy(self) -> "ModalState":
         return dataclasses.replace(self, scale=np.array(self.scale, float), masses=list(self.masses),
@@ -1131,18 +1140,19 @@ class ReducedModal:
             w = self.base.w * sc[self.base.width_axis]
             area = float(np.prod([sc[i] for i in range(3) if i != self.base.thickness_axis]))
             rho_t = self.base.model.materials[0].density * s.rho_factor * self.base.t * sc[self.base.thickness_axis]
+            b_n, b_t = s.free_molecular()
             for k, (fa, _) in enumerate(needed):
                 if fa == "lateral" and lt[k] > 0:
                     a = vt[:, k]
                     sw = area * float(a[:q] @ sub.top_w @ a[:q])
                     f[k], Q[k] = _stokes_mode(float(a @ K @ a), float(a @ M @ a), sw, math.sqrt(lt[k]), rho_f, eta_f,
-                                              s.fluid_factor, s.Q_int)
+                                              s.fluid_factor, s.Q_int, b_fm=b_t)
                 if fa not in ("flapwise", "torsion") or lt[k] <= 0:
                     continue
                 a = vt[:, k]
                 mq, sq = float(a @ M @ a), area * float(a[:q] @ sub.top @ a[:q])
                 f[k], Q[k], x = _fluid_mode(float(a @ K @ a), mq, sq, math.sqrt(lt[k]), w, rho_f, eta_f,
-                                            s.fluid_factor, s.Q_int, torsion=fa == "torsion")
+                                            s.fluid_factor, s.Q_int, torsion=fa == "torsion", b_fm=b_n)
                 if hydro is not None:
                     hydro.setdefault("x", np.full(len(needed), np.nan))[k] = x
                     # the top face's share: flapwise only (torsion's load is the uniform beam's exactly)
@@ -1383,7 +1393,7 @@ def _lowest_pairs(K: np.ndarray, M: np.ndarray, n: int, shift: float) -> tuple[n
     return lam, V / mn[None, :]
 
 
-def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = False):
+def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = False, b_fm: float = math.inf):
     """Loaded frequency [Hz], Q and added-mass ratio ``x`` (the fluid's added modal mass over the mode's own) of
     one flapwise mode (Rayleigh quotient with its shape): added mass ``(pi/4) rho_f w Gamma_r`` per unit area
     of the top face's transverse motion, damping from Gamma_i, iterated to the loaded frequency.
@@ -1391,12 +1401,21 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = 
     ``torsion``: a torsion mode, ``(3 pi / 32) rho_f w Gamma_tor,r`` per unit area of the top face's transverse
     motion: for a section rotating by theta (``u_t = theta y``, ``int u_t^2 dy = theta^2 w^3 / 12``) this is the
     added moment of inertia ``(pi/128) rho_f w^4 Gamma_tor,r`` per length of Green & Sader (2002), i.e. their
-    uniform-beam loading exactly for a rigid section rotation (:func:`~probedyn.diagnose.hydrodynamics.torsion_gamma`)."""
+    uniform-beam loading exactly for a rigid section rotation (:func:`~probedyn.diagnose.hydrodynamics.torsion_gamma`).
+
+    ``b_fm``: a rarefied gas's free-molecular damping per unit area of the face's transverse motion (both faces,
+    :func:`~probedyn.diagnose.hydrodynamics.free_molecular_damping`); the continuum load is scaled by
+    :func:`~probedyn.diagnose.hydrodynamics.rarefied_factor` at each frequency (infinite: a continuum)."""
     gamma = torsion_gamma if torsion else sader_gamma
     ma0 = factor * (3.0 * math.pi / 32.0 if torsion else 0.25 * math.pi) * rho_f * w * sq
+    c_fm = b_fm * sq
+
+    def load(o):  # Gamma at o, scaled for a rarefied gas
+        gg = complex(gamma(o, w, rho_f, eta_f))
+        return gg if not math.isfinite(c_fm) else gg * rarefied_factor(c_fm, o * ma0 * gg.imag)
 
     def loaded(o):  # one pass of the fixed point o = sqrt(kq / (mq + ma Gamma_r(o))), and Gamma at o
-        gg = complex(gamma(o, w, rho_f, eta_f))
+        gg = load(o)
         return math.sqrt(kq / (mq + ma0 * gg.real)), gg
 
     # the fixed point by secant steps on h(o) = loaded(o) - o (the plain iteration contracts by ~x / (2 (1 + x))
@@ -1418,7 +1437,7 @@ def _fluid_mode(kq, mq, sq, om, w, rho_f, eta_f, factor, Q_int, torsion: bool = 
         prev = (om, h)
         om = nxt
     if not done:
-        g = complex(gamma(om, w, rho_f, eta_f))
+        g = load(om)
     qf = (mq + ma0 * g.real) / (ma0 * g.imag) if g.imag > 0 else math.inf
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf), ma0 * g.real / mq
 
@@ -1435,19 +1454,25 @@ def top_face_forms(model: ElasticModel, thickness_axis: int, width_axis: int) ->
     return forms[0], forms[1]
 
 
-def _stokes_mode(kq, mq, sq_w, om, rho_f, eta_f, factor, Q_int):
+def _stokes_mode(kq, mq, sq_w, om, rho_f, eta_f, factor, Q_int, b_fm: float = math.inf):
     """Loaded frequency [Hz] and Q of one lateral mode: the Stokes layers of the top and bottom faces
     (:func:`~probedyn.diagnose.hydrodynamics.stokes_layer_mass` per face; the bottom face moves across the
     width as the top one in lateral bending), ``sq_w`` the top face's in-plane mass form ``int u_w^2 dA`` of
-    the mode, iterated to the loaded frequency."""
+    the mode, iterated to the loaded frequency. ``b_fm``: a rarefied gas's free-molecular damping per unit area
+    of one face moving in its plane (as in :func:`_fluid_mode`; infinite: a continuum)."""
+
+    def added(o):  # the two layers' added mass at o (their damping is o times it), scaled for a rarefied gas
+        ma = factor * 2.0 * float(stokes_layer_mass(o, rho_f, eta_f)) * sq_w
+        return ma if not math.isfinite(b_fm) else ma * rarefied_factor(2.0 * b_fm * sq_w, o * ma)
+
     for _ in range(60):
-        ma = factor * 2.0 * float(stokes_layer_mass(om, rho_f, eta_f)) * sq_w
+        ma = added(om)
         om_new = math.sqrt(kq / (mq + ma))
         done = abs(om_new - om) <= 1e-14 * om
         om = om_new
         if done:
             break
-    ma = factor * 2.0 * float(stokes_layer_mass(om, rho_f, eta_f)) * sq_w
+    ma = added(om)
     qf = (mq + ma) / ma if ma > 0 else math.inf
     return om / (2 * math.pi), 1.0 / (1.0 / Q_int + 1.0 / qf)
 
@@ -1700,6 +1725,7 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
     if rho_f > 0 and s.fluid_factor > 0 and "top" in (model.mesh.boundaries or {}):
         Stop, Stop_w = top_face_forms(model, base.thickness_axis, base.width_axis)
     w = base.w * sc[base.width_axis]
+    b_n, b_t = s.free_molecular()
     for k, (fa, o) in enumerate(needed):
         idx = [i for i, x in enumerate(fams) if x == fa]
         if len(idx) < o:
@@ -1708,11 +1734,12 @@ def full_solve(base: FEMBaseline, s: ModalState, needed: list[tuple[str, int]], 
         _, omega, a, kq, mq = modes[idx[o - 1]]
         f[k] = omega / (2 * np.pi)
         if Stop_w is not None and fa == "lateral":
-            f[k], Q[k] = _stokes_mode(kq, mq, float(a @ (Stop_w @ a)), omega, rho_f, eta_f, s.fluid_factor, s.Q_int)
+            f[k], Q[k] = _stokes_mode(kq, mq, float(a @ (Stop_w @ a)), omega, rho_f, eta_f, s.fluid_factor, s.Q_int,
+                                      b_fm=b_t)
         if Stop is not None and fa in ("flapwise", "torsion"):
             sq = float(a @ (Stop @ a))
             f[k], Q[k], x_added[k] = _fluid_mode(kq, mq, sq, omega, w, rho_f, eta_f,
-                                                 s.fluid_factor, s.Q_int, torsion=fa == "torsion")
+                                                 s.fluid_factor, s.Q_int, torsion=fa == "torsion", b_fm=b_n)
             if fa == "flapwise":
                 r_top[k] = min(rho_t * sq / mq, 1.0)
     info = {"dofs": model.dofs, "seconds": time.perf_counter() - t0, "families": fams,

@@ -60,6 +60,7 @@ import math
 from typing import Any
 
 import numpy as np
+from scipy.constants import k as K_B  # Boltzmann constant [J/K]
 from scipy.optimize import least_squares
 from scipy.signal import find_peaks
 from scipy.stats import gamma as gamma_dist
@@ -72,7 +73,6 @@ from probedyn.diagnose.modal_model import FAMILIES, FEMBaseline, _fluid_mode, _s
 
 __all__ = ["spectrum_problem", "fit_line", "fit_doublet", "detect_peaks", "sho_psd"]
 
-K_B = 1.380649e-23
 MATCH_TOL = 0.03
 Q_FACTOR = 3.0
 Q_SPREAD = 10.0  # the Qs of one lever's modes lie within this factor of each other (an unresolved line beyond: a spur)

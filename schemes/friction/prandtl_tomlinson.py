@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.constants import k as K_B  # Boltzmann constant [J/K]
 from numba import njit
 
 from probedyn.core.errors import ParameterError
@@ -38,7 +39,6 @@ from probedyn.core.presets import preset
 
 from .base import FRICTION_MODELS, TABLE_2_1, FrictionModel, positive_param
 
-K_B = 1.380649e-23  # J/K
 
 #: mica lattice constant (Table 4.2 of the source)
 MICA_LATTICE = preset("table-4.2-mica")["a"]
