@@ -31,9 +31,11 @@ KY_RATIO_BOUNDS = (0.1, 100.0)
 KY_STARTS = (10.0,)
 #: the grid of (angle [deg], k_y / k_x) the problem ranks by the whole model's chi-square (:meth:`ridge_starts`):
 #: on a lever stiffer across the scan the chi-square's basin is narrow in both (an own truth at 12 deg and 8:
-#: chi^2 x 5 at 6 or 11, x 4 at 11 or 13 deg), and the isotropic starts do not reach it
+#: chi^2 x 5 at 6 or 11, x 4 at 11 or 13 deg), and the isotropic starts do not reach it; 0.65 is the usual
+#: scan across a rectangular lever's axis (:data:`KY_RATIO_BOUNDS`; own case 2012 at 0.66: angle 37 % off
+#: without it, 0.5 % with it, docs/diagnose.md section 9.37)
 RIDGE_THETAS = (8.0, 12.0, 17.0, 24.0, 33.0)
-RIDGE_KY = (3.0, 10.0)
+RIDGE_KY = (0.65, 3.0, 10.0)
 
 
 def _aligned(ref: dict, theta_deg: float) -> dict:
