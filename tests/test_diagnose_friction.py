@@ -326,6 +326,35 @@ def test_a_misaligned_ridge_start_profiled_in_period_and_corrugation_is_fitted_i
 
 
 @pytest.mark.slow
+def test_a_lever_softer_across_the_scan_is_reached_from_the_ridge(tmp_path):
+    """Own study seed 2012 (12.9 deg to the rows, k_y = 0.655 k_x: the usual scan across a rectangular lever's
+    axis, bending through the tip height against torsion). With the ridge's stiffness ratios 3 and 10 only (levers
+    stiffer across the scan) the diagnosis fitted the angle 37 % off (session 50). The ridge now holds 0.65: of all
+    the nested starts the misalignment gets (declared, data-derived, ridge, profiled), the one with the lowest
+    chi^2 lies on a lever softer across the scan, and the fit from it has the angle within the issue's 10 %
+    (measured in the whole diagnosis: 0.53 %) and k_y / k_x below 1. Slow (~60 s CPU); with ``RIDGE_KY = (3, 10)``
+    it fails (measured: the best start then lies on a stiffer lever)."""
+    path, truth = make_friction_case(tmp_path, 2012, "lattice-misalignment")
+    assert truth["params"]["ky_ratio"] < 1.0
+    prob = make_problem(path)
+    prob.workers = 1
+    F = Fitter(prob)
+    base = F.baseline()
+    ref = dict(base.values)
+    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
+
+    def c2(v):
+        return float(np.sum(prob.residuals(v, (mis,)) ** 2))
+
+    best = min(prob.nested_starts(ref, (), (mis,)), key=c2)
+    assert best["ky_ratio"] < 1.0
+    fit = F.fit((mis,), [best])
+    assert fit.chi2 < 0.5 * base.chi2
+    assert fit.values["theta_deg"] == pytest.approx(truth["params"]["theta_deg"], rel=0.10)
+    assert fit.values["ky_ratio"] < 1.0
+
+
+@pytest.mark.slow
 def test_a_misaligned_scan_on_an_anisotropic_lever_is_named_with_its_angle_and_stiffness(tmp_path):
     """The diagnosis (the misalignment cause only, for time) on the truth above: the angle within 3 % and the
     stiffness ratio within 15 % (the chi-square is rugged at 0.1 deg and 5 % in k_y: a slip landing in another
