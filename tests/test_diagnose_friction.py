@@ -294,6 +294,21 @@ def test_a_data_start_that_moves_the_period_profiles_the_corrugation_at_its_eta(
     assert best["u0"] == pytest.approx(truth["u0"], rel=0.02)
 
 
+def _misaligned_case(tmp_path, seed: int):
+    """An own-study misalignment truth, its problem (one process), fitter, baseline fit, the misalignment cause and
+    the chi^2 of the model extended by it."""
+    path, truth = make_friction_case(tmp_path, seed, "lattice-misalignment")
+    prob = make_problem(path)
+    prob.workers = 1
+    F = Fitter(prob)
+    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
+
+    def c2(v):
+        return float(np.sum(prob.residuals(v, (mis,)) ** 2))
+
+    return truth, prob, F, F.baseline(), mis, c2
+
+
 def test_a_misaligned_ridge_start_profiled_in_period_and_corrugation_is_fitted_into_the_truths_basin(tmp_path):
     """Own study seed 2019 (10.2 deg to the rows, k_y = 2.56 k_x; missed in sessions 48-49): the misalignment's ridge
     keeps the baseline's period along the scan (``a = a_ref cos(theta)``), but on a lever stiffer across the scan the
@@ -303,20 +318,11 @@ def test_a_misaligned_ridge_start_profiled_in_period_and_corrugation_is_fitted_i
     cause (its gain over the baseline above the chi^2 - dof it leaves: chi^2 below half the baseline's; measured
     1.4e4 against 5.7e5, the truth's own 2.8e4) with the angle within the issue's 10 % (measured 2.7 %; k_y / k_x
     1.8 %). From the raw point the fit stays above that line (measured 4.9e5)."""
-    path, truth = make_friction_case(tmp_path, 2019, "lattice-misalignment")
-    prob = make_problem(path)
-    prob.workers = 1
-    F = Fitter(prob)
-    base = F.baseline()
+    truth, prob, F, base, mis, c2 = _misaligned_case(tmp_path, 2019)
     ref = dict(base.values)
-    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
     assert prob._beyond_noise(ref, ())
     (start, _) = mis.data_starts(prob, ref)  # the angle from the declared lattice, on the isotropic lever
     raw = {**ref, **start, "ky_ratio": 3.0}
-
-    def c2(v):
-        return float(np.sum(prob.residuals(v, (mis,)) ** 2))
-
     c_raw = c2(raw)
     prof = prob._period_profile(raw, c_raw, (mis,))
     assert c2(prof) < 0.5 * c_raw
@@ -334,19 +340,9 @@ def test_a_lever_softer_across_the_scan_is_reached_from_the_ridge(tmp_path):
     chi^2 lies on a lever softer across the scan, and the fit from it has the angle within the issue's 10 %
     (measured in the whole diagnosis: 0.53 %) and k_y / k_x below 1. Slow (~60 s CPU); with ``RIDGE_KY = (3, 10)``
     it fails (measured: the best start then lies on a stiffer lever)."""
-    path, truth = make_friction_case(tmp_path, 2012, "lattice-misalignment")
+    truth, prob, F, base, mis, c2 = _misaligned_case(tmp_path, 2012)
     assert truth["params"]["ky_ratio"] < 1.0
-    prob = make_problem(path)
-    prob.workers = 1
-    F = Fitter(prob)
-    base = F.baseline()
-    ref = dict(base.values)
-    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
-
-    def c2(v):
-        return float(np.sum(prob.residuals(v, (mis,)) ** 2))
-
-    best = min(prob.nested_starts(ref, (), (mis,)), key=c2)
+    best = min(prob.nested_starts(dict(base.values), (), (mis,)), key=c2)
     assert best["ky_ratio"] < 1.0
     fit = F.fit((mis,), [best])
     assert fit.chi2 < 0.5 * base.chi2
