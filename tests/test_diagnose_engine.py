@@ -295,3 +295,39 @@ def test_a_screened_runner_up_within_the_margin_is_continued_and_can_win():
     for keep, margin in ((1, SCREEN_MARGIN), (SCREEN_KEEP, 0.01)):
         f, cont = run(keep, margin)
         assert f.values["x"] == pytest.approx(0.0, abs=0.05) and f.chi2 > 0.9 and cont == pytest.approx([0.05])
+
+
+def test_the_lr_threshold_against_a_limit_on_the_edge_holds_its_level():
+    """engine.boundary_lr_threshold: a container tested against its limit (the limit at the edge of the extra
+    parameter's range, as JKR is Maugis-Dugdale at 1/lambda = 0) rejects a true limit at the stated level.
+    Monte Carlo on a nonlinear nested pair fitted with its bound: y = A exp(-s x), s >= 0, the limit a
+    constant (s = 0), data from the limit. The rejection rate at alpha = 5 % is 5 % within 4 binomial standard
+    errors, and the interior-null threshold chi2_1(0.95) = 3.84 rejects at half of it (chi-bar-square
+    1/2 chi2_0 + 1/2 chi2_1: Self & Liang 1987) -- the difference is 7 standard errors."""
+    from scipy.optimize import minimize_scalar
+    from scipy.stats import chi2
+
+    from probedyn.diagnose.engine import boundary_lr_threshold
+
+    alpha, n_rep = 0.05, 4000
+    assert boundary_lr_threshold(1, 0.01) == pytest.approx(chi2.isf(0.02, 1), rel=1e-12)  # 5.41
+    for k in (2, 3):  # the mixture's tail at the threshold is alpha, between the two pure thresholds
+        x = boundary_lr_threshold(k, alpha)
+        assert 0.5 * chi2.sf(x, k - 1) + 0.5 * chi2.sf(x, k) == pytest.approx(alpha, rel=1e-9)
+        assert chi2.isf(alpha, k - 1) < x < chi2.isf(alpha, k)
+    rng = np.random.default_rng(38)
+    xg = np.linspace(0.0, 1.0, 40)
+    stats = np.empty(n_rep)
+    for i in range(n_rep):
+        y = 1.0 + rng.normal(0.0, 1.0, xg.size)  # the limit's truth, unit noise
+
+        def chi2_profile(s):  # A profiled (linear) at each s
+            g = np.exp(-s * xg)
+            return float(np.sum((y - g * (g @ y) / (g @ g)) ** 2))
+
+        c_limit = chi2_profile(0.0)
+        res = minimize_scalar(chi2_profile, bounds=(0.0, 20.0), method="bounded", options={"xatol": 1e-9})
+        stats[i] = max(c_limit - min(res.fun, c_limit), 0.0)
+    se = np.sqrt(alpha * (1 - alpha) / n_rep)
+    assert abs(np.mean(stats > boundary_lr_threshold(1, alpha)) - alpha) < 4 * se
+    assert abs(np.mean(stats > chi2.isf(alpha, 1)) - alpha / 2) < 4 * np.sqrt(alpha / 2 * (1 - alpha / 2) / n_rep)
