@@ -331,3 +331,41 @@ def test_the_lr_threshold_against_a_limit_on_the_edge_holds_its_level():
     se = np.sqrt(alpha * (1 - alpha) / n_rep)
     assert abs(np.mean(stats > boundary_lr_threshold(1, alpha)) - alpha) < 4 * se
     assert abs(np.mean(stats > chi2.isf(alpha, 1)) - alpha / 2) < 4 * np.sqrt(alpha / 2 * (1 - alpha / 2) / n_rep)
+
+
+def test_within_a_confounded_group_the_cause_with_the_fewest_parameters_leads():
+    """engine._fewest_parameters_lead (modal and spectra, ``occam_within_group``): a three-parameter cause leading a
+    group by less than the margin gives the lead to the group's one-parameter cause with the best evidence (blind
+    spectrum s01); the old leader stays a rival. Not where the problem does not opt in, not where the leader already
+    has the fewest, and not where the group seen from the new leader would not hold the old one."""
+    from probedyn.diagnose.engine import EVIDENCE_MARGIN, _fewest_parameters_lead
+
+    class _C:
+        def __init__(self, key):
+            self.key = key
+
+    class _P:
+        occam_within_group = True
+
+    def row(key, ev, k):
+        return {"cause": _C(key), "evidence": ev, "k": k}
+
+    def rival_of(d, lead):
+        return d is not lead and d["evidence"] >= lead["evidence"] - EVIDENCE_MARGIN
+
+    claimed = [row("bonded-overlap", 50.0, 3), row("modulus-error", 49.5, 1), row("length-error", 49.0, 1),
+               row("clamp-compliance", 48.9, 2), row("point-mass", 40.0, 2)]
+    best, rivals = claimed[0], [d for d in claimed[1:] if rival_of(d, claimed[0])]
+    new, new_rivals, note = _fewest_parameters_lead(_P(), claimed, best, rivals, rival_of)
+    assert new["cause"].key == "modulus-error" and claimed[0] is new and note
+    assert [d["cause"].key for d in new_rivals] == ["bonded-overlap", "length-error", "clamp-compliance"]
+    # not opted in, or the leader already the simplest: unchanged
+    claimed = [row("bonded-overlap", 50.0, 3), row("modulus-error", 49.5, 1)]
+    assert _fewest_parameters_lead(object(), claimed, claimed[0], claimed[1:], rival_of)[0] is claimed[0]
+    claimed = [row("modulus-error", 50.0, 1), row("thickness-error", 49.5, 1), row("point-mass", 49.0, 2)]
+    assert _fewest_parameters_lead(_P(), claimed, claimed[0], claimed[1:], rival_of)[2] is None
+    # a rival by a rule that does not hold the other way round (the old leader not within reach of the new one)
+    claimed = [row("clamp-compliance", 50.0, 2), row("length-error", 40.0, 1)]
+    one_way = lambda d, lead: d is not lead and lead["cause"].key == "clamp-compliance"  # noqa: E731
+    new, _, note = _fewest_parameters_lead(_P(), claimed, claimed[0], claimed[1:], one_way)
+    assert new["cause"].key == "clamp-compliance" and note is None and claimed[0] is new

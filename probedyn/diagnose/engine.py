@@ -1061,9 +1061,14 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     reasons: list[str] = []
     if claimed:
         best = claimed[0]
-        rivals = [d for d in claimed[1:] if not d.get("contains_leader")
-                  and (rank(d) >= rank(best) - margin or d.get("sibling_limit") or _tied_alternative(problem, d, best, margin)
-                       or (by_ho and _unresolved(best, d, cv, margin)))]
+
+        def rival_of(d, lead):
+            return (d is not lead and not d.get("contains_leader")
+                    and (rank(d) >= rank(lead) - margin or d.get("sibling_limit")
+                         or _tied_alternative(problem, d, lead, margin) or (by_ho and _unresolved(lead, d, cv, margin))))
+
+        rivals = [d for d in claimed[1:] if rival_of(d, best)]
+        best, rivals, occam = _fewest_parameters_lead(problem, claimed, best, rivals, rival_of)
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
         current = best["fit"]
@@ -1072,6 +1077,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         findings.append(_finding(problem, F, base, best, confounded[0] if confounded else None, alpha))
         if parsimony:
             findings[0]["parsimony"] = parsimony
+        if occam:
+            findings[0]["notes"] = list(findings[0].get("notes") or []) + [occam]
         # 6. greedy extension while the chi-square test still fails
         while len(chosen) < max_causes and current.p_value < alpha:
             ext = []
@@ -1360,6 +1367,33 @@ def _parsimony(claimed: list[dict], margin: float, alpha: float = ALPHA) -> dict
             "container": best["cause"].key, "container_evidence": best["evidence"],
             "container_parameters": {p.name: best["fit"].values[p.name] for p in best["cause"].params},
             "contains_leader": bool(best.get("contains_leader"))}
+
+
+def _fewest_parameters_lead(problem, claimed: list[dict], best: dict, rivals: list[dict], rival_of):
+    """Occam within a confounded group (a problem with ``occam_within_group``: modal and spectra). The group's causes
+    are within the evidence margin of the leader, or not resolved by the folds: the data do not separate them, so the
+    ranking among them is the folds' scatter. Every parameter a cause has beyond another's costs it an Occam factor
+    in a Bayes factor (the prior volume it spreads over), which held-out evidence within the margin cannot resolve;
+    the cause with the fewest parameters therefore leads (the best by evidence among those), the others stay its
+    confounded rivals. Only where the group is the same seen from it (the old leader is its rival). Blind spectrum
+    s01 (a modulus error on a flapwise-only record in air): a three-parameter bonded overlap led a group of six by a
+    fraction of the margin; the one-parameter modulus error is named. Reorders ``claimed``; returns the leader, its
+    rivals and the note for the report (None where the rule does not act)."""
+    if not rivals or not getattr(problem, "occam_within_group", False):
+        return best, rivals, None
+    group = [best, *rivals]
+    kmin = min(d["k"] for d in group)
+    if best["k"] == kmin:
+        return best, rivals, None
+    new = next(d for d in group if d["k"] == kmin)
+    new_rivals = [d for d in claimed if rival_of(d, new)]
+    if not any(d is best for d in new_rivals):
+        return best, rivals, None
+    claimed.remove(new)
+    claimed.insert(0, new)
+    return new, new_rivals, (f"named first within its confounded group as the cause with the fewest parameters "
+                             f"({new['k']}; {best['cause'].key}, with {best['k']}, led by held-out evidence within "
+                             "what the data can separate)")
 
 
 def _evidence(d: dict, ref: Fit, cv: CrossValidation | None, use_cv: bool) -> None:

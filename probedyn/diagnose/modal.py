@@ -131,6 +131,9 @@ class ModalProblem:
     #: rank claimed causes by their held-out (leave-one-mode-out) evidence: which mode pattern a
     #: cause predicts for a mode it was not fitted to is what tells causes apart (see docs/diagnose.md)
     rank_by_heldout = True
+    #: within a confounded group the cause with the fewest parameters is named first (engine:
+    #: ``_fewest_parameters_lead``; the spectra's modal problems inherit it)
+    occam_within_group = True
     #: the folds (one mode left out) start from the null and from the full-data optimum of the
     #: cause's parameters (engine: ``cv_warm``). A cause located by several modes (a point mass: mass
     #: and position) has several (mass, position) pairs that fit the training modes about equally
