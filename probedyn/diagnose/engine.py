@@ -70,7 +70,9 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    either). Between two limits of one container (JKR and DMT under Maugis-Dugdale), ranked in sample
    by the parsimony rule (:func:`_parsimony`; also when a limit leads with the container within the
    margin behind it), the other limit is also confounded while its in-sample Akaike score is within
-   the margin (near a jump their held-out evidence scatters by several nats).
+   the margin (near a jump their held-out evidence scatters by several nats). A problem with
+   ``occam_within_group`` (modal, spectra) names the group's cause with the fewest parameters first
+   (:func:`_fewest_parameters_lead`): within the margin the order is the folds' scatter.
 6. **Extend** greedily while the extended model still fails the chi^2 test (at most
    ``max_causes``, each nested in the current model and passing the same tests). On a
    ``heldout_predictive`` problem an extension's evidence is also capped by the **plain** held-out
@@ -123,7 +125,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
-from scipy.optimize import OptimizeWarning, least_squares
+from scipy.optimize import OptimizeWarning, brentq, least_squares
 from scipy.stats import chi2 as chi2_dist
 
 from probedyn.core.errors import DataFormatError
@@ -893,7 +895,6 @@ def boundary_lr_threshold(k: int, alpha: float = ALPHA) -> float:
         raise ValueError("a container has at least one parameter more than its limit")
     if k == 1:
         return float(chi2_dist.isf(2.0 * alpha, 1))
-    from scipy.optimize import brentq
 
     def tail(x: float) -> float:
         return 0.5 * float(chi2_dist.sf(x, k - 1)) + 0.5 * float(chi2_dist.sf(x, k)) - alpha
@@ -1377,7 +1378,8 @@ def _fewest_parameters_lead(problem, claimed: list[dict], best: dict, rivals: li
     the cause with the fewest parameters therefore leads (the best by evidence among those), the others stay its
     confounded rivals. Only where the group is the same seen from it (the old leader is its rival). Blind spectrum
     s01 (a modulus error on a flapwise-only record in air): a three-parameter bonded overlap led a group of six by a
-    fraction of the margin; the one-parameter modulus error is named. Reorders ``claimed``; returns the leader, its
+    fraction of the margin; a one-parameter cause is named (the thickness error, which the flapwise frequencies do
+    not tell from the modulus error; docs/diagnose.md 9.38). Reorders ``claimed``; returns the leader, its
     rivals and the note for the report (None where the rule does not act)."""
     if not rivals or not getattr(problem, "occam_within_group", False):
         return best, rivals, None
