@@ -297,6 +297,26 @@ def test_a_screened_runner_up_within_the_margin_is_continued_and_can_win():
         assert f.values["x"] == pytest.approx(0.0, abs=0.05) and f.chi2 > 0.9 and cont == pytest.approx([0.05])
 
 
+def test_the_engine_tails_are_scipy_stats_numbers():
+    """``probedyn.diagnose.tails`` stands in for scipy.stats.chi2 / norm (its import is 0.28 s of every
+    diagnosis's start-up): the same special functions, so the same numbers to the last bit, over the
+    degrees of freedom and tails the engine uses (Bonferroni quantiles down to 1e-9, the 5.41 bound)."""
+    from scipy.stats import chi2, norm
+
+    from probedyn.diagnose.tails import chi2 as t_chi2, norm as t_norm
+
+    for k in (1, 2, 3, 5, 12, 40):
+        for x in (0.1, 1.0, 5.41, 30.0, 300.0):
+            assert t_chi2.sf(x, k) == chi2.sf(x, k)
+        for p in (0.5, 0.01, 1e-3, 1e-9):
+            assert t_chi2.isf(p, k) == chi2.isf(p, k)
+            assert t_chi2.ppf(1 - p, k) == chi2.ppf(1 - p, k)
+    for x in (0.0, 1.0, 4.0, 8.0):
+        assert t_norm.sf(x) == norm.sf(x)
+    # a limit: chi-square of 1 degree of freedom is a squared standard normal
+    assert t_chi2.sf(4.0, 1) == pytest.approx(2 * t_norm.sf(2.0), rel=1e-14)
+
+
 def test_the_lr_threshold_against_a_limit_on_the_edge_holds_its_level():
     """engine.boundary_lr_threshold: a container tested against its limit (the limit at the edge of the extra
     parameter's range, as JKR is Maugis-Dugdale at 1/lambda = 0) rejects a true limit at the stated level.

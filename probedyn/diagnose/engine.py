@@ -126,7 +126,7 @@ from typing import Any, Callable
 
 import numpy as np
 from scipy.optimize import OptimizeWarning, brentq, least_squares
-from scipy.stats import chi2 as chi2_dist
+from probedyn.diagnose.tails import chi2 as chi2_dist
 
 from probedyn.core.errors import DataFormatError
 from probedyn.core.registry import RegistryError

@@ -83,7 +83,18 @@ def axial_gradient_matrix(model, axis: int) -> sp.csr_matrix:
     return sp.kron(G, sp.identity(3), format="csr")
 
 
-def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
+def _chunk_size(nq: int, per_point: int, chunk: int | None) -> int:
+    """Elements per chunk: ``chunk`` if given, else as many as keep one chunk's largest work array
+    (``nq`` quadrature points x ``per_point`` doubles per element) near 1 M doubles (8 MB). Larger
+    chunks gain nothing in the batched products and pay the page faults of fresh ~100 MB arrays
+    (measured on the default cantilever, 840 hexahedra x 8 points, a 143-shape basis: 1.38 s for the
+    first split in one chunk, 0.29 s in the chunks of 50 elements this gives; the sums agree to 5e-16)."""
+    if chunk is not None:
+        return max(1, int(chunk))
+    return max(16, int(2 ** 20 // max(1, nq * per_point)))
+
+
+def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int | None = None,
                             elements: np.ndarray | None = None, materials=None,
                             intorder: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Projected stiffness split by derivative directions, and the projected axial gradients.
@@ -125,6 +136,7 @@ def reduced_stiffness_split(model, Phi: np.ndarray, chunk: int = 1024,
     sel_rows = [[(I, a) for I, (a, b) in enumerate(pairs) if b == j] + [(I, b) for I, (a, b) in enumerate(pairs)
                 if a != b and a == j] for j in range(3)]
     els = np.arange(nel) if elements is None else np.asarray(elements, int)
+    chunk = _chunk_size(len(W), 6 * 3 * r, chunk)  # F of _add_split: (e, q, 6, 3r)
     for start in range(0, els.size, chunk):
         sel = els[start:start + chunk]
         ne = sel.size
@@ -186,7 +198,7 @@ def _voigt_tensor(s: np.ndarray) -> np.ndarray:
     return T
 
 
-def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024, elements: np.ndarray | None = None,
+def stretch_sensitivity(model, V: np.ndarray, chunk: int | None = None, elements: np.ndarray | None = None,
                         internal_force: bool = False):
     """``dK/ds_a V`` at s = 1 for the three axes a, shape (3, N, n): the first derivative of the
     stiffness under a stretch of the mesh along a, minus the volume term,
@@ -212,6 +224,7 @@ def stretch_sensitivity(model, V: np.ndarray, chunk: int = 1024, elements: np.nd
     out = np.zeros((3, model.n_nodes, 3, n))
     kv = np.zeros((model.n_nodes, 3, n)) if internal_force else None  # K V over the elements (``internal_force``)
     els = np.arange(nel) if elements is None else np.asarray(elements, int)  # ``elements``: these only
+    chunk = _chunk_size(len(W), 9 * n, chunk)  # H and sig: (e, q, 3, 3, n)
     for start in range(0, els.size, chunk):
         sel = els[start:start + chunk]
         ne = sel.size

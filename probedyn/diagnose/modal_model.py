@@ -923,10 +923,12 @@ class ReducedModal:
             keep = w > 1e-10 * w.max()
             Tf = V[:, keep] / np.sqrt(w[keep])[None, :]
             Q = Q @ Tf
-        EQ = E @ Q
+        P = Q
+        # the products with the basis, each sparse matrix once (E P = K P + lambda_1 M P)
+        KP, MP = K @ P, M @ P
+        EQ = KP + lam0[0] * MP
         self.Phi = Q  # orthonormal in the energy norm E = K + lambda_1 M
         self.shift = float(lam0[0])  # the same shift for the reduced eigenproblems (_lowest_pairs)
-        P = self.Phi
         self.r = P.shape[1]
         self.E_r = _sym(P.T @ EQ)
         cols, owner, chunk = [], [], []
@@ -940,15 +942,15 @@ class ReducedModal:
         # coordinates of each raw shape in the basis: raw = Phi C  with  C = Phi^T E raw
         self._raw_coords = np.linalg.solve(self.E_r, EQ.T @ np.column_stack(cols))
         self._owner = owner
-        self.M_r = _sym(P.T @ (M @ P))
+        self.M_r = _sym(P.T @ MP)
         Mel = m._Mel if m._Mel is not None else M
-        self.M_el = _sym(P.T @ (Mel @ P))
+        self.M_el = self.M_r.copy() if Mel is M else _sym(P.T @ (Mel @ P))
         self.M_fixed = self.M_r - self.M_el
         self.M_tip = None  # the meshed tip's share of M_el (translated, not stretched, through the thickness)
         if base.tip is not None:
             Mt = el_mass(m.mesh, np.where(base.tip[0], m.elem_density, 0.0), element=m.element, basis=m.basis)
             self.M_tip = _sym(P.T @ (Mt @ P))
-        self.K_r = _sym(P.T @ (K @ P))
+        self.K_r = _sym(P.T @ KP)
         # the clamp face's area moments and every basis shape's face moments (reference coordinates about
         # the face centroid): the rigid motion a shape gives the face, in any stretched geometry (_Sub.face_rigid)
         Xc = (m.basis.doflocs - base.clamp_centroid[:, None]).T  # (n_nodes, 3)

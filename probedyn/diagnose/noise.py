@@ -283,7 +283,7 @@ def sequence_scales(r: np.ndarray, seqs) -> dict[str, Any] | None:
     quantile of ``len(seqs) - 1`` degrees of freedom at the two-sided tail of ``GATE_SE`` standard errors
     (6.3e-5). A force curve's approach and retract recorded at different rates (the JPK QI curve: 5 kHz and
     50 kHz, the retract's scatter 4.3x the approach's) carry different detector bandwidths, hence noise."""
-    from scipy.stats import chi2 as chi2_dist, norm
+    from probedyn.diagnose.tails import chi2 as chi2_dist, norm
 
     ln_q, w = [], []
     for s in seqs:
