@@ -98,21 +98,79 @@ def test_loop_ratio_is_monotone_and_has_its_stiff_contact_limit():
     assert abs(_pt_loop_ratio(np.array([eta]))[0] / lim - 1.0) < 2.0 / eta
 
 
+def _step_path(D: float, kb: float, width: float = 0.0):
+    """A model path along the support: two parallel stick branches of slope ``kb``, the one before the slip
+    at X* = 0 higher by the drop ``D``; ``width`` > 0: the fall is a smooth transient of that width."""
+    b = np.concatenate([np.linspace(-6.0, -1e-9, 6001), np.linspace(1e-9, 6.0, 6001)])
+    if width > 0:
+        b = np.linspace(-6.0, 6.0, 24001)
+        return b, kb * b + 0.5 * D * (1.0 - np.tanh(b / width))
+    return b, kb * b + np.where(b < 0, D, 0.0)
+
+
 def test_slip_scatter_moments_are_the_two_branch_mixture():
-    """A slip at Y = X* + delta (delta uniform on (-1, 1)) between two stick branches a drop D apart:
-    a point sample at x > 0 is on the upper branch with probability p = (1 - x) / 2, so its mean
-    is shifted by D p and its variance is D^2 p (1 - p) (exact for the quantile grid up to its
-    discreteness, 1/M)."""
+    """The limit of an instantaneous slip: a slip at Y = X* + delta (delta uniform on (-1, 1)) between two
+    stick branches a drop D apart. A point sample at x > 0 is on the upper branch with probability
+    p = (1 - x) / 2, so its mean is shifted by D p and its variance is D^2 p (1 - p) (exact for the quantile
+    grid up to its discreteness, 1/M), whatever the branches' common slope (the translated path keeps the
+    branches where they are)."""
     from probedyn.diagnose.friction import _scatter_moments
 
     M = 4000
     dq = -1.0 + (np.arange(M) + 0.5) * 2.0 / M
     x = np.array([-0.5, 0.25, 0.5, 0.75, 2.0])
-    mean, var = _scatter_moments(x, np.zeros(len(x), int), [(0, 0.0, 1.0)], dq, 2.0, point=True)
     p = np.where(np.abs(x) < 1, (1 - np.abs(x)) / 2, 0.0)
     sign = np.where(x > 0, 1.0, -1.0)  # before X*: a slip earlier puts the sample on the lower branch
-    assert np.allclose(mean, sign * 2.0 * p, atol=2.0 / M)
-    assert np.allclose(var, 4.0 * p * (1 - p), atol=4.0 / M)
+    for kb in (0.0, 0.7):
+        path = _step_path(2.0, kb)
+        mean, var = _scatter_moments(x, np.zeros(len(x), int), [(0, 0.0, 1.0)], dq, True, [path], 2.0)
+        assert np.allclose(mean, sign * 2.0 * p, atol=2.0 / M)
+        assert np.allclose(var, 4.0 * p * (1 - p), atol=4.0 / M)
+        # the same slip on a retrace (motion in -X, the shift reversed): the mirror image
+        xr, pathr = -x, (-path[0][::-1], -path[1][::-1])
+        mean_r, var_r = _scatter_moments(xr, np.zeros(len(x), int), [(0, 0.0, -1.0)], dq, True, [pathr], 2.0)
+        assert np.allclose(mean_r, -mean, atol=2.0 / M) and np.allclose(var_r, var, atol=4.0 / M)
+
+
+def test_slip_scatter_of_interval_means_is_the_branch_fraction():
+    """Interval means across an instantaneous slip: a sample over (x - h, x + h) holds the upper branch over
+    the part before Y, so its value is D times that fraction of the interval; its mean and variance over
+    Y = delta uniform on (-1, 1) follow in closed form (the branches' slope cancels as for points)."""
+    from probedyn.diagnose.friction import _scatter_moments
+
+    M = 4000
+    dq = -1.0 + (np.arange(M) + 0.5) * 2.0 / M
+    h = 0.25
+    x = np.arange(-2.0, 2.0 + 1e-9, 2 * h)  # contiguous intervals, as the sampler's
+    D = 2.0
+    mean, var = _scatter_moments(x, np.zeros(len(x), int), [(0, 0.0, 1.0)], dq, False, [_step_path(D, 0.4)], 6.0)
+    frac = np.clip((dq[:, None] - (x[None, :] - h)) / (2 * h), 0.0, 1.0)  # the part before Y
+    Fs = D * frac
+    F0 = D * np.clip((0.0 - (x - h)) / (2 * h), 0.0, 1.0)
+    assert np.allclose(mean, Fs.mean(axis=0) - F0, atol=1e-3)
+    assert np.allclose(var, Fs.var(axis=0), atol=1e-3)
+    assert var[np.argmin(np.abs(x))] > 0.3  # the interval holding the slip scatters most
+
+
+def test_slip_scatter_inside_a_transient_is_its_slope_times_the_shift():
+    """A sample caught during the slip's fall (a smooth transient of width w much wider than the slip
+    point's scatter sigma): its value moves with the translated transient, so its variance is
+    ``(F'(x) - k_b)^2 sigma^2`` (the delta method; the step model gave 0 to a sample outside (X*, Y)), and
+    on the branches away from the slip it is 0 (to the transient's tail)."""
+    from probedyn.diagnose.friction import _scatter_moments
+
+    M = 2000
+    sig, w, D, kb = 0.01, 0.2, 2.0, 0.5
+    from scipy.special import ndtri
+
+    dq = sig * ndtri((np.arange(M) + 0.5) / M)
+    b, f = _step_path(D, kb, width=w)
+    x = np.array([-1.0, 0.05, 0.1, 0.2, 1.0])
+    mean, var = _scatter_moments(x, np.zeros(len(x), int), [(0, 0.0, 1.0)], dq, True, [(b, f)], 6.0)
+    slope = np.interp(x, b, np.gradient(f, b)) - kb
+    assert np.allclose(np.sqrt(var), np.abs(slope) * np.std(dq), rtol=0.02, atol=1e-4)
+    # x = 0.05 ... 0.2 lie beyond every shifted slip point (|dq| < 3.5 sigma): the step model gave them 0
+    assert var[0] < 1e-8 and var[-1] < 1e-6 and np.all(var[1:4] > 1e-4)
 
 
 def test_loop_reads_a_calibration_factor_and_the_corrugation(tmp_path):
