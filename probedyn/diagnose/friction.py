@@ -55,6 +55,11 @@ __all__ = ["FrictionProblem", "FrictionState", "read_friction", "simulate_scan"]
 #: model enters the data on its steady stick-slip cycle; the data before their own first slip (which
 #: depend on the unrecorded history, e.g. a previous retrace) are not used (FrictionProblem.use)
 PREROLL = 2.0
+#: lattice periods of support travel an activated path runs on past the record's last sample (the final segment
+#: continued): a slip whose instability lies just beyond the record's end may come, activated, before its last
+#: samples, and only a slip in the path carries that scatter (:func:`_scatter_moments`; blind f20, 1.5 K, point
+#: samples: the last sample, already slipped, at 60 sigma against a model without it)
+POSTROLL = 1.0
 START_PERIODS = 1.5  # lattice periods at the start of a scan left out (unknown history before the scan)
 #: corrugation above which a slip can carry the tip past the next well (Medyanik et al., PRL 97, 136106
 #: (2006): multiple slips need eta > 4.6); there the stick-slip pattern of a scan is one of several
@@ -658,7 +663,8 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
     """Trace/retrace with thermally activated slips: between slips the FFM integration runs as
     usual; when the support reaches the median activated slip point of the current well, the tip
     is placed just over the saddle (at rest) and the FFM dynamics carries out the slip. The tip starts at
-    rest at ``x0`` (default: under the support, ``turns[0]``)."""
+    rest at ``x0`` (default: under the support, ``turns[0]``). An activated path runs on ``POSTROLL`` periods past
+    the last turn (the record's end), so that a slip just beyond it scatters into the last samples."""
     from probedyn.schemes.ffm import ScanResult
 
     x0 = turns[0] if x0 is None else x0
@@ -673,6 +679,8 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
     adv = _median_advance(tab, H)
     Xtab, _, Xc, xs_tab, _ = tab
     scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0, H)
+    d_end = 1.0 if turns[-1] > turns[-2] else -1.0
+    turns = list(turns[:-1]) + [turns[-1] + d_end * POSTROLL * a]  # the record's end run on (POSTROLL)
     if adv < THERMAL_PLACE_ADVANCE * a:
         # activated slips close to the instability: the athermal path (its slips resolved by the
         # integrator, the saddle-node delay included) with every slip's scatter about the instability
