@@ -1142,7 +1142,7 @@ class FrictionProblem:
         """Whether the model ``causes`` at ``values`` fails its chi-square test at the diagnosis' alpha (the
         engine's detectability criterion): a reference that fits the data to their noise leaves no basin for an
         extension to be searched for."""
-        from scipy.stats import chi2 as chi2_dist
+        from probedyn.diagnose.tails import chi2 as chi2_dist
 
         from probedyn.diagnose.engine import ALPHA
 
@@ -1470,7 +1470,7 @@ class FrictionProblem:
 
     # -- structure ----------------------------------------------------------------------------
     def structure(self, r: np.ndarray) -> dict[str, Any]:
-        from scipy.stats import chi2
+        from probedyn.diagnose.tails import chi2
 
         out: dict[str, Any] = {"scans": [], "left_out_start_samples": int((~self.use).sum())}
         fr = []

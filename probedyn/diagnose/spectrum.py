@@ -540,7 +540,7 @@ def fit_doublet(freq: np.ndarray, psd: np.ndarray, single: dict[str, Any], s_log
     independent rows, and sigma_i^2 (1 + |rho|) on the diagonal bounds the 2 x 2 covariance from above
     (D - C is positive semi-definite), so a pair's chi-square is never counted with more precision
     than the data carry."""
-    from scipy.stats import chi2 as chi2_dist
+    from probedyn.diagnose.tails import chi2 as chi2_dist
 
     from probedyn.diagnose.engine import ALPHA
 
@@ -1304,7 +1304,7 @@ def _unlabelled_price(table: list[dict]) -> float:
     could give -- loses to the one that leaves it out. Unresolved lines (a spur, or a mode whose Q the
     spectrum cannot measure) and lines whose Q or area no mode of the lever could have carry no such
     evidence and cost nothing."""
-    from scipy.stats import chi2 as chi2_dist
+    from probedyn.diagnose.tails import chi2 as chi2_dist
 
     from probedyn.diagnose.engine import ALPHA
 
@@ -1386,7 +1386,7 @@ def _labelling_scores(meas: SpectrumData, options: list[tuple], base: FEMBaselin
 
 def _threshold(c, n_c: int) -> float:
     """A cause's likelihood-ratio threshold ``chi2_k(1 - alpha / N)`` (the engine's claim rule)."""
-    from scipy.stats import chi2 as chi2_dist
+    from probedyn.diagnose.tails import chi2 as chi2_dist
 
     from probedyn.diagnose.engine import ALPHA
 

@@ -3,7 +3,7 @@
 The same special functions ``scipy.stats.chi2`` and ``scipy.stats.norm`` evaluate (``chdtrc``,
 ``chdtri``, ``gammaincinv``, ``ndtr``), so the numbers are identical, without importing
 :mod:`scipy.stats` (0.28 s of every diagnosis's start-up, measured on the 2-core CI machine; the
-engine needs four functions of it). ``k`` is the number of degrees of freedom (k > 0).
+engine needs four functions of it; friction and spectra use the same ones). ``k`` is the number of degrees of freedom (k > 0).
 """
 from __future__ import annotations
 
