@@ -51,7 +51,7 @@ from probedyn.schemes.friction import FrictionModel, model_class
 from probedyn.schemes.friction.bristle import bristle2d_eval
 from probedyn.schemes.friction.prandtl_tomlinson import MICA_LATTICE
 from probedyn.schemes.probe_hooks import ffm_cantilever
-from probedyn.schemes.rosenbrock import ros23
+from probedyn.schemes.rosenbrock import ros23, stable_identity
 from probedyn.schemes.stickslip_analysis import analyze
 
 # ------------------------------------------------------------------------------------------
@@ -185,6 +185,9 @@ def _system(kern, ctx, t, y, f, J, Tt, want_j):
         Tt[1] = k * V / m
         Tt[2] = 0.0
     return F
+
+
+stable_identity(_system, "ffm")  # the on-disk cache finds ros23's specialisation again (schemes/rosenbrock.py)
 
 
 def _ros23(kern, p, m, c, k, V, T, y0, rtol, atol, h0, hmax, max_steps, X0=0.0):

@@ -38,7 +38,7 @@ from numba import njit
 
 from probedyn.core.errors import ParameterError
 from probedyn.schemes.ffm import ScanResult, along_turns
-from probedyn.schemes.rosenbrock import ros23
+from probedyn.schemes.rosenbrock import ros23, stable_identity
 
 
 @njit(cache=True)
@@ -82,6 +82,9 @@ def _system(kern, ctx, t, y, f, J, Tt, want_j):
         Tt[2] = kx * V / m
         Tt[3] = 0.0
     return Fs
+
+
+stable_identity(_system, "ffm_lattice2d")  # the on-disk cache finds ros23's specialisation again (schemes/rosenbrock.py)
 
 
 def lattice2d_path(*, U0: float, a: float, theta: float, k_x: float, k_y: float, m: float, c_x: float,

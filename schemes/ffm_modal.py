@@ -37,7 +37,7 @@ from numba import njit
 
 from probedyn.core.errors import ParameterError, SolverError
 from probedyn.lumped.reduced import ReducedProbe
-from probedyn.schemes.rosenbrock import ros23
+from probedyn.schemes.rosenbrock import ros23, stable_identity
 
 
 @njit(cache=True)
@@ -77,6 +77,9 @@ def _system(kern, ctx, t, y, f, J, Tt, want_j):
         J[2 * n, 2 * n] = dzz
         Tt[2 * n] = dzx * V
     return F
+
+
+stable_identity(_system, "ffm_modal")  # the on-disk cache finds ros23's specialisation again (schemes/rosenbrock.py)
 
 
 @dataclass

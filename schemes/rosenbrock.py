@@ -17,7 +17,15 @@ Each model is one ``system(kern, ctx, t, y, f, J, Tt, want_j)``, numba-compiled:
 ``f`` and, if ``want_j``, ``df/dy`` into ``J`` and ``df/dt`` into ``Tt``, and returns the force it records at
 this state. ``kern`` is the friction model's numba kernel (or None) and ``ctx`` a tuple of the model's
 parameters; numba compiles (and caches on disk) one specialisation per system and kernel, so a new model
-runs at the speed of the built-in ones. Users: :mod:`probedyn.schemes.ffm` (one mode, any friction model),
+runs at the speed of the built-in ones.
+
+The on-disk cache keys a specialisation by the identities of the dispatchers it receives, and numba names a
+dispatcher by a random UUID, new in every process. Every system and kernel passed here is therefore given a
+stable identity (:func:`stable_identity`); without one the cache never hits. Until session 55 the systems had
+none, and ``ros23`` was compiled again in every process that ran an FFM scan (4 s). Each process also added an
+entry to the index. numba keeps only the last 128 dispatchers it rebuilt from an index alive, so once the
+index named more systems than that, saving it failed in every process that had to compile: ``ReferenceError:
+underlying object has vanished``, a traceback from ``probedyn diagnose`` (blind friction f22). Users: :mod:`probedyn.schemes.ffm` (one mode, any friction model),
 :mod:`probedyn.schemes.ffm_modal` (N modes), :mod:`probedyn.schemes.ffm_lattice2d` (two lateral springs
 over a square lattice). The nano-placing release (:mod:`probedyn.schemes.placing._kernel`) keeps a variant of
 its own: it locates contact transitions inside a step and factorises ``W`` once per step.
@@ -25,10 +33,29 @@ its own: it locates contact transitions inside a step and factorises ``W`` once 
 
 from __future__ import annotations
 
+import hashlib
+import inspect
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
+
+
+def stable_identity(fn: Any, owner: str) -> None:
+    """Give a numba dispatcher passed to a cached function (a system of :func:`ros23`, a friction kernel) an
+    identity that is the same in every process, so that numba's on-disk cache finds the specialisation again.
+    The identity is the owner, the function's module and name and its source hash, so a changed function gets a
+    new identity and a cached integrator never runs an old formula. Uses numba's ``_set_uuid`` (its
+    ``_MemoMixin``); on a numba without it the integrator still runs, only compiled again in every process."""
+    try:
+        if getattr(fn, "_MemoMixin__uuid", None) is not None:
+            return
+        src = inspect.getsource(fn.py_func)
+        digest = hashlib.sha1(src.encode()).hexdigest()[:16]
+        fn._set_uuid(f"probedyn:{owner}:{fn.py_func.__module__}.{fn.py_func.__qualname__}:{digest}")
+    except (AttributeError, OSError, TypeError, AssertionError):  # pragma: no cover - other numba
+        pass
 
 
 @njit(cache=True)
@@ -129,4 +156,4 @@ def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
     return ts[: i + 1], ys[: i + 1], Fs[: i + 1], i, n_rej
 
 
-__all__ = ["lu_solve_small", "ros23"]
+__all__ = ["lu_solve_small", "ros23", "stable_identity"]

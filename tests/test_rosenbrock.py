@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from probedyn.schemes.rosenbrock import ros23
+from probedyn.schemes.rosenbrock import ros23, stable_identity
 
 
 @njit(cache=True)
@@ -21,6 +21,9 @@ def _prothero_robinson(kern, ctx, t, y, f, J, Tt, want_j):
         J[0, 0] = lam
         Tt[0] = -lam * math.cos(t) - math.sin(t)
     return y[0]
+
+
+stable_identity(_prothero_robinson, "tests")
 
 
 def _run(lam, rtol, y0=0.0, T=2.0):
@@ -55,3 +58,31 @@ def test_a_stiff_transient_decays_without_oscillation():
     ts, y, F, n, exact = _run(-1e7, 1e-6, y0=1.0)
     late = ts > 1e-5  # 100 time constants
     assert np.max(np.abs(y[late] - exact[late])) < 20e-6
+
+
+_SCAN = """
+from probedyn.schemes.ffm import FFM, line_scan_path
+from probedyn.schemes.ffm_lattice2d import lattice2d_path
+from probedyn.schemes.rosenbrock import ros23
+ffm = FFM.from_preset("mica", "pt", {"U0": 5e-19, "a": 4e-10, "k_x": 8.0, "m_x": 2e-11, "c_x": 1e-5})
+line_scan_path(ffm, [0.0, 4e-9, 0.0], speed=5e-6, rtol=1e-5, atol_rel=1e-5)
+lattice2d_path(U0=5e-19, a=4e-10, theta=0.1, k_x=8.0, k_y=8.0, m=2e-11, c_x=1e-5, c_y=1e-5, turns=[0.0, 2e-9],
+               speed=5e-6)
+print(sum(ros23.stats.cache_hits.values()), sum(ros23.stats.cache_misses.values()))
+"""
+
+
+def test_a_new_process_finds_the_integrator_in_the_disk_cache():
+    """The FFM systems and friction kernels have process-independent identities (``stable_identity``), so the
+    second process to run a scan loads ``ros23``'s specialisations from numba's disk cache instead of compiling
+    them (4 s each). Without those identities every process compiled and added an entry to the index, and past
+    128 entries saving it failed with a ReferenceError (session 55)."""
+    import subprocess
+    import sys
+
+    runs = [subprocess.run([sys.executable, "-c", _SCAN], capture_output=True, text=True, timeout=300)
+            for _ in range(2)]
+    for r in runs:
+        assert r.returncode == 0, r.stderr[-2000:]
+    hits, misses = map(int, runs[1].stdout.split())
+    assert (hits, misses) == (2, 0)

@@ -45,8 +45,6 @@ with ``scales=True`` in :attr:`FrictionModel.load_params`) are multiplied by a f
 
 from __future__ import annotations
 
-import hashlib
-import inspect
 import math
 from typing import Any, ClassVar
 
@@ -56,6 +54,7 @@ from probedyn.core.errors import ParameterError
 from probedyn.core.params import Param, ParamSet
 from probedyn.core.presets import preset
 from probedyn.core.registry import Model, Registry, RegistryError
+from probedyn.schemes.rosenbrock import stable_identity
 
 #: Table 2.1 (mica FFM experiment): default friction levels of the bristle-type models
 TABLE_2_1 = preset("table-2.1")
@@ -178,23 +177,12 @@ def positive_param(name: str, default: float, unit: str, doc: str, source: str,
 
 
 def _stable_identity(kernel: Any, owner: str) -> None:
-    """Give a numba kernel a process-independent identity.
+    """Give a numba kernel a process-independent identity (:func:`probedyn.schemes.rosenbrock.stable_identity`).
 
     The FFM integrator receives the kernel as an argument, so numba compiles one specialisation
     per kernel; the on-disk cache finds it again in a new process only if the kernel's
-    serialised identity is the same there. numba names a dispatcher by a random UUID; here it is
-    the kernel's module, name and source hash (a changed kernel gets a new identity, so a cached
-    integrator never runs an old formula). Without this the integrator still runs, only it is
-    compiled again in every process (seconds). Uses numba's ``_set_uuid`` (ReduceMixin)."""
-    try:
-        if getattr(kernel, "_MemoMixin__uuid", None) is not None:
-            return
-        src = inspect.getsource(kernel.py_func)
-        digest = hashlib.sha1(src.encode()).hexdigest()[:16]
-        kernel._set_uuid(f"probedyn.friction:{owner}:{kernel.py_func.__module__}."
-                         f"{kernel.py_func.__qualname__}:{digest}")
-    except (AttributeError, OSError, TypeError, AssertionError):  # pragma: no cover - other numba
-        pass
+    serialised identity is the same there."""
+    stable_identity(kernel, f"friction:{owner}")
 
 
 def _check_friction(cls: type) -> None:
