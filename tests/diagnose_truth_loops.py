@@ -4,7 +4,9 @@ A tip slides with Coulomb friction ``mu`` on a polymer-like surface (islands of 
 Gaussian-edged plateaus of 5-60 nm height; a flat, tilted surface for the noise-only cases), under the
 vertical load ``L`` the feedback holds plus an adhesion ``A`` along the surface normal. The lateral force
 is the tip's **force balance on the incline solved as a 2 x 2 linear system** at 8 points per sample
-interval and averaged (interval means), its own code path: no use of probedyn's slope law or FFM. The
+interval and averaged (interval means), its own code path: no use of probedyn's slope law or FFM. Where the
+support turns, the tip sticks until the lever's force has run from one direction's friction to the other's
+(:func:`_with_reversal`, on a fine grid of its own). The
 lateral channel reads ``g`` times the force plus a zero offset and white noise; the height channel
 records the surface shifted by the feedback's lag (forward in the trace, backward in the retrace) plus
 noise. Optional friction contrast: the islands' friction coefficient differs by a factor 0.6-1.5.
@@ -49,6 +51,32 @@ def _balance(L, A, mu, d, theta):
     M[:, 1, 1] = c - mu * d * s
     b[:, 1] = L + A * c
     return np.linalg.solve(M, b[..., None])[:, 0, 0]
+
+
+def _with_reversal(sub: np.ndarray, other: np.ndarray, d: float, k_x: float, dx: float, m: int = 256) -> np.ndarray:
+    """Interval means of the lateral force of one direction ``d`` with its reversal: the support turns half an
+    interval before the first sample, and the tip sticks there while the lever's force runs, at ``k_x`` per metre
+    of support travel, from the other direction's sliding force (``other``: the same line scanned the other
+    way before, a raster) until it reaches this direction's; then it slides. ``sub``: the sliding force at the
+    8 sub-points of every interval (as positions increase). The intervals the stick reaches are averaged over
+    ``m`` points each, on the sliding force interpolated between the sub-points."""
+    n = sub.shape[0]
+    F = sub.mean(axis=1)
+    run = sub if d > 0 else sub[::-1, ::-1]  # in the order of the motion
+    F_prev = other[0, 0] if d > 0 else other[-1, -1]
+    span = 2.0 * float(np.max(np.abs(sub))) / k_x
+    K = min(n, int(np.ceil(span / dx)) + 1)
+    u_sub = (np.arange(K)[:, None] + (np.arange(8) + 0.5)[None, :] / 8).ravel() * dx
+    u = (np.arange(K * m) + 0.5) / m * dx
+    slide = np.interp(u, u_sub, run[:K].ravel())
+    ramp = F_prev + d * k_x * u
+    stuck = ~np.maximum.accumulate(d * ramp >= d * slide)
+    f = np.where(stuck, ramp, slide).reshape(K, m).mean(axis=1)
+    if d > 0:
+        F[:K] = f
+    else:
+        F[n - K:] = f[::-1]
+    return F
 
 
 def make_loop_case(folder: Path, seed: int, effect: str | None,
@@ -96,8 +124,9 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
         h_pts, h_sub, ind_sub = h_true[:n], h_true[n:], ind[n:]
         theta = np.arctan(np.gradient(h_sub, xs))
         mu = mu0 * (1.0 + (contrast - 1.0) * ind_sub)
+        bal = {d: _balance(Ls, A, mu, d, theta).reshape(n, 8) for d in (1.0, -1.0)}
         for d in (1.0, -1.0):
-            F = _balance(Ls, A, mu, d, theta).reshape(n, 8).mean(axis=1)
+            F = _with_reversal(bal[d], bal[-d], d, k_x, dx)
             sig = g * F + zero + sigma * rng.standard_normal(n)
             hrec = np.roll(h_pts, int(d) * lag)
             if lag:
