@@ -72,15 +72,17 @@ print(sum(ros23.stats.cache_hits.values()), sum(ros23.stats.cache_misses.values(
 """
 
 
-def test_a_new_process_finds_the_integrator_in_the_disk_cache():
+def test_a_new_process_finds_the_integrator_in_the_disk_cache(tmp_path):
     """The FFM systems and friction kernels have process-independent identities (``stable_identity``), so the
     second process to run a scan loads ``ros23``'s specialisations from numba's disk cache instead of compiling
     them (4 s each). Without those identities every process compiled and added an entry to the index, and past
     128 entries saving it failed with a ReferenceError (session 55)."""
+    import os
     import subprocess
     import sys
 
-    runs = [subprocess.run([sys.executable, "-c", _SCAN], capture_output=True, text=True, timeout=300)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}  # a cache of its own: no other test writes its index
+    runs = [subprocess.run([sys.executable, "-c", _SCAN], capture_output=True, text=True, timeout=300, env=env)
             for _ in range(2)]
     for r in runs:
         assert r.returncode == 0, r.stderr[-2000:]
