@@ -39,8 +39,18 @@ def _nested_never_worse(prob, keys=None):
         f = F.nested(base, (c,))
         # never worse than the model it contains (the engine falls back to the null start)
         assert f.chi2 <= base.chi2 * (1 + 1e-9) + 1e-9, (c.key, f.chi2, base.chi2)
-        # the null values of the new parameters reproduce the baseline: the extension nests it
-        r0 = F.residuals({**base.values, **{p.name: p.null for p in c.params}}, (c,))
+        # the null values of the new parameters reproduce the baseline: the extension nests it. A problem with a
+        # profiled nuisance (a friction scan's lattice registry) holds the baseline's, as the engine's null start
+        # does (Fitter.nested): a registry profiled afresh may end in another basin of the rugged stick-slip
+        # chi^2 (seed 11 at 0.01 K: 89 sigma apart), which is the profile's path, not the model's nesting
+        held = getattr(base, "nuisance", None) is not None and hasattr(prob, "fixed_nuisance")
+        if held:
+            prob.fixed_nuisance = base.nuisance
+        try:
+            r0 = F.residuals({**base.values, **{p.name: p.null for p in c.params}}, (c,))
+        finally:
+            if held:
+                prob.fixed_nuisance = None
         assert np.allclose(r0, base.r, rtol=1e-6, atol=1e-6 * (1 + np.abs(base.r).max())), c.key
         out[c.key] = (base.chi2, f.chi2)
     return out
@@ -313,6 +323,8 @@ def test_the_engine_tails_are_scipy_stats_numbers():
             assert t_chi2.ppf(1 - p, k) == chi2.ppf(1 - p, k)
     for x in (0.0, 1.0, 4.0, 8.0):
         assert t_norm.sf(x) == norm.sf(x)
+    for p in (0.5, 0.01, 1e-9, 1e-300):
+        assert t_norm.isf(p) == norm.isf(p)
     # a limit: chi-square of 1 degree of freedom is a squared standard normal
     assert t_chi2.sf(4.0, 1) == pytest.approx(2 * t_norm.sf(2.0), rel=1e-14)
 
@@ -389,3 +401,28 @@ def test_within_a_confounded_group_the_cause_with_the_fewest_parameters_leads():
     one_way = lambda d, lead: d is not lead and lead["cause"].key == "clamp-compliance"  # noqa: E731
     new, _, note = _fewest_parameters_lead(_P(), claimed, claimed[0], claimed[1:], one_way)
     assert new["cause"].key == "clamp-compliance" and note is None and claimed[0] is new
+
+
+def test_a_chi_square_on_the_record_s_own_robust_scatter_holds_its_level():
+    """engine.gof_p: a white-noise record measured against the robust (MAD) scale of its own second differences
+    (``friction._scatter``, the sigma of a friction record without a stated noise) rejects a true model at the
+    stated level once the sigma's own sampling error is in the test; at face value the chi-square test rejects
+    it 3-4 times too often (the MAD's efficiency is 37 %)."""
+    from types import SimpleNamespace
+
+    from probedyn.diagnose.engine import gof_p
+    from probedyn.diagnose.friction import _scatter
+
+    rng = np.random.default_rng(55)
+    alpha, n_rec = 0.05, 3000
+    own, plain = 0, 0
+    stub = SimpleNamespace(sigma_from_scatter=True)
+    for _ in range(n_rec):
+        scans = [SimpleNamespace(force=rng.standard_normal(256)) for _ in range(2)]
+        s = _scatter(scans)
+        chi2 = float(sum(np.sum(sc.force**2) for sc in scans)) / s**2
+        own += gof_p(chi2, 512, stub) < alpha
+        plain += gof_p(chi2, 512) < alpha
+    se = (alpha * (1 - alpha) / n_rec) ** 0.5
+    assert abs(own / n_rec - alpha) < 4 * se
+    assert plain / n_rec > 2.5 * alpha

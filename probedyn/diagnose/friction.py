@@ -1008,6 +1008,9 @@ class FrictionProblem:
         self.noise_excess = bool(data.noise_stated and self.sigma_scatter > NOISE_EXCESS * self.sigma)
         if self.noise_excess:
             self.sigma = self.sigma_scatter
+        #: the sigma is the record's own robust scatter (unstated, or replacing the stated one): the chi-square
+        #: tests include its sampling error (engine.gof_p)
+        self.sigma_from_scatter = bool(not data.noise_stated or self.noise_excess)
         self.force = np.concatenate([s.force for s in sc])
         self.n = len(self.force)
         self.model_var = np.zeros(self.n)  # the model's own variance per sample (set by predict)

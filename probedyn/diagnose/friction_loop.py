@@ -237,6 +237,9 @@ class FrictionLoopProblem:
                                       "direction cannot separate it from the lateral channel's zero)")
         self.sigma_scatter = _scatter(sc)
         self.sigma = data.sigma_force if data.sigma_force > 0 else max(self.sigma_scatter, 1e-15)
+        #: an unstated noise is the record's own robust scatter: the chi-square tests include its sampling error
+        #: (engine.gof_p)
+        self.sigma_from_scatter = not data.noise_stated
         self.force = np.concatenate([s.force for s in sc])
         self.n = len(self.force)
         self.direction = np.concatenate([s.direction for s in sc]).astype(float)

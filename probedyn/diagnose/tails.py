@@ -1,7 +1,7 @@
 """Tail probabilities and quantiles of the chi-square and normal laws, from :mod:`scipy.special`.
 
 The same special functions ``scipy.stats.chi2`` and ``scipy.stats.norm`` evaluate (``chdtrc``,
-``chdtri``, ``gammaincinv``, ``ndtr``), so the numbers are identical, without importing
+``chdtri``, ``gammaincinv``, ``ndtr``, ``ndtri``), so the numbers are identical, without importing
 :mod:`scipy.stats` (0.28 s of every diagnosis's start-up, measured on the 2-core CI machine; the
 engine needs four functions of it; friction and spectra use the same ones). ``k`` is the number of degrees of freedom (k > 0).
 """
@@ -36,3 +36,8 @@ class norm:  # noqa: N801
     def sf(x):
         """P(X > x)."""
         return special.ndtr(-x)
+
+    @staticmethod
+    def isf(p):
+        """The x with P(X > x) = p."""
+        return -special.ndtri(p)
