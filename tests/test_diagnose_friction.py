@@ -594,3 +594,29 @@ def test_a_wrong_baseline_does_not_switch_start_wells_under_a_nested_fit(tmp_pat
     assert res["findings"] and res["findings"][0]["cause"] == "scanner-nonlinearity", res["findings"]
     n = res["baseline"]["dof"]
     assert res["findings"][0]["gain"]["chi2_after"] < n + 4 * math.sqrt(2 * n)
+
+
+def test_thermal_activation_starts_from_the_reference_raised_by_its_peak_lowering():
+    """ThermalActivation._reference_starts: the reference model fits the peaks athermally, so an activated start
+    raises its corrugation by the ratio of the athermal peak to the median activated slip's force. That ratio
+    is 1 on a cold record (0.5 K: the slip comes after the branch's force maximum) and grows with the
+    temperature and the attempt frequency (300 K: the peak lowered by a quarter to a half, the range the declared
+    starts guess)."""
+    from types import SimpleNamespace
+
+    from probedyn.diagnose.causes.thermal_activation import REFERENCE_F0, ThermalActivation
+
+    prob = SimpleNamespace(speeds=np.array([4e-8, 4e-7]), loads=np.array([6e-9, 6e-9]), a_slip=2.8e-10,
+                           data=SimpleNamespace(k_x=3.5))
+    ref = {"u0": 6.95e-12, "a": 2.8e-10}  # blind f24's corrugation: eta 3 at 6 nN
+    factors = {}
+    for T in (0.5, 50.0, 300.0):
+        c = ThermalActivation()
+        c.T = T
+        st = c._reference_starts(prob, ref)
+        assert [s["log10_f0"] for s in st] == list(REFERENCE_F0)
+        factors[T] = [s["u0"] / ref["u0"] for s in st]
+    assert factors[0.5] == [1.0, 1.0, 1.0]
+    assert all(1.0 <= a <= b for a, b in zip(factors[0.5], factors[50.0]))
+    assert all(a < b for a, b in zip(factors[50.0], factors[300.0]))
+    assert factors[300.0] == sorted(factors[300.0]) and 1.2 < factors[300.0][0] and factors[300.0][-1] < 3.0
