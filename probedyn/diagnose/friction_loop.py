@@ -347,8 +347,10 @@ class FrictionLoopProblem:
                 if len(x) > 1:
                     mid = 0.5 * (x[1:] + x[:-1])
                     edges = np.concatenate([[x[0] - (mid[0] - x[0])], mid, [x[-1] + (x[-1] - mid[-1])]])
-                else:
-                    edges = np.array([x[0], x[0]])
+                else:  # one sample: no interval to place the reversal in (no stick is modelled there)
+                    self.rev_ua[o] = self.rev_ub[o] = np.inf
+                    segs.append((o, None))
+                    continue
                 self.rev_ua[o] = edges[:-1] - edges[0]
                 self.rev_ub[o] = edges[1:] - edges[0]
                 prev = runs[j - 1] if j > 0 else (runs[1] if len(runs) > 1 else None)
