@@ -25,7 +25,9 @@ stable identity (:func:`stable_identity`); without one the cache never hits. Unt
 none, and ``ros23`` was compiled again in every process that ran an FFM scan (4 s). Each process also added an
 entry to the index. numba keeps only the last 128 dispatchers it rebuilt from an index alive, so once the
 index named more systems than that, saving it failed in every process that had to compile: ``ReferenceError:
-underlying object has vanished``, a traceback from ``probedyn diagnose`` (blind friction f22). Users: :mod:`probedyn.schemes.ffm` (one mode, any friction model),
+underlying object has vanished``, a traceback from ``probedyn diagnose`` (blind friction f22).
+
+Users: :mod:`probedyn.schemes.ffm` (one mode, any friction model),
 :mod:`probedyn.schemes.ffm_modal` (N modes), :mod:`probedyn.schemes.ffm_lattice2d` (two lateral springs
 over a square lattice). The nano-placing release (:mod:`probedyn.schemes.placing._kernel`) keeps a variant of
 its own: it locates contact transitions inside a step and factorises ``W`` once per step.

@@ -68,7 +68,7 @@ class ThermalActivation(Cause):
         slowest scan comes at a peak force lower than the athermal instability's by the ratio ``phi`` (the
         quasi-static barrier, :func:`probedyn.diagnose.friction.thermal_hazard`); the reference already fits the
         peaks athermally, so the activated model starts at its corrugation over ``phi``. At 300 K ``phi`` is
-        0.5-0.8, the factors the declared starts guess; on a cold record it is 1 within a per cent. The
+        0.45-0.8, the factors the declared starts guess; on a cold record (0.5 K) it is 1. The
         recorded peaks' ridge (:meth:`_peak_ridge`) misses such a record when the reference carries a
         calibration factor: blind f24 (0.5 K, g = 0.9) had no start near its activation (log10 f0 6.1, chi^2
         2027 -> 1479 on 1440 samples), and its slips' 0.3 pm scatter stood at 6-8 sigma in the interval means
