@@ -444,3 +444,38 @@ def test_a_chi_square_on_the_record_s_own_robust_scatter_holds_its_level():
     se = (alpha * (1 - alpha) / n_rec) ** 0.5
     assert abs(own / n_rec - alpha) < 4 * se
     assert plain / n_rec > 2.5 * alpha
+
+
+def test_a_chi_square_too_small_for_a_fitted_variance_lowers_the_verdict():
+    """A model that carries a fitted variance of its own (friction's thermal slip scatter) can lower its chi-square
+    by widening it, so there a chi-square improbably small is a misfit as well (blind f20: 650 on 892 degrees of
+    freedom, lower-tail p 1e-10, read *explained* before). ``gof_p_lower`` holds its level on a record's own robust
+    scatter (conservative: 2-4 % at 5 %, where the face-value lower tail rejects a true model in 17 %), and the verdict
+    names the reason."""
+    from types import SimpleNamespace
+
+    from probedyn.diagnose.engine import _verdict, gof_p_lower
+    from probedyn.diagnose.friction import _scatter
+
+    rng = np.random.default_rng(56)
+    alpha, n_rec = 0.05, 3000
+    own = plain = 0
+    stub = SimpleNamespace(sigma_from_scatter=True)
+    for _ in range(n_rec):
+        scans = [SimpleNamespace(force=rng.standard_normal(256)) for _ in range(2)]
+        s = _scatter(scans)
+        chi2 = float(sum(np.sum(sc.force**2) for sc in scans)) / s**2
+        own += gof_p_lower(chi2, 512, stub) < alpha
+        plain += gof_p_lower(chi2, 512) < alpha
+    se = (alpha * (1 - alpha) / n_rec) ** 0.5
+    assert own / n_rec < alpha + 4 * se and plain / n_rec > 2.5 * alpha
+    assert gof_p_lower(650.0, 892) < 1e-9 and gof_p_lower(892.0, 892) == pytest.approx(0.5, abs=0.02)
+
+    findings = [{"cause": "thermal-activation", "flags": []}]
+    low = {"report": {"p_value": 1.0, "p_value_lower": 1.2e-10, "chi2": 650.0, "dof": 892}, "heldout": None}
+    verdict, why = _verdict(True, findings, [], low, 0.01)
+    assert verdict == "partly-explained" and "smaller than the noise" in why[0]
+    fine = {"report": {"p_value": 0.3, "p_value_lower": 0.7, "chi2": 880.0, "dof": 892}, "heldout": None}
+    assert _verdict(True, findings, [], fine, 0.01)[0] == "explained"
+    plain_model = {"report": {"p_value": 1.0, "chi2": 650.0, "dof": 892}, "heldout": None}  # no fitted variance
+    assert _verdict(True, findings, [], plain_model, 0.01)[0] == "explained"

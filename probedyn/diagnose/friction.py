@@ -1460,6 +1460,17 @@ class FrictionProblem:
             out[self.slices[i]] = F
         return out
 
+    def variance_fitted(self, values, causes=()) -> bool:
+        """Whether the model carries a variance of its own that its parameters set (the thermal slip scatter,
+        :func:`_scatter_moments`). The fit minimises ``sum r^2 / (sigma^2 + var)`` without ``ln(sigma^2 + var)``,
+        so it can lower its chi-square by widening the scatter; the engine then also tests the chi-square's lower
+        tail (engine ``gof_p_lower``; blind f20: 650 on 892 degrees of freedom, docs/diagnose.md 9.41)."""
+        try:
+            self.predict(values, causes)
+        except ProbedynError:
+            return False
+        return bool(np.any(self.model_var[self.use] > 0))
+
     def residuals(self, values, causes=()) -> np.ndarray:
         try:
             m = self.predict(values, causes)

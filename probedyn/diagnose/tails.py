@@ -19,6 +19,11 @@ class chi2:  # noqa: N801  (named as scipy.stats.chi2, whose four methods it sta
         return special.chdtrc(k, x)
 
     @staticmethod
+    def cdf(x, k):
+        """P(X <= x)."""
+        return special.chdtr(k, x)
+
+    @staticmethod
     def isf(p, k):
         """The x with P(X > x) = p."""
         return special.chdtri(k, p)
