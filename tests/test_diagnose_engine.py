@@ -421,29 +421,38 @@ def test_within_a_confounded_group_the_cause_with_the_fewest_parameters_leads():
     assert new["cause"].key == "clamp-compliance" and note is None and claimed[0] is new
 
 
+def _rejections_on_own_scatter(test, seed: int, alpha: float, n_rec: int) -> tuple[float, float]:
+    """Rejection rates of a chi-square ``test(chi2, dof[, problem])`` at ``alpha`` on ``n_rec`` white-noise records
+    (two scans of 256 samples) measured against the robust (MAD) scale of their own second differences
+    (``friction._scatter``): with the record's own-scatter correction, and at face value."""
+    from types import SimpleNamespace
+
+    from probedyn.diagnose.friction import _scatter
+
+    rng = np.random.default_rng(seed)
+    stub = SimpleNamespace(sigma_from_scatter=True)
+    own = plain = 0
+    for _ in range(n_rec):
+        scans = [SimpleNamespace(force=rng.standard_normal(256)) for _ in range(2)]
+        s = _scatter(scans)
+        chi2 = float(sum(np.sum(sc.force**2) for sc in scans)) / s**2
+        own += test(chi2, 512, stub) < alpha
+        plain += test(chi2, 512) < alpha
+    return own / n_rec, plain / n_rec
+
+
 def test_a_chi_square_on_the_record_s_own_robust_scatter_holds_its_level():
     """engine.gof_p: a white-noise record measured against the robust (MAD) scale of its own second differences
     (``friction._scatter``, the sigma of a friction record without a stated noise) rejects a true model at the
     stated level once the sigma's own sampling error is in the test; at face value the chi-square test rejects
     it 3-4 times too often (the MAD's efficiency is 37 %)."""
-    from types import SimpleNamespace
-
     from probedyn.diagnose.engine import gof_p
-    from probedyn.diagnose.friction import _scatter
 
-    rng = np.random.default_rng(55)
     alpha, n_rec = 0.05, 3000
-    own, plain = 0, 0
-    stub = SimpleNamespace(sigma_from_scatter=True)
-    for _ in range(n_rec):
-        scans = [SimpleNamespace(force=rng.standard_normal(256)) for _ in range(2)]
-        s = _scatter(scans)
-        chi2 = float(sum(np.sum(sc.force**2) for sc in scans)) / s**2
-        own += gof_p(chi2, 512, stub) < alpha
-        plain += gof_p(chi2, 512) < alpha
+    own, plain = _rejections_on_own_scatter(gof_p, 55, alpha, n_rec)
     se = (alpha * (1 - alpha) / n_rec) ** 0.5
-    assert abs(own / n_rec - alpha) < 4 * se
-    assert plain / n_rec > 2.5 * alpha
+    assert abs(own - alpha) < 4 * se
+    assert plain > 2.5 * alpha
 
 
 def test_a_chi_square_too_small_for_a_fitted_variance_lowers_the_verdict():
@@ -452,23 +461,12 @@ def test_a_chi_square_too_small_for_a_fitted_variance_lowers_the_verdict():
     freedom, lower-tail p 1e-10, read *explained* before). ``gof_p_lower`` holds its level on a record's own robust
     scatter (conservative: 2-4 % at 5 %, where the face-value lower tail rejects a true model in 17 %), and the verdict
     names the reason."""
-    from types import SimpleNamespace
-
     from probedyn.diagnose.engine import _verdict, gof_p_lower
-    from probedyn.diagnose.friction import _scatter
 
-    rng = np.random.default_rng(56)
     alpha, n_rec = 0.05, 3000
-    own = plain = 0
-    stub = SimpleNamespace(sigma_from_scatter=True)
-    for _ in range(n_rec):
-        scans = [SimpleNamespace(force=rng.standard_normal(256)) for _ in range(2)]
-        s = _scatter(scans)
-        chi2 = float(sum(np.sum(sc.force**2) for sc in scans)) / s**2
-        own += gof_p_lower(chi2, 512, stub) < alpha
-        plain += gof_p_lower(chi2, 512) < alpha
+    own, plain = _rejections_on_own_scatter(gof_p_lower, 56, alpha, n_rec)
     se = (alpha * (1 - alpha) / n_rec) ** 0.5
-    assert own / n_rec < alpha + 4 * se and plain / n_rec > 2.5 * alpha
+    assert own < alpha + 4 * se and plain > 2.5 * alpha
     assert gof_p_lower(650.0, 892) < 1e-9 and gof_p_lower(892.0, 892) == pytest.approx(0.5, abs=0.02)
 
     findings = [{"cause": "thermal-activation", "flags": []}]

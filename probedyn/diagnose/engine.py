@@ -663,16 +663,18 @@ def gof_p(chi2: float, dof: int, problem=None, white=None) -> float:
     robust scale of its own record (``problem.sigma_from_scatter``, no noise stated, not re-read and not
     whitened), the chi-square's normal score is shrunk by ``sqrt 2 / MAD_SCATTER_LOG_SD``. That is the test of
     ``ln(chi2 / n)`` against its spread with the sigma's own sampling error included (docs/diagnose.md 9.40)."""
-    p = float(chi2_dist.sf(chi2, max(dof, 1)))
-    if problem is not None and white is None and getattr(problem, "sigma_from_scatter", False):
-        p = float(norm_dist.sf(norm_dist.isf(p) * math.sqrt(2.0) / MAD_SCATTER_LOG_SD))
-    return p
+    return _own_scatter_tail(float(chi2_dist.sf(chi2, max(dof, 1))), problem, white)
 
 
 def gof_p_lower(chi2: float, dof: int, problem=None, white=None) -> float:
     """The lower tail of :func:`gof_p`: the probability of a chi-square this small or smaller (the same shrunk
     normal score where the sigma is the record's own robust scatter)."""
-    p = float(chi2_dist.cdf(chi2, max(dof, 1)))
+    return _own_scatter_tail(float(chi2_dist.cdf(chi2, max(dof, 1))), problem, white)
+
+
+def _own_scatter_tail(p: float, problem, white) -> float:
+    """A chi-square tail probability ``p``, its normal score shrunk by ``sqrt 2 / MAD_SCATTER_LOG_SD`` where the
+    sigma is the record's own robust scatter (:func:`gof_p`)."""
     if problem is not None and white is None and getattr(problem, "sigma_from_scatter", False):
         p = float(norm_dist.sf(norm_dist.isf(p) * math.sqrt(2.0) / MAD_SCATTER_LOG_SD))
     return p
