@@ -43,7 +43,10 @@ class CauseParam:
     ``lo``/``hi`` bound the value; ``null`` is the value at which the cause has no effect (it
     must lie in ``[lo, hi]``); ``scale`` ``"lin"`` or ``"log"`` (fitted as log10 of the value;
     then ``lo > 0``); ``starts``: values tried besides the null value in the multi-start fit
-    (a position along the beam, a compliance spanning decades, ...).
+    (a position along the beam, a compliance spanning decades, ...); ``sweep``: the step (in the value, or
+    its log10 for ``"log"``) of a profile sweep after every full-data fit of the cause
+    (engine ``Fitter.swept``; 0: none). A parameter whose misfit is rugged along it (one that moves
+    stick-slip events across samples) declares one: a local optimiser stops in the first basin.
     """
 
     name: str
@@ -54,6 +57,7 @@ class CauseParam:
     doc: str = ""
     scale: str = "lin"
     starts: tuple[float, ...] = ()
+    sweep: float = 0.0
 
     def __post_init__(self) -> None:
         if not (self.lo <= self.null <= self.hi):
@@ -62,6 +66,8 @@ class CauseParam:
             raise RegistryError(f"parameter {self.name}: scale must be 'lin' or 'log'")
         if self.scale == "log" and not self.lo > 0:
             raise RegistryError(f"parameter {self.name}: a log-scale parameter needs lo > 0")
+        if not self.sweep >= 0:
+            raise RegistryError(f"parameter {self.name}: sweep must be >= 0")
         for s in self.starts:
             if not (self.lo <= s <= self.hi):
                 raise RegistryError(f"parameter {self.name}: start {s} outside [{self.lo}, {self.hi}]")
@@ -79,7 +85,7 @@ class CauseParam:
     def with_bounds(self, lo: float, hi: float, null: float | None = None) -> "CauseParam":
         n = self.null if null is None else null
         return CauseParam(self.name, self.unit, lo, hi, min(max(n, lo), hi), self.doc, self.scale,
-                          tuple(s for s in self.starts if lo <= s <= hi))
+                          tuple(s for s in self.starts if lo <= s <= hi), self.sweep)
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "unit": self.unit, "bounds": [self.lo, self.hi], "null": self.null,

@@ -22,6 +22,9 @@ from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 #: attempt frequencies [log10 Hz] of the starts relative to the reference model (:meth:`ThermalActivation._reference_starts`)
 REFERENCE_F0 = (5.0, 7.0, 9.0)
+#: the profile sweep's step in log10 f0 (engine Fitter.swept): an activated slip moves by about a sample interval
+#: per 0.1-0.3 decade of f0 (blind f07: basins at 3.5, 3.8 and 4.2), so a coarser step can pass a basin
+SWEEP_DEX = 0.1
 
 
 @CAUSES.register
@@ -35,7 +38,7 @@ class ThermalActivation(Cause):
     needs = "scans at two or more speeds (better: over a decade)"
     changes = ("temperature",)
     params = (CauseParam("log10_f0", "log10(Hz)", 0.0, 13.0, 0.0, "attempt frequency f0 (log10 of f0 / 1 Hz)",
-                         starts=(5.0, 8.0)),)
+                         starts=(5.0, 8.0), sweep=SWEEP_DEX),)
 
     def constrain(self, problem):
         T = problem.temperature
