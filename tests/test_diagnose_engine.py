@@ -477,3 +477,58 @@ def test_a_chi_square_too_small_for_a_fitted_variance_lowers_the_verdict():
     assert _verdict(True, findings, [], fine, 0.01)[0] == "explained"
     plain_model = {"report": {"p_value": 1.0, "chi2": 650.0, "dof": 892}, "heldout": None}  # no fitted variance
     assert _verdict(True, findings, [], plain_model, 0.01)[0] == "explained"
+
+
+def test_a_rugged_parameter_is_swept_past_its_first_basin():
+    """``Fitter.swept`` (a cause parameter declaring ``sweep``; friction's attempt frequency): after a full-data
+    fit the profile is walked both ways, each point a fit of the other parameters with this one held, and the
+    free refit from the lowest point is kept when it lowers chi^2 by more than ``SWEEP_GAIN`` (one parameter's
+    likelihood-ratio threshold). On a one-parameter chi^2 of tilted wells ``A (2 - cos 2 pi s - 0.2 s)`` (floors
+    A x 1.0, 0.8, 0.6, 0.4 at s ~ 0, 1, 2, 3; an optimiser property, so a landscape whose optima are known exactly)
+    plus a baseline offset, the local fit from the null s = 0 stops in the first or second well. With A = 20 a sweep in
+    steps of 0.25 (three misses before the next well, within the patience) reaches the deepest one, at 3.005, a
+    gain of 8 or more; with A = 5 the deepest well is lower by 3 at most, inside the confidence region, and the
+    fit stays where the local fit ended. Undeclared,
+    or on a fold's training data (``mask``), there is no sweep; the step is in the parameter's value, not the
+    optimiser's scaled coordinate."""
+    from probedyn.diagnose.causes import Cause, CauseParam
+    from probedyn.diagnose.engine import SWEEP_GAIN, SWEEP_PATIENCE
+
+    class Tilted(Cause):
+        key = "tilted-wells"
+        kind = "friction"
+
+    class Wells:
+        base_params = (CauseParam("b", "1", -1.0, 1.0, 0.0),)
+
+        def __init__(self, sweep, depth):
+            self.causes = (Tilted((CauseParam("s", "1", 0.0, 3.5, 0.0, sweep=sweep),)),)
+            self.depth = depth
+
+        def residuals(self, v, causes):
+            s = v.get("s", 0.0)
+            return np.array([np.sqrt(self.depth * (2.0 - np.cos(2 * np.pi * s) - 0.2 * s)), v["b"] - 0.3])
+
+    def fit(sweep, depth=20.0, mask=None):
+        prob = Wells(sweep, depth)
+        F = Fitter(prob)
+        base = F.baseline(mask)
+        return base, F.nested(base, prob.causes, mask)
+
+    def floor(s, depth=20.0):
+        return depth * (2.0 - np.cos(2 * np.pi * s) - 0.2 * s)
+
+    s_first = np.arcsin(0.2 / (2 * np.pi)) / (2 * np.pi)  # the first well's floor; the deepest interior one's at 3 + it
+    s_deep = 3 + s_first
+    assert SWEEP_PATIENCE >= 4  # three rising steps of a quarter period before the next well
+    assert floor(s_first, 5.0) - floor(s_deep, 5.0) < SWEEP_GAIN < floor(s_first) - floor(s_deep)
+    base, f = fit(0.25)
+    assert f.values["s"] == pytest.approx(s_deep, abs=2e-3) and f.values["b"] == pytest.approx(0.3, abs=1e-6)
+    assert f.chi2 == pytest.approx(floor(s_deep), abs=1e-5)
+    assert f.chi2 < base.chi2 and f.start.endswith("+sweep")
+    for sweep, mask in ((0.0, None), (0.25, np.array([True, True]))):  # a local fit's first or second well
+        _, g = fit(sweep, 20.0, mask)
+        assert g.values["s"] < 1.5 and g.chi2 > f.chi2 + SWEEP_GAIN and not g.start.endswith("+sweep")
+    (_, g), (_, g0) = fit(0.25, 5.0), fit(0.0, 5.0)
+    assert g.values["s"] == pytest.approx(g0.values["s"], abs=1e-9) and g.chi2 == pytest.approx(g0.chi2, abs=1e-9)
+    assert g.chi2 > floor(s_deep, 5.0) + 1.0  # a lower basin was there, and not taken
