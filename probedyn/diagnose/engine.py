@@ -467,7 +467,7 @@ class Fitter:
         Where the misfit is rugged along a parameter (an attempt frequency moves every activated slip across
         the samples, so the chi^2 of a stick-slip record jumps between basins a few tenths of a decade apart),
         a local optimiser from the declared starts stops in the first basin: blind f07 (50 K) ended at
-        log10 f0 3.47 with chi^2 655 where the profile has 611 at 4.2 (generator 4.67; docs/diagnose.md 9.42).
+        log10 f0 3.47 with chi^2 655 where the profile has 611 at 4.27 (generator 4.67; docs/diagnose.md 9.42).
         The sweep steps away from the optimum both ways, each point a fit of the other parameters with this
         one held, started from the previous point's optimum (its nuisance included), and gives up on a
         direction after :data:`SWEEP_PATIENCE` steps without a new lowest chi^2 (at most :data:`SWEEP_MAX`
