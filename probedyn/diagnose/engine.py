@@ -211,6 +211,13 @@ class Fit:
     def p_value(self) -> float:
         return float(chi2_dist.sf(self.chi2, self.dof))
 
+    def as_start(self, **values: float) -> dict[str, Any]:
+        """A start at this optimum (``values`` replacing some of it), its profiled nuisance included."""
+        st: dict[str, Any] = {**self.values, **values}
+        if self.nuisance is not None:
+            st["__nuisance__"] = self.nuisance
+        return st
+
 
 def _inactive_rows(problem, values, causes) -> int:
     """Rows of the residual vector that are zero by construction in this model (a problem's
@@ -314,10 +321,7 @@ class Fitter:
                     if f.chi2 <= (1.0 + margin) * ranked[0].chi2]
             best_g: Fit | None = None
             for f_s in kept:
-                st = dict(f_s.values)
-                if f_s.nuisance is not None:
-                    st["__nuisance__"] = f_s.nuisance
-                g = self._fit(causes, [st], mask, fixed, None, plist, free, rounds)
+                g = self._fit(causes, [f_s.as_start()], mask, fixed, None, plist, free, rounds)
                 g.start = f_s.start
                 g = g if g.chi2 <= f_s.chi2 else f_s
                 if best_g is None or g.chi2 < best_g.chi2:
@@ -476,10 +480,7 @@ class Fitter:
         region at the engine's alpha, as consistent with the data as the one the fit reached, and on a flat rugged
         profile the lowest basin is the noise's (blind f13: 0.4 decade for a chi^2 lower by 0.36, held out
         worse by 37)."""
-        params = [p for c in new for p in c.params if p.sweep > 0]
-        if not params:
-            return f
-        for p in params:
+        for p in [p for c in new for p in c.params if p.sweep > 0]:
             j = next(i for i, q in enumerate(f.plist) if q.name == p.name)
             lo, hi = _u_bounds(p)
             best_c, best_st = f.chi2, None
@@ -490,13 +491,11 @@ class Fitter:
                     u, k = u + step, k + 1
                     if not lo <= u <= hi:
                         break
-                    st = dict(g.values, **{p.name: _from_u(p, u)})
-                    if g.nuisance is not None:
-                        st["__nuisance__"] = g.nuisance
-                    g = self.fit(f.causes, [st], fixed={p.name: st[p.name]})
+                    held = {p.name: _from_u(p, u)}
+                    g = self.fit(f.causes, [g.as_start(**held)], fixed=held)
                     if g.chi2 < best_c - 1e-9 * max(1.0, best_c):
                         best_c, misses = g.chi2, 0
-                        best_st = dict(g.values, **({"__nuisance__": g.nuisance} if g.nuisance is not None else {}))
+                        best_st = g.as_start()
                     else:
                         misses += 1
             if best_st is None:
@@ -868,10 +867,7 @@ def _profile(F: Fitter, fit: Fit, j: int, h0: float, target: float = 1.0) -> tup
 
     def chi2_at(u):
         fixed = {p.name: _from_u(p, u)}
-        start = dict(fit.values)
-        if fit.nuisance is not None:
-            start["__nuisance__"] = fit.nuisance
-        g = F.fit(fit.causes, [start], fit.mask, fixed=fixed, max_nfev=40 * len(names))
+        g = F.fit(fit.causes, [fit.as_start()], fit.mask, fixed=fixed, max_nfev=40 * len(names))
         return g.chi2
 
     ends = []
