@@ -492,7 +492,7 @@ def test_a_rugged_parameter_is_swept_past_its_first_basin():
     or on a fold's training data (``mask``), there is no sweep; the step is in the parameter's value, not the
     optimiser's scaled coordinate."""
     from probedyn.diagnose.causes import Cause, CauseParam
-    from probedyn.diagnose.engine import SWEEP_GAIN, SWEEP_PATIENCE
+    from probedyn.diagnose.engine import SWEEP_GAIN, SWEEP_PATIENCE, _sweep_claim
 
     class Tilted(Cause):
         key = "tilted-wells"
@@ -501,18 +501,20 @@ def test_a_rugged_parameter_is_swept_past_its_first_basin():
     class Wells:
         base_params = (CauseParam("b", "1", -1.0, 1.0, 0.0),)
 
-        def __init__(self, sweep, depth):
-            self.causes = (Tilted((CauseParam("s", "1", 0.0, 3.5, 0.0, sweep=sweep),)),)
+        def __init__(self, sweep, depth, claimed=False):
+            self.causes = (Tilted((CauseParam("s", "1", 0.0, 3.5, 0.0, sweep=sweep, sweep_claimed=claimed),)),)
             self.depth = depth
 
         def residuals(self, v, causes):
             s = v.get("s", 0.0)
             return np.array([np.sqrt(self.depth * (2.0 - np.cos(2 * np.pi * s) - 0.2 * s)), v["b"] - 0.3])
 
-    def fit(sweep, depth=20.0, mask=None):
-        prob = Wells(sweep, depth)
+    def fit(sweep, depth=20.0, mask=None, claimed=False, F_out=None):
+        prob = Wells(sweep, depth, claimed)
         F = Fitter(prob)
         base = F.baseline(mask)
+        if F_out is not None:
+            F_out.append(F)
         return base, F.nested(base, prob.causes, mask)
 
     def floor(s, depth=20.0):
@@ -532,3 +534,15 @@ def test_a_rugged_parameter_is_swept_past_its_first_basin():
     (_, g), (_, g0) = fit(0.25, 5.0), fit(0.0, 5.0)
     assert g.values["s"] == pytest.approx(g0.values["s"], abs=1e-9) and g.chi2 == pytest.approx(g0.chi2, abs=1e-9)
     assert g.chi2 > floor(s_deep, 5.0) + 1.0  # a lower basin was there, and not taken
+    # a sweep that waits for a claim (``sweep_claimed``, a misaligned scan's angle): not on the candidate's fit, then
+    # on the claimed cause (engine._sweep_claim), with its gain and evidence updated
+    Fs: list = []
+    base, g = fit(0.25, claimed=True, F_out=Fs)
+    assert g.values["s"] < 1.5 and not g.start.endswith("+sweep")
+    d = {"cause": g.causes[0], "fit": g, "k": 1, "dchi2": base.chi2 - g.chi2, "evidence": None}
+    _sweep_claim(Fs[0], d, base, None, False)
+    assert d["fit"] is not g and d["fit"].values["s"] == pytest.approx(s_deep, abs=2e-3)
+    assert d["dchi2"] == pytest.approx(base.chi2 - floor(s_deep), abs=1e-5) and d["evidence"] is None
+    d = {"cause": g.causes[0], "fit": g, "k": 1, "dchi2": base.chi2 - g.chi2, "evidence": 0.0}
+    _sweep_claim(Fs[0], d, base, None, False)
+    assert d["evidence"] == pytest.approx(0.5 * d["dchi2"] - 1)  # Akaike, on the swept gain

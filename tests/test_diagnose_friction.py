@@ -424,6 +424,23 @@ def test_a_misaligned_scan_on_an_anisotropic_lever_is_named_with_its_angle_and_s
     assert abs(p["ky_ratio"]["value"] - 8.0) < 0.15 * 8.0
 
 
+@pytest.mark.slow
+def test_a_claimed_misalignment_is_swept_along_its_angle(tmp_path):
+    """Own study seed 2005 (26.81 deg to the rows, k_y = 2.98 k_x): the nested fit stops on the wall of the
+    (angle, k_y / k_x) valley at 25.13 deg (6.3 % off, chi^2 586 000); once the cause is claimed its angle's profile
+    is swept (``SWEEP_DEG``, engine ``_sweep_claim``) and the fit ends in the valley, at the truth's angle within
+    1 % (measured 26.79 deg, chi^2 150 000; docs/diagnose.md 9.43). The candidate's own row keeps the swept fit."""
+    from probedyn.diagnose.engine import run
+
+    path, truth = make_friction_case(tmp_path, 2005, "lattice-misalignment")
+    d = run(path, only=["lattice-misalignment"])
+    assert d["findings"] and d["findings"][0]["cause"] == "lattice-misalignment", d["verdict"]
+    p = d["findings"][0]["parameters"]
+    assert p["theta_deg"]["value"] == pytest.approx(truth["params"]["theta_deg"], rel=0.01)
+    row = next(r for r in d["candidates"] if r["cause"] == "lattice-misalignment")
+    assert row["start"].endswith("+sweep") and row["parameters"]["theta_deg"] == p["theta_deg"]["value"]
+
+
 def test_scans_recorded_one_way_only_have_a_structure_report(tmp_path):
     """A record of trace scans only (no retrace: no half loop per scan) at two speeds: the residual's structure
     report leaves out the friction-against-speed trend instead of reducing an empty selection (a blind

@@ -47,6 +47,9 @@ class CauseParam:
     its log10 for ``"log"``) of a profile sweep after every full-data fit of the cause
     (engine ``Fitter.swept``; 0: none). A parameter whose misfit is rugged along it (one that moves
     stick-slip events across samples) declares one: a local optimiser stops in the first basin.
+    ``sweep_claimed``: the sweep runs only once the cause is claimed (the lead, or an extension taken),
+    not on every candidate's fit: for a parameter whose held fits are costly (a misaligned scan's angle, each
+    point a 2D scan) and whose first basin is already good enough for the ranking.
     """
 
     name: str
@@ -58,6 +61,7 @@ class CauseParam:
     scale: str = "lin"
     starts: tuple[float, ...] = ()
     sweep: float = 0.0
+    sweep_claimed: bool = False
 
     def __post_init__(self) -> None:
         if not (self.lo <= self.null <= self.hi):
@@ -85,7 +89,7 @@ class CauseParam:
     def with_bounds(self, lo: float, hi: float, null: float | None = None) -> "CauseParam":
         n = self.null if null is None else null
         return CauseParam(self.name, self.unit, lo, hi, min(max(n, lo), hi), self.doc, self.scale,
-                          tuple(s for s in self.starts if lo <= s <= hi), self.sweep)
+                          tuple(s for s in self.starts if lo <= s <= hi), self.sweep, self.sweep_claimed)
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "unit": self.unit, "bounds": [self.lo, self.hi], "null": self.null,

@@ -36,6 +36,16 @@ KY_STARTS = (10.0,)
 #: without it, 0.5 % with it, docs/diagnose.md section 9.37)
 RIDGE_THETAS = (8.0, 12.0, 17.0, 24.0, 33.0)
 RIDGE_KY = (0.65, 3.0, 10.0)
+#: the angle's profile sweep step [deg] (engine Fitter.swept), run once the cause is claimed (``sweep_claimed``:
+#: every held point is a 2D scan fit of 1-5 s). On an anisotropic lever the free fit stalls on the (angle, k_y / k_x)
+#: valley's wall: own 2005 (26.81 deg, k_y / k_x 3) stopped at 25.13 deg with chi^2 586 000, where the angle held at
+#: 25.63, 26.13, 26.63 deg gives 467 000, 305 000, 167 000 (docs/diagnose.md 9.42-9.43)
+SWEEP_DEG = 0.5
+#: the stiffness ratio's sweep step [log10] (claimed only, after the angle's): the chi^2 is rugged at about 5 % in
+#: k_y / k_x (a slip landing in another well across the scan). Own 2047 (20.12 deg, k_y / k_x 3.57): swept in the
+#: angle alone the fit ends at 20.22 deg and 3.31 with chi^2 34 000 (a free fit from the truth reaches 4 000);
+#: swept in both, 20.12 deg and 3.62 with chi^2 5 900 (docs/diagnose.md 9.43)
+SWEEP_KY_DEX = 0.02
 
 
 def _aligned(ref: dict, theta_deg: float) -> dict:
@@ -61,9 +71,11 @@ class LatticeMisalignment(Cause):
                    "cos(theta) F_x + sin(theta) F_y with periods a/cos(theta) and a/sin(theta).")
     needs = "a scan with several lattice periods"
     changes = ("lattice",)
-    params = (CauseParam("theta_deg", "deg", 0.0, 45.0, 0.0, "scan angle to the lattice rows", starts=THETA_STARTS),
+    params = (CauseParam("theta_deg", "deg", 0.0, 45.0, 0.0, "scan angle to the lattice rows", starts=THETA_STARTS,
+                         sweep=SWEEP_DEG, sweep_claimed=True),
               CauseParam("ky_ratio", "1", KY_RATIO_BOUNDS[0], KY_RATIO_BOUNDS[1], 1.0,
-                         "the lever's lateral stiffness across the scan over k_x", scale="log", starts=KY_STARTS))
+                         "the lever's lateral stiffness across the scan over k_x", scale="log", starts=KY_STARTS,
+                         sweep=SWEEP_KY_DEX, sweep_claimed=True))
 
     def constrain(self, problem):
         """A declared ``[lever] k_y`` fixes the stiffness across the scan: only the angle is fitted."""
