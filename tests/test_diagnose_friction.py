@@ -429,7 +429,7 @@ def test_a_claimed_misalignment_is_swept_along_its_angle(tmp_path):
     """Own study seed 2005 (26.81 deg to the rows, k_y = 2.98 k_x): the nested fit stops on the wall of the
     (angle, k_y / k_x) valley at 25.13 deg (6.3 % off, chi^2 586 000); once the cause is claimed its angle's profile
     is swept (``SWEEP_DEG``, engine ``_sweep_claim``) and the fit ends in the valley, at the truth's angle within
-    1 % (measured 26.79 deg, chi^2 150 000; docs/diagnose.md 9.43). The candidate's own row keeps the swept fit."""
+    1 % (measured 26.79 deg, chi^2 141 600 with k_y / k_x swept too; docs/diagnose.md 9.43). The candidate's own row keeps the swept fit."""
     from probedyn.diagnose.engine import run
 
     path, truth = make_friction_case(tmp_path, 2005, "lattice-misalignment")

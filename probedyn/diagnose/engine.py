@@ -1177,7 +1177,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
 
         rivals = [d for d in claimed[1:] if rival_of(d, best)]
         best, rivals, occam = _fewest_parameters_lead(problem, claimed, best, rivals, rival_of)
-        if best is not claimed[0]:
+        if id(best) not in swept:  # a lead taken by the fewest parameters (it may now stand first in ``claimed``)
+            swept.add(id(best))
             _sweep_claim(F, best, base, cv, use_cv)
         if rivals:
             confounded.append(_confounding(problem, best, rivals, margin))
