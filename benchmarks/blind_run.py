@@ -10,7 +10,8 @@ helpers from the documented formats and catalog only (docs/diagnose.md §1, §3)
 Expected cause: the key's effect (a catalog key); ``jump-to-contact`` is DMT's van der Waals tail (as in
 ``benchmarks/diagnose_rates_curves.py``); ``none`` expects no finding. Reported per case: verdict, findings, the
 first finding's group, its fitted parameters and, for every parameter the key states under the catalog's name,
-the relative error of the fit; CPU time. Totals: correct first over the hidden cases, correct in the group, false
+the relative error of the fit; CPU time (the diagnosis' worker processes included); the declared conditions'
+terms the baseline took on. Totals: correct first over the hidden cases, correct in the group, false
 discoveries (any finding on a null), nulls not read as *no significant discrepancy*, the median relative error of
 the first parameter the key states (the cause's main parameter), every miss.
 """
@@ -20,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import sys
-import time
 from pathlib import Path
 
 from probedyn.diagnose.causes import CAUSES
@@ -45,8 +45,14 @@ def _parameter_errors(expected: str, fitted: dict, key: dict) -> dict:
     return out
 
 
+def _cpu() -> float:
+    """CPU seconds of this process and its reaped children (the diagnosis' worker processes)."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
 def score_case(case_toml: Path, key: dict) -> dict:
-    c0 = time.process_time()
+    c0 = _cpu()
     res = run(case_toml)
     f = res["findings"]
     first = f[0]["cause"] if f else None
@@ -55,7 +61,10 @@ def score_case(case_toml: Path, key: dict) -> dict:
            "findings": [x["cause"] for x in f], "group": [first, *f[0].get("confounded_with", [])] if f else [],
            "parameters": {n: p.get("value") for n, p in f[0]["parameters"].items()} if f else {},
            "baseline_p": res["baseline"]["p_value"], "targeted_test": res["baseline"].get("targeted_test"),
-           "noise_model": (res["method"].get("noise") or {}).get("model"), "cpu_s": time.process_time() - c0}
+           "noise_model": (res["method"].get("noise") or {}).get("model"), "cpu_s": _cpu() - c0,
+           # effects the declared conditions imply, taken into the baseline (thermal activation at a declared
+           # temperature, docs/diagnose.md 9.44): no finding, by design
+           "baseline_terms": [t["term"] for t in res["baseline"].get("declared_terms") or () if t["taken"]]}
     if first == exp and exp is not None:
         row["parameter_errors"] = _parameter_errors(exp, row["parameters"], key)
         if row["parameter_errors"]:
@@ -73,7 +82,9 @@ def summarize(rows: dict) -> dict:
             "nulls_not_clean": [c for c, r in rows.items() if not r["expected"] and r["verdict"] != "no-significant-discrepancy"],
             "median_parameter_error": errs[len(errs) // 2] if errs else None,
             "misses": {c: (r["effect"], r["group"]) for c, r in rows.items()
-                       if r["expected"] and r["findings"][:1] != [r["expected"]]}}
+                       if r["expected"] and r["findings"][:1] != [r["expected"]]},
+            "misses_in_baseline": [c for c, r in rows.items() if r["expected"] and r["findings"][:1] != [r["expected"]]
+                                   and r["expected"] in r.get("baseline_terms", ())]}
 
 
 def main(out_dir: Path, results: Path) -> dict:

@@ -15,9 +15,10 @@ velocity relative to the support; across the scan k_y = k on aligned scans, draw
 since session 48) over -U0 [cos(q x) + cos(q y)], trace and retrace of 8 lattice
 periods (40 interval-mean samples per period), three scans (speed v, 10 v at load N; v at 2 N),
 eta = 3-6, 5 pN white measurement noise. Hidden effects: ``FRICTION_EFFECTS`` in turn (thermal
-activation at 300 K; the other cases at 0.01 K, declared, where activation stays within the noise:
-at 1 K it raises chi^2 at the truth 4-10 fold, see ``diagnose_truth.T_COLD``); noise-only cases: the same truth without an effect. Seeds: effects 2000 + i, nulls
-6000 + i.
+activation at 300 K with the temperature not declared -- a declared temperature's activation is a term of the
+baseline, docs/diagnose.md 9.44; the other cases at 0.01 K, declared, where activation stays near the noise:
+at 1 K it raises chi^2 at the truth 4-10 fold, see ``diagnose_truth.T_COLD``); noise-only cases: the same truth
+without an effect. Seeds: effects 2000 + i, nulls 6000 + i.
 
 Reported: correct cause first (the first finding is the hidden effect), in its confounded group,
 false discoveries on the nulls (any finding), the median |fit - truth| / |truth - null| of the

@@ -881,7 +881,9 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
     (outdir / f"{name}.toml").write_text(
         f'[measurement]\nkind = "friction"\ndata = "{name}.csv"\nsampling = "{sampling}"\n\n'
         f"[lever]\nk_x = {k!r}\nm_x = {m!r}\nQ_x = {Q!r}\n\n[sample]\nlattice = 5e-10\n\n"
-        + (f"[medium]\ntemperature = {T!r}\n\n" if T > 0 else "")
+        # a declared temperature implies the activation (the baseline carries it, engine _declared_terms): the hidden
+        # thermal activation is a record whose temperature is not declared
+        + (f"[medium]\ntemperature = {T!r}\n\n" if T > 0 and effect != "thermal-activation" else "")
         + f"[noise]\nforce = {noise!r}\n\n" + "\n".join(tom))
     truth = {"effect": effect, "params": params, "a": a, "eta": eta, "u0": u0, "T": T, "v_lo": v_lo}
     return outdir / f"{name}.toml", truth

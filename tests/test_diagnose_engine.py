@@ -33,7 +33,8 @@ def _nested_never_worse(prob, keys=None):
     F = Fitter(prob)
     base = F.baseline()
     out = {}
-    for c in prob.causes:
+    # the declared conditions' terms (a declared temperature's activation) nest the baseline as the causes do
+    for c in list(prob.causes) + list(getattr(prob, "declared_terms", ())):
         if keys is not None and c.key not in keys:
             continue
         f = F.nested(base, (c,))
@@ -103,8 +104,9 @@ def test_every_friction_cause_at_its_null_is_the_baseline(tmp_path):
     F = Fitter(prob)
     base = F.baseline()
     prob.fixed_nuisance = base.nuisance
+    assert [t.key for t in prob.declared_terms] == ["thermal-activation"]  # the truth's 0.01 K, declared
     try:
-        for c in prob.causes:
+        for c in prob.causes + prob.declared_terms:
             r0 = F.residuals({**base.values, **{p.name: p.null for p in c.params}}, (c,))
             assert np.allclose(r0, base.r, rtol=1e-9, atol=1e-9 * (1 + np.abs(base.r).max())), c.key
     finally:

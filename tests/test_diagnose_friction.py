@@ -247,7 +247,7 @@ def test_misaligned_scan_profile_and_one_model_one_residual(tmp_path):
 
     path, truth = make_friction_case(tmp_path, 2026, "lattice-misalignment", params={"theta_deg": 11.2, "ky_ratio": 1.0})
     prob = make_problem(path)
-    by = {c.key: c for c in prob.causes}
+    by = {c.key: c for c in prob.causes + prob.declared_terms}  # thermal activation: a term at the declared 0.01 K
     mis = by["lattice-misalignment"]
     v = {"u0": truth["u0"], "a": truth["a"], "theta_deg": truth["params"]["theta_deg"]}
     r = prob.residuals(v, (mis,))
@@ -670,6 +670,39 @@ def test_a_fold_starts_from_the_whole_full_data_optimum_registry_included(tmp_pa
     for f in fold_fits:
         own = float(np.sum(base.r[f.mask] ** 2))
         assert f.chi2 <= own * (1 + 1e-9), (f.chi2, own)
+
+
+def test_a_declared_temperature_s_activation_joins_the_baseline(tmp_path):
+    """Thermal activation at a declared temperature is a term of the baseline, not a cause (engine
+    ``_declared_terms``): a Langevin tip at 1 K slips early by more than interval means resolve, and the blind
+    generator's nulls at 0.3-2 K were all reported as *thermal activation found* (docs/diagnose.md 9.44). Taken on
+    where it lowers -2 ln L (chi^2 and the slip scatter's log-determinant) by more than its likelihood-ratio
+    threshold, its attempt frequency then a baseline parameter and every model activated. The slip advance scales
+    as T^(2/3): at 1e-3 K (the sidecar's lowest) it is 1e-2 of the 1 K advance, below the noise, and the baseline
+    stays athermal (at the own nulls' 0.01 K, 0.05 of it: chi^2 gains of order 10, detectable on some records)."""
+    from probedyn.diagnose.engine import ALPHA, _declared_terms, lr_threshold
+
+    path, _ = make_friction_case(tmp_path, 7, None, length_periods=6, params={"T": 1.0}, name="warm")
+    prob = make_problem(path)
+    assert "thermal-activation" not in [c.key for c in prob.causes]
+    assert [t.key for t in prob.declared_terms] == ["thermal-activation"]
+    F = Fitter(prob)
+    base = F.baseline()
+    new, rows = _declared_terms(F, base, ALPHA)
+    assert rows[0]["taken"] and rows[0]["lr_gain"] > lr_threshold(1, 1, ALPHA)
+    assert new.chi2 == pytest.approx(base.chi2 - rows[0]["dchi2"])
+    assert [p.name for p in new.plist] == ["u0", "a", "log10_f0"] and not new.causes
+    assert [p.name for p in prob.base_params] == ["u0", "a", "log10_f0"] and prob.base_terms == tuple(prob.declared_terms)
+    # the baseline's model is now the activated one: its residuals without any cause give its chi^2
+    assert float(np.sum(prob.residuals(new.values, ()) ** 2)) == pytest.approx(new.chi2, rel=1e-6)
+    assert 3.0 < rows[0]["values"]["log10_f0"] < 9.0  # an attempt frequency of the lever-tip order (f_res 160 kHz)
+
+    cold, _ = make_friction_case(tmp_path, 7, None, length_periods=6, params={"T": 1e-3}, name="cold")
+    prob = make_problem(cold)
+    F = Fitter(prob)
+    base = F.baseline()
+    same, rows = _declared_terms(F, base, ALPHA)
+    assert not rows[0]["taken"] and same is base and [p.name for p in prob.base_params] == ["u0", "a"]
 
 
 def test_the_thermal_slip_scatter_is_a_fitted_variance(tmp_path):

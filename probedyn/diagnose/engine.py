@@ -9,6 +9,10 @@ discretisation estimate): a correct model with correctly stated noise gives ``r 
    are fitted by bounded least squares (trust-region reflective) from their starts. If the data
    cannot inform them (the Jacobian is rank-deficient) the diagnosis stops with a message that
    names the degenerate combination.
+   **Declared conditions' terms** (``problem.declared_terms``, :func:`_declared_terms`): an effect the declared
+   conditions imply (thermal activation at a declared temperature) is fitted nested in the baseline and joins it
+   where it lowers ``-2 ln L`` by more than its likelihood-ratio threshold; its parameters are then baseline
+   parameters, and no cause to be discovered.
    **Correlated noise** (:mod:`.noise`): a problem that declares its residuals' recording
    ``sequences`` has the noise's lag-one correlation estimated from the baseline residuals (a stated
    marginal sigma against the residuals' high-frequency scatter; without a stated noise the first
@@ -1041,6 +1045,8 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
     # the noise model a diagnosis sets on its problem (an unstated AR(1) noise's sigma, the whitener) is
     # undone when it returns: the problem object stays as the measurement made it
     saved = {k: getattr(problem, k) for k in ("sigma", "whitener") if hasattr(problem, k)}
+    # ... and so are the baseline's parameters and terms, which the declared conditions may extend (_declared_terms)
+    terms = {k: getattr(problem, k) for k in ("base_params", "base_terms") if hasattr(problem, "declared_terms")}
     problem.whitener = None
     try:
         return _diagnose(problem, F, alpha=alpha, max_causes=max_causes, only=only, margin=margin,
@@ -1053,6 +1059,8 @@ def diagnose(problem, *, alpha: float = ALPHA, max_causes: int = 2, only: list[s
                     setattr(problem, k, saved[k])
             elif hasattr(problem, k):
                 delattr(problem, k)
+        for k, v in terms.items():
+            setattr(problem, k, v)
 
 
 def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[str] | None, margin: float,
@@ -1071,6 +1079,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     # 1-2. baseline and its chi-square test
     base = F.baseline()
     _check_baseline_identifiable(base)
+    # 1a. what the declared conditions imply (thermal activation at a declared temperature) joins the baseline
+    base, declared = _declared_terms(F, base, alpha)
     # 1b. correlated noise (:mod:`.noise`): where the stated noise's high-frequency part and the
     # residuals' lag-one correlation both say AR(1), every fit from here on is whitened. Without a stated
     # noise the correlation comes from the residuals' own first and second differences, which a misfit
@@ -1270,6 +1280,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             "residual_unit": problem.unit,
             "heldout_rms": _rms(base.cv_r) if base.cv_r is not None else None,
             "residuals": base.r, "structure": problem.structure(base.r),
+            "declared_terms": declared,
         },
         "candidates": [_candidate_row(d) for d in sorted(cands, key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))],
         "findings": findings,
@@ -1285,6 +1296,42 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     if extra:
         result.update(extra())
     return result
+
+
+def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[str, Any]]]:
+    """Step 1a: the effects the measurement's declared conditions imply (``problem.declared_terms``: thermal
+    activation at a declared temperature) join the baseline where the data show them.
+
+    Each term is fitted nested in the baseline (from the baseline optimum with its parameters at their nulls, plus
+    its own starts and sweep, as a cause is) and taken on when it lowers chi^2 by more than the one-sided
+    likelihood-ratio threshold of its parameters at ``alpha`` (not divided among the catalog: the term is not one of
+    many hypotheses but a consequence of what was declared). Taken on, its parameters become baseline parameters
+    (``problem.base_params``) and its effect part of every model (``problem.base_terms``): the causes are then
+    tested against, and nested in, the baseline with the term. Not taken on, the baseline stays as it was (a cold
+    record's activation within the noise, an attempt frequency the data cannot inform). Returns the baseline and,
+    per term, what was found (for the report)."""
+    problem = F.problem
+    logdet = getattr(problem, "variance_logdet", None)
+    out: list[dict[str, Any]] = []
+    for t in list(getattr(problem, "declared_terms", ()) or ()):
+        g = F.nested(base, (t,))
+        # the likelihood ratio: where the term's model carries a variance of its own (a scatter it fits), its
+        # -2 ln L is chi^2 plus that variance's log-determinant (FrictionProblem.variance_logdet)
+        pen = (logdet(g.values, (t,)) - logdet(base.values, ())) if logdet is not None else 0.0
+        gain = float(base.chi2 - g.chi2 - pen)
+        thr = lr_threshold(len(t.params), 1, alpha)
+        row: dict[str, Any] = {"term": t.key, "title": t.title, "dchi2": float(base.chi2 - g.chi2),
+                               "variance_logdet": float(pen), "lr_gain": gain, "lr_threshold": thr,
+                               "taken": bool(gain > thr), "note": t.note}
+        if row["taken"]:
+            problem.base_params = list(problem.base_params) + list(t.params)
+            problem.base_terms = tuple(problem.base_terms) + (t,)
+            base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask,
+                       start=f"{base.start}+{t.key}", nuisance=g.nuisance)
+            row["values"] = {p.name: float(g.values[p.name]) for p in t.params}
+            row["derived"] = t.derived(g.values, problem)
+        out.append(row)
+    return base, out
 
 
 def _strained(fit: "Fit", cause) -> bool:
@@ -1545,8 +1592,15 @@ def _sweep_claim(F: Fitter, d: dict, ref: Fit, cv: CrossValidation | None, use_c
     updated in ``d``. The caller ranks the claims again: a lower chi^2 need not predict the held-out groups
     better. A misaligned scan's angle and stiffness ratio: every held point is a 2D scan, so sweeping every
     candidate cost the three-scan example 22 -> 50 s for a candidate it does not claim, where own 2005's claimed
-    angle goes from 6.3 % to 0.1 % off with it (docs/diagnose.md 9.42-9.43)."""
+    angle goes from 6.3 % to 0.1 % off with it (docs/diagnose.md 9.42-9.43).
+
+    The baseline's declared-condition terms (:func:`_declared_terms`) are walked too: their basin was found for the
+    baseline, and a claim moves it (blind f05, a scanner's bow on an activated record: chi^2 1122 where the
+    activation fitted after the bow reaches 1111)."""
     g = F.swept(d["fit"], (d["cause"],), claimed=True)
+    terms = tuple(getattr(F.problem, "base_terms", ()) or ())
+    if terms:
+        g = F.swept(g, terms)
     if g is d["fit"]:
         return
     d["fit"] = g

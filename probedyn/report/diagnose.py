@@ -61,6 +61,16 @@ def summary(res: dict[str, Any]) -> str:
     b = res["baseline"]
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
+    for t in b.get("declared_terms") or ():
+        if t["taken"]:
+            d = t.get("derived") or {}
+            what = (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
+                    if "attempt_frequency_Hz" in d else "")
+            lines.append(f"baseline includes {t['title'].lower()}{what}: the declared conditions imply it, and it "
+                         f"lowers -2 ln L by {t['lr_gain']:.1f} (threshold {t['lr_threshold']:.2f})")
+        else:
+            lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, but it lowers "
+                         f"-2 ln L by {t['lr_gain']:.1f} only (threshold {t['lr_threshold']:.2f})")
     st = (b.get("structure") or {}).get("static")
     if st:
         lines.append(f"static spring constant: measured {st['k_meas_N_per_m']:.5g} ± {st['sigma_N_per_m']:.2g} N/m "

@@ -119,6 +119,10 @@ class Cause:
         # a problem may narrow the parameters (declared conditions); the class stays untouched
         self.params = tuple(type(self).params if params is None else params)
         self.note = note
+        #: set by :meth:`constrain` where the measurement's declared conditions *imply* the effect (thermal
+        #: activation at a declared temperature): it is then no cause to discover but a term of the baseline, which
+        #: carries it where the data show it (engine ``_declared_terms``), and the other causes extend that baseline
+        self.declared = False
 
     def effect(self, values: dict[str, float], state: Any) -> None:  # pragma: no cover - placeholder
         """Apply the cause with parameter ``values`` to the model ``state`` (in place)."""

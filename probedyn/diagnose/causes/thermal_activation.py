@@ -11,6 +11,12 @@ at which the FFM integration places the tip over the saddle and lets its dynamic
 The temperature is the declared one ([medium] temperature; 295 K if none is declared, noted);
 the fitted parameter is the attempt frequency (log10 of f0/Hz; 0 = 1 Hz, no activation at
 scan speeds: the null value).
+
+A *declared* temperature implies the activation: every Langevin tip at a finite temperature slips
+early, at 1 K still by more than interval means resolve (blind friction nulls at 0.3-2 K: chi^2 of the
+athermal model 1.2-8 x n). The effect is then a term of the baseline, carried where the data show it
+(``declared``, engine ``_declared_terms``), with the attempt frequency a baseline parameter, and no
+cause to discover; the cause proper is a record whose temperature is not declared.
 """
 
 from __future__ import annotations
@@ -47,6 +53,7 @@ class ThermalActivation(Cause):
         note = "" if T is not None else "no temperature declared: 295 K assumed"
         c = ThermalActivation(note=note)
         c.T = T if T is not None else 295.0
+        c.declared = T is not None
         return c
 
     def start_sets_from(self, ref: dict[str, float]) -> list[dict[str, float]]:
