@@ -1303,9 +1303,10 @@ def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[
     activation at a declared temperature) join the baseline where the data show them.
 
     Each term is fitted nested in the baseline (from the baseline optimum with its parameters at their nulls, plus
-    its own starts and sweep, as a cause is) and taken on when it lowers chi^2 by more than the one-sided
-    likelihood-ratio threshold of its parameters at ``alpha`` (not divided among the catalog: the term is not one of
-    many hypotheses but a consequence of what was declared). Taken on, its parameters become baseline parameters
+    its own starts and sweep, as a cause is) and taken on when it lowers ``-2 ln L`` (chi^2, plus the log-determinant
+    of a variance the model carries, ``problem.variance_logdet``) by more than the likelihood-ratio threshold
+    ``chi2_k(1 - alpha)`` of its k parameters (not divided among the catalog: the term is not one of many hypotheses
+    but a consequence of what was declared). Taken on, its parameters become baseline parameters
     (``problem.base_params``) and its effect part of every model (``problem.base_terms``): the causes are then
     tested against, and nested in, the baseline with the term. Not taken on, the baseline stays as it was (a cold
     record's activation within the noise, an attempt frequency the data cannot inform). Returns the baseline and,

@@ -1481,8 +1481,8 @@ class FrictionProblem:
         """``sum ln(1 + var / sigma^2)`` over the fitted samples: the part of ``-2 ln L`` that the chi-square leaves
         out where the model carries a variance of its own (the thermal slip scatter). A likelihood-ratio test of such
         a model against one without adds it to the model's chi-square: a widened scatter lowers chi^2 by down-weighting
-        the worst samples even where there is no scatter to model (a 0.01 K record: chi^2 -17.9 from a scatter up to
-        2 sigma^2 on a few samples, the log term +20)."""
+        the worst samples even where there is no scatter to model (own seed 7 at 0.01 K: chi^2 -17.9 with a scatter up to
+        2 sigma^2 on a few samples, of which the log term takes back 6.5)."""
         try:
             self.predict(values, causes)
         except ProbedynError:
