@@ -1,5 +1,6 @@
 """Measurement files: every malformed or implausible input is a one-line error naming where it is."""
 
+import math
 from pathlib import Path
 
 import pytest
@@ -141,6 +142,19 @@ def test_class6_flat_friction_cannot_inform(tmp_path, force, what):
     (tmp_path / "f.toml").write_text(FR_SIDE)
     with pytest.raises(DataFormatError, match=f"cannot inform the fit: .*{what}"):
         read_measurement(tmp_path / "f.toml")
+
+
+def test_zero_kelvin_declares_an_athermal_friction_record_only(tmp_path):
+    """0 K is a friction record's athermal declaration (a simulation's: ``schemes`` PT at temperature 0): no
+    activation is offered, neither as a cause nor as a baseline term. A spectrum or a fluid needs a real
+    temperature, so a modal record at 0 K is refused."""
+    (tmp_path / "f.csv").write_text(_friction_csv(lambda i: 1e-10 * math.sin(0.8 * i)))
+    (tmp_path / "f.toml").write_text(FR_SIDE.replace("[noise]", "[medium]\ntemperature = 0\n[noise]"))
+    prob = make_problem(tmp_path / "f.toml")
+    assert prob.temperature == 0.0 and not prob.declared_terms
+    assert "thermal-activation" not in [c.key for c in prob.causes]
+    with pytest.raises(DataFormatError, match=r"temperature = 0 K is outside the plausible range \[0.001, 2000\]"):
+        read_measurement(_write(tmp_path, side=SIDE + "[medium]\ntemperature = 0\n"))
 
 
 def test_class6_flat_force_curve_cannot_inform(tmp_path):

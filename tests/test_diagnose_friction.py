@@ -705,6 +705,24 @@ def test_a_declared_temperature_s_activation_joins_the_baseline(tmp_path):
     assert not rows[0]["taken"] and same is base and [p.name for p in prob.base_params] == ["u0", "a"]
 
 
+def test_a_declared_term_within_a_hidden_effect_s_misfit_is_not_taken(tmp_path):
+    """The declared activation is held to the rule a claimed cause is (engine ``_beyond_remainder``): taken on only
+    where its gain exceeds the excess chi^2 - dof the baseline with it still leaves. A hidden calibration error (a
+    gain 1.3 at 0.01 K, declared) leaves the athermal baseline at chi^2 ~ 250 n; any flexible term takes a share of
+    that misfit (here more than a thousand, far past the likelihood-ratio line), which is no evidence of activation
+    (own misaligned seed 2005: taken on, it sent the misalignment's fit to another basin, docs/diagnose.md 9.45)."""
+    from probedyn.diagnose.engine import ALPHA, _declared_terms
+
+    path, _ = make_friction_case(tmp_path, 7, "force-calibration", length_periods=6, params={"g": 1.3})
+    prob = make_problem(path)
+    F = Fitter(prob)
+    base = F.baseline()
+    same, rows = _declared_terms(F, base, ALPHA)
+    r = rows[0]
+    assert r["lr_gain"] > 10 * r["lr_threshold"] and r["remainder"] > 100 * r["lr_gain"]
+    assert not r["taken"] and same is base and [p.name for p in prob.base_params] == ["u0", "a"]
+
+
 def test_the_thermal_slip_scatter_is_a_fitted_variance(tmp_path):
     """``FrictionProblem.variance_fitted``: the athermal model carries no variance of its own; with thermal
     activation (a 300 K Langevin truth) the slips' scatter enters sample by sample, and the engine then also tests

@@ -392,7 +392,10 @@ def _common(meta: dict, side: Path, kind: str) -> dict[str, Any]:
             out["medium"] = (float(rho_f), float(eta_f))
             out["medium_name"] = name or "declared fluid"
         if "temperature" in med:
-            out["temperature"] = _num(meta, "medium", "temperature", side, lo=1e-3, hi=2000.0, unit="K")
+            # friction: 0 K declares an athermal record (a simulation's), where no slip is activated; spectra need
+            # thermal motion and fluids a real temperature, hence 1 mK there
+            lo = 0.0 if kind == "friction" else 1e-3
+            out["temperature"] = _num(meta, "medium", "temperature", side, lo=lo, hi=2000.0, unit="K")
     free = meta.get("baseline", {}).get("free", ())
     if isinstance(free, str) or not all(isinstance(x, str) for x in free):
         raise DataFormatError(f"{side}: [baseline] free must be a list of names")

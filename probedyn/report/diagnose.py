@@ -68,6 +68,10 @@ def summary(res: dict[str, Any]) -> str:
                     if "attempt_frequency_Hz" in d else "")
             lines.append(f"baseline includes {t['title'].lower()}{what}: the declared conditions imply it, and it "
                          f"lowers -2 ln L by {t['lr_gain']:.1f} (threshold {t['lr_threshold']:.2f})")
+        elif t["lr_gain"] > t["lr_threshold"]:
+            lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, and it lowers "
+                         f"-2 ln L by {t['lr_gain']:.1f}, but the baseline with it still leaves an excess chi2 - dof of "
+                         f"{t['remainder']:.1f}: a gain within that misfit is not separable from it")
         else:
             lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, but it lowers "
                          f"-2 ln L by {t['lr_gain']:.1f} only (threshold {t['lr_threshold']:.2f})")
