@@ -266,7 +266,7 @@ class Fitter:
         (the baseline), see :func:`_run_job`. Returns the fits in order."""
         if self._pool is None or len(jobs) < 2:
             return [_run_job(self, j) for j in jobs]
-        by_key = {c.key: c for c in self.problem.causes}
+        by_key = _by_key(self.problem)
         packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None,
                    j[4] if len(j) > 4 else None) for j in jobs]
         out = []
@@ -577,11 +577,16 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
     return f1 if f1.chi2 < f0.chi2 else f0
 
 
+def _by_key(problem) -> dict[str, Any]:
+    """The problem's causes and declared terms by key (a pool job names them by key)."""
+    return {c.key: c for c in (*problem.causes, *(getattr(problem, "declared_terms", ()) or ()))}
+
+
 def _pool_job(packed: tuple) -> tuple["Fit", int]:
     """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
     F = _POOL_FITTER
     ref, keys, mask, warm, only = packed
-    by_key = {c.key: c for c in F.problem.causes}
+    by_key = _by_key(F.problem)
     if ref is not None:
         ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
     n0 = F.nfev
@@ -1173,6 +1178,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         claimed = sorted((d for d in claimed if d["evidence"] > 0), key=lambda d: -rank(d))
     parsimony = _parsimony(claimed, margin, alpha)
     findings: list[dict] = []
+    declared_after: list[dict] = []  # declared terms taken on after a claim (_declared_after_claim)
     confounded: list[dict] = []
     chosen: list[Cause] = []
     current = base
@@ -1200,6 +1206,8 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             findings[0]["parsimony"] = parsimony
         if occam:
             findings[0]["notes"] = list(findings[0].get("notes") or []) + [occam]
+        current = _declared_after_claim(F, current, alpha, findings[-1], declared_after, cv)
+        chain[-1] = current
         # 6. greedy extension while the chi-square test still fails
         while len(chosen) < max_causes and gof_p(current.chi2, current.dof, problem, F.white) < alpha:
             ext = []
@@ -1232,7 +1240,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             _sweep_claim(F, nxt, current, cv, use_cv)
             findings.append(_finding(problem, F, current, nxt, None, alpha))
             chosen.append(nxt["cause"])
-            current = nxt["fit"]
+            current = _declared_after_claim(F, nxt["fit"], alpha, findings[-1], declared_after, cv)
             chain.append(current)
         # a problem with ``extension_vs_model_error``: every claimed cause must take more than the excess
         # the chain leaves unexplained (_beyond_remainder)
@@ -1281,6 +1289,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
             "heldout_rms": _rms(base.cv_r) if base.cv_r is not None else None,
             "residuals": base.r, "structure": problem.structure(base.r),
             "declared_terms": declared,
+            "declared_terms_after_claims": declared_after,
         },
         "candidates": [_candidate_row(d) for d in sorted(cands, key=lambda d: -(d["evidence"] if d["evidence"] is not None else -1e300))],
         "findings": findings,
@@ -1342,6 +1351,43 @@ def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[
             row["derived"] = t.derived(g.values, problem)
         out.append(row)
     return base, out
+
+
+def _declared_after_claim(F: Fitter, fit: Fit, alpha: float, finding: dict, rows: list[dict], cv=None) -> Fit:
+    """A declared term the baseline did not take (:func:`_declared_terms`: its gain lay within the misfit of a
+    hidden effect) is tested again on the model of a claim, by the same rule: nested in it, taken on where it lowers
+    ``-2 ln L`` by more than its likelihood-ratio threshold and by more than the excess ``chi^2 - dof`` the claim's
+    model with it still leaves. Taken on, the term is part of the model from there on (its parameters fitted in the
+    chain, not a finding): a declared temperature's activation beside a hidden effect (blind friction records at
+    0.5-2 K, whose athermal misfit the hidden effect dominates). ``rows`` receives what was tried; the finding is
+    noted where a term was taken, and the chain's cross-validation folds start from the taken fit (``cv``). Returns
+    the model to continue from."""
+    problem = F.problem
+    taken = {c.key for c in (getattr(problem, "base_terms", ()) or ())} | {c.key for c in fit.causes}
+    logdet = getattr(problem, "variance_logdet", None)
+    for t in list(getattr(problem, "declared_terms", ()) or ()):
+        if t.key in taken:
+            continue
+        g = F.nested(fit, (t,))
+        pen = (logdet(g.values, g.causes) - logdet(fit.values, fit.causes)) if logdet is not None else 0.0
+        gain = float(fit.chi2 - g.chi2 - pen)
+        thr = lr_threshold(len(t.params), 1, alpha)
+        remainder = max(float(g.chi2 - g.dof), 0.0)
+        row: dict[str, Any] = {"term": t.key, "title": t.title, "after": finding["cause"],
+                               "dchi2": float(fit.chi2 - g.chi2), "variance_logdet": float(pen), "lr_gain": gain,
+                               "lr_threshold": thr, "remainder": remainder,
+                               "taken": bool(gain > thr and gain > remainder), "note": t.note}
+        if row["taken"]:
+            row["values"] = {p.name: float(g.values[p.name]) for p in t.params}
+            row["derived"] = t.derived(g.values, problem)
+            finding["notes"] = list(finding.get("notes") or []) + [
+                f"the declared conditions' {t.title.lower()} joined the model after this claim (-2 ln L lowered by "
+                f"{gain:.1f}; the baseline's gain had been within the hidden effect's misfit)"]
+            if cv is not None:  # the folds of the chain start from this optimum, as a claim's do (cv_warm)
+                cv.full_fits[tuple(c.key for c in g.causes)] = g
+            fit = g
+        rows.append(row)
+    return fit
 
 
 def _strained(fit: "Fit", cause) -> bool:

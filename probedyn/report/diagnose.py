@@ -75,6 +75,13 @@ def summary(res: dict[str, Any]) -> str:
         else:
             lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, but it lowers "
                          f"-2 ln L by {t['lr_gain']:.1f} only (threshold {t['lr_threshold']:.2f})")
+    for t in b.get("declared_terms_after_claims") or ():
+        if t["taken"]:
+            d = t.get("derived") or {}
+            what = (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
+                    if "attempt_frequency_Hz" in d else "")
+            lines.append(f"{t['title'].lower()}{what} joined the model after the claim of {t['after']}: it lowers "
+                         f"-2 ln L by {t['lr_gain']:.1f} there, beyond the excess chi2 - dof of {t['remainder']:.1f} left")
     st = (b.get("structure") or {}).get("static")
     if st:
         lines.append(f"static spring constant: measured {st['k_meas_N_per_m']:.5g} ± {st['sigma_N_per_m']:.2g} N/m "
