@@ -548,3 +548,54 @@ def test_a_rugged_parameter_is_swept_past_its_first_basin():
     d = {"cause": g.causes[0], "fit": g, "k": 1, "dchi2": base.chi2 - g.chi2, "evidence": 0.0}
     _sweep_claim(Fs[0], d, base, None, False)
     assert d["evidence"] == pytest.approx(0.5 * d["dchi2"] - 1)  # Akaike, on the swept gain
+
+
+def test_pool_workers_end_with_their_parent(tmp_path):
+    """The engine's forked workers do not outlive a parent killed outright (SIGKILL, e.g. by ``timeout``), and take
+    SIGTERM's default action rather than the command line's handler they would inherit (``_pool_worker_init``;
+    before, `probedyn diagnose` killed by `timeout` left its workers blocked on the job queue for ever)."""
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "parent.py"
+    script.write_text(
+        "import os, signal, time\n"
+        "from concurrent.futures import ProcessPoolExecutor\n"
+        "import multiprocessing\n"
+        "from probedyn.diagnose.engine import _pool_worker_init\n"
+        "def job(i):\n"
+        "    time.sleep(0.05)\n"
+        "    return os.getpid(), signal.getsignal(signal.SIGTERM) is signal.SIG_DFL\n"
+        "signal.signal(signal.SIGTERM, lambda *a: None)  # a handler the workers must not keep\n"
+        "pool = ProcessPoolExecutor(2, mp_context=multiprocessing.get_context('fork'),\n"
+        "                           initializer=_pool_worker_init, initargs=(os.getpid(),))\n"
+        "res = list(pool.map(job, range(8)))\n"
+        "print(' '.join(str(p) for p in sorted({p for p, _ in res})), all(d for _, d in res), flush=True)\n"
+        "os.kill(os.getpid(), signal.SIGKILL)\n"
+    )
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60).stdout.split()
+    pids, default = [int(p) for p in out[:-1]], out[-1]
+    assert pids and default == "True"
+    deadline = time.monotonic() + 10
+    alive = pids
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+        alive = [p for p in pids if _alive(p)]
+    assert not alive, f"workers {alive} outlived their parent"
+
+
+def _alive(pid: int) -> bool:
+    import os
+
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+    except OSError:  # pragma: no cover - no /proc
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        return True

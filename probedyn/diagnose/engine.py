@@ -254,7 +254,8 @@ class Fitter:
         global _POOL_FITTER
         if self._pool is None and self._workers() > 1 and "fork" in multiprocessing.get_all_start_methods():
             _POOL_FITTER = self
-            self._pool = ProcessPoolExecutor(self._workers(), mp_context=multiprocessing.get_context("fork"))
+            self._pool = ProcessPoolExecutor(self._workers(), mp_context=multiprocessing.get_context("fork"),
+                                             initializer=_pool_worker_init, initargs=(os.getpid(),))
 
     def close_pool(self) -> None:
         if self._pool is not None:
@@ -575,6 +576,38 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
     w = dict(warm) if getattr(F.problem, "cv_warm_all", False) else {**ref.values, **{q: warm[q] for q in newp}}
     f1 = F.fit(tuple(ref.causes) + new, [w], mask)
     return f1 if f1.chi2 < f0.chi2 else f0
+
+
+def _pool_worker_init(parent: int) -> None:
+    """In a forked worker: the default action for SIGINT, SIGTERM and SIGHUP, and no wakeup fd (the command line's
+    handlers and its watchdog's pipe are the parent's: inherited, a worker caught SIGTERM and lived on), and a
+    watch that ends the worker when its parent is gone (a parent killed outright leaves its workers blocked on the
+    job queue for ever: found with `timeout` around `probedyn diagnose`)."""
+    import signal
+    import threading
+
+    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            try:
+                signal.signal(sig, signal.SIG_DFL)
+            except (OSError, ValueError):  # pragma: no cover
+                pass
+    try:
+        signal.set_wakeup_fd(-1)
+    except (OSError, ValueError):  # pragma: no cover
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(ORPHAN_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="probedyn-orphan-watch", daemon=True).start()
+
+
+#: how often a pool worker checks that its parent is alive [s]
+ORPHAN_POLL_S = 0.5
 
 
 def _by_key(problem) -> dict[str, Any]:
