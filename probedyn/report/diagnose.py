@@ -56,6 +56,13 @@ def _fmt_param(name: str, p: dict[str, Any]) -> str:
     return txt
 
 
+def _term_values(t: dict[str, Any]) -> str:
+    """What a declared term taken on was fitted to, in words (its derived values)."""
+    d = t.get("derived") or {}
+    return (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
+            if "attempt_frequency_Hz" in d else "")
+
+
 def summary(res: dict[str, Any]) -> str:
     """The diagnosis in a few lines (also the text block of the report)."""
     b = res["baseline"]
@@ -63,9 +70,7 @@ def summary(res: dict[str, Any]) -> str:
              f"{b['residual_rms']:.2f} sigma"]
     for t in b.get("declared_terms") or ():
         if t["taken"]:
-            d = t.get("derived") or {}
-            what = (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
-                    if "attempt_frequency_Hz" in d else "")
+            what = _term_values(t)
             lines.append(f"baseline includes {t['title'].lower()}{what}: the declared conditions imply it, and it "
                          f"lowers -2 ln L by {t['lr_gain']:.1f} (threshold {t['lr_threshold']:.2f})")
         elif t["lr_gain"] > t["lr_threshold"]:
@@ -77,9 +82,7 @@ def summary(res: dict[str, Any]) -> str:
                          f"-2 ln L by {t['lr_gain']:.1f} only (threshold {t['lr_threshold']:.2f})")
     for t in b.get("declared_terms_after_claims") or ():
         if t["taken"]:
-            d = t.get("derived") or {}
-            what = (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
-                    if "attempt_frequency_Hz" in d else "")
+            what = _term_values(t)
             lines.append(f"{t['title'].lower()}{what} joined the model after the claim of {t['after']}: it lowers "
                          f"-2 ln L by {t['lr_gain']:.1f} there, beyond the excess chi2 - dof of {t['remainder']:.1f} left")
     st = (b.get("structure") or {}).get("static")
