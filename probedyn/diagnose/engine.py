@@ -1340,82 +1340,77 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     return result
 
 
+def _test_term(F: Fitter, fit: Fit, t, alpha: float) -> tuple[Fit, dict[str, Any]]:
+    """A declared term ``t`` tested on the model ``fit`` (the baseline, or a claim's model): fitted nested in it and
+    taken on when it lowers ``-2 ln L`` (chi^2, plus the log-determinant of a variance the model carries,
+    ``problem.variance_logdet``) by more than the likelihood-ratio threshold ``chi2_k(1 - alpha)`` of its k
+    parameters and by more than the excess ``chi^2 - dof`` the model with it still leaves (:func:`_beyond_remainder`'s
+    rule for a claimed cause: a gain below that remainder is not separable from the misfit it shows). Returns the
+    nested fit and the row the report shows."""
+    problem = F.problem
+    logdet = getattr(problem, "variance_logdet", None)
+    g = F.nested(fit, (t,))
+    # the likelihood ratio: where the term's model carries a variance of its own (a scatter it fits), its
+    # -2 ln L is chi^2 plus that variance's log-determinant (FrictionProblem.variance_logdet)
+    pen = (logdet(g.values, g.causes) - logdet(fit.values, fit.causes)) if logdet is not None else 0.0
+    gain = float(fit.chi2 - g.chi2 - pen)
+    thr = lr_threshold(len(t.params), 1, alpha)
+    # a hidden effect's misfit is partly taken by any flexible term (own misaligned seed 2005 at 0.01 K: the
+    # activation gained 13 465 of a baseline chi^2 of 1.2e6 and, taken on, sent the misalignment's fit to another
+    # basin); a declared temperature's own activation takes most of the athermal misfit (blind nulls at 0.3-2 K:
+    # gains 164-6615 against remainders 0-156)
+    remainder = max(float(g.chi2 - g.dof), 0.0)
+    row: dict[str, Any] = {"term": t.key, "title": t.title, "dchi2": float(fit.chi2 - g.chi2),
+                           "variance_logdet": float(pen), "lr_gain": gain, "lr_threshold": thr,
+                           "remainder": remainder, "taken": bool(gain > thr and gain > remainder), "note": t.note}
+    if row["taken"]:
+        row["values"] = {p.name: float(g.values[p.name]) for p in t.params}
+        row["derived"] = t.derived(g.values, problem)
+    return g, row
+
+
 def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[str, Any]]]:
     """Step 1a: the effects the measurement's declared conditions imply (``problem.declared_terms``: thermal
     activation at a declared temperature) join the baseline where the data show them.
 
     Each term is fitted nested in the baseline (from the baseline optimum with its parameters at their nulls, plus
-    its own starts and sweep, as a cause is) and taken on when it lowers ``-2 ln L`` (chi^2, plus the log-determinant
-    of a variance the model carries, ``problem.variance_logdet``) by more than the likelihood-ratio threshold
-    ``chi2_k(1 - alpha)`` of its k parameters (not divided among the catalog: the term is not one of many hypotheses
-    but a consequence of what was declared), and by more than the excess ``chi^2 - dof`` the baseline with the term
-    still leaves (a gain below that remainder is not separable from the misfit it shows: :func:`_beyond_remainder`,
-    the same rule for the causes of a chain). Taken on, its parameters become baseline parameters
+    its own starts and sweep, as a cause is) and tested by :func:`_test_term` (its likelihood-ratio threshold is not
+    divided among the catalog: the term is not one of many hypotheses but a consequence of what was declared). Taken on, its parameters become baseline parameters
     (``problem.base_params``) and its effect part of every model (``problem.base_terms``): the causes are then
     tested against, and nested in, the baseline with the term. Not taken on, the baseline stays as it was (a cold
     record's activation within the noise, an attempt frequency the data cannot inform). Returns the baseline and,
     per term, what was found (for the report)."""
     problem = F.problem
-    logdet = getattr(problem, "variance_logdet", None)
     out: list[dict[str, Any]] = []
     for t in list(getattr(problem, "declared_terms", ()) or ()):
-        g = F.nested(base, (t,))
-        # the likelihood ratio: where the term's model carries a variance of its own (a scatter it fits), its
-        # -2 ln L is chi^2 plus that variance's log-determinant (FrictionProblem.variance_logdet)
-        pen = (logdet(g.values, (t,)) - logdet(base.values, ())) if logdet is not None else 0.0
-        gain = float(base.chi2 - g.chi2 - pen)
-        thr = lr_threshold(len(t.params), 1, alpha)
-        # the excess the baseline with the term still leaves (_beyond_remainder's rule for a claimed cause): a gain
-        # below it is not separable from that misfit. A hidden effect's misfit is partly taken by any flexible term
-        # (own misaligned seed 2005 at 0.01 K: the activation gained 13 465 of a baseline chi^2 of 1.2e6 and, taken
-        # on, sent the misalignment's fit to another basin); a declared temperature's own activation takes most of
-        # the athermal misfit (blind nulls at 0.3-2 K: gains 164-6615 against remainders 0-156)
-        remainder = max(float(g.chi2 - g.dof), 0.0)
-        row: dict[str, Any] = {"term": t.key, "title": t.title, "dchi2": float(base.chi2 - g.chi2),
-                               "variance_logdet": float(pen), "lr_gain": gain, "lr_threshold": thr,
-                               "remainder": remainder, "taken": bool(gain > thr and gain > remainder),
-                               "note": t.note}
+        g, row = _test_term(F, base, t, alpha)
         if row["taken"]:
             problem.base_params = list(problem.base_params) + list(t.params)
             problem.base_terms = tuple(problem.base_terms) + (t,)
             base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask,
                        start=f"{base.start}+{t.key}", nuisance=g.nuisance)
-            row["values"] = {p.name: float(g.values[p.name]) for p in t.params}
-            row["derived"] = t.derived(g.values, problem)
         out.append(row)
     return base, out
 
 
 def _declared_after_claim(F: Fitter, fit: Fit, alpha: float, finding: dict, rows: list[dict], cv=None) -> Fit:
     """A declared term the baseline did not take (:func:`_declared_terms`: its gain lay within the misfit of a
-    hidden effect) is tested again on the model of a claim, by the same rule: nested in it, taken on where it lowers
-    ``-2 ln L`` by more than its likelihood-ratio threshold and by more than the excess ``chi^2 - dof`` the claim's
-    model with it still leaves. Taken on, the term is part of the model from there on (its parameters fitted in the
+    hidden effect) is tested again on the model of a claim, by the same rule (:func:`_test_term`). Taken on, the term is part of the model from there on (its parameters fitted in the
     chain, not a finding): a declared temperature's activation beside a hidden effect (blind friction records at
     0.5-2 K, whose athermal misfit the hidden effect dominates). ``rows`` receives what was tried; the finding is
     noted where a term was taken, and the chain's cross-validation folds start from the taken fit (``cv``). Returns
     the model to continue from."""
     problem = F.problem
     taken = {c.key for c in (getattr(problem, "base_terms", ()) or ())} | {c.key for c in fit.causes}
-    logdet = getattr(problem, "variance_logdet", None)
     for t in list(getattr(problem, "declared_terms", ()) or ()):
         if t.key in taken:
             continue
-        g = F.nested(fit, (t,))
-        pen = (logdet(g.values, g.causes) - logdet(fit.values, fit.causes)) if logdet is not None else 0.0
-        gain = float(fit.chi2 - g.chi2 - pen)
-        thr = lr_threshold(len(t.params), 1, alpha)
-        remainder = max(float(g.chi2 - g.dof), 0.0)
-        row: dict[str, Any] = {"term": t.key, "title": t.title, "after": finding["cause"],
-                               "dchi2": float(fit.chi2 - g.chi2), "variance_logdet": float(pen), "lr_gain": gain,
-                               "lr_threshold": thr, "remainder": remainder,
-                               "taken": bool(gain > thr and gain > remainder), "note": t.note}
+        g, row = _test_term(F, fit, t, alpha)
+        row = {"term": row.pop("term"), "title": row.pop("title"), "after": finding["cause"], **row}
         if row["taken"]:
-            row["values"] = {p.name: float(g.values[p.name]) for p in t.params}
-            row["derived"] = t.derived(g.values, problem)
             finding["notes"] = list(finding.get("notes") or []) + [
                 f"the declared conditions' {t.title.lower()} joined the model after this claim (-2 ln L lowered by "
-                f"{gain:.1f}; the baseline's gain had been within the hidden effect's misfit)"]
+                f"{row['lr_gain']:.1f}; the baseline's gain had been within the hidden effect's misfit)"]
             if cv is not None:  # the folds of the chain start from this optimum, as a claim's do (cv_warm)
                 cv.full_fits[tuple(c.key for c in g.causes)] = g
             fit = g
