@@ -884,7 +884,8 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
         # a declared temperature implies the activation (the baseline carries it, engine _declared_terms): the hidden
         # thermal activation is a record whose temperature is not declared
         + (f"[medium]\ntemperature = {T!r}\n\n" if T > 0 and effect != "thermal-activation" else "")
-        + f"[noise]\nforce = {noise!r}\n\n" + "\n".join(tom))
+        # the stated noise is the detector's: the tip's thermal motion comes on top of it (the Langevin integration)
+        + f'[noise]\nforce = {noise!r}\nforce_part = "detector"\n\n' + "\n".join(tom))
     truth = {"effect": effect, "params": params, "a": a, "eta": eta, "u0": u0, "T": T, "v_lo": v_lo}
     return outdir / f"{name}.toml", truth
 

@@ -157,6 +157,23 @@ def test_zero_kelvin_declares_an_athermal_friction_record_only(tmp_path):
         read_measurement(_write(tmp_path, side=SIDE + "[medium]\ntemperature = 0\n"))
 
 
+@pytest.mark.parametrize("noise, what", [
+    ('force = 5e-12\nforce_part = "thermal"\n', "force_part must be 'total' .* or 'detector'"),
+    ('force_part = "detector"\n', r"force_part says what \[noise\] force covers: state force too"),
+])
+def test_what_the_stated_friction_noise_covers_is_checked(tmp_path, noise, what):
+    """``[noise] force_part`` says whether the stated force noise is the samples' total (default) or the detector's
+    alone (the tip's thermal force noise then comes on top at a declared temperature): any other value, or the key
+    without a stated noise, is refused with the reason."""
+    (tmp_path / "f.csv").write_text(_friction_csv(lambda i: 1e-10 * math.sin(0.8 * i)))
+    (tmp_path / "f.toml").write_text(FR_SIDE.replace("force = 5e-12\n", noise))
+    with pytest.raises(DataFormatError, match=what):
+        read_measurement(tmp_path / "f.toml")
+    ok = FR_SIDE.replace("force = 5e-12\n", 'force = 5e-12\nforce_part = "detector"\n')
+    (tmp_path / "f.toml").write_text(ok)
+    assert read_measurement(tmp_path / "f.toml").noise_part == "detector"
+
+
 def test_class6_flat_force_curve_cannot_inform(tmp_path):
     (tmp_path / "c.csv").write_text("z_m,force_N\n" + "".join(f"{i * 1e-10:.3e},0\n" for i in range(50)))
     (tmp_path / "c.toml").write_text('[measurement]\nkind = "force"\ndata = "c.csv"\n[lever]\nk = 1.0\n')

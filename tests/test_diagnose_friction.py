@@ -78,6 +78,43 @@ def test_hidden_viscous_friction_is_named(tmp_path):
     assert abs(p["value"] - g_true) < tol, (p, g_true)
 
 
+def _room_temperature_case(tmp_path, seed: int):
+    """Own generator seed ``seed`` at a declared 300 K (its effect drawn as in the study; the 5 pN detector noise
+    declared as the detector's, the Langevin tip's thermal motion on top)."""
+    from diagnose_truth import FRICTION_EFFECTS, draw_friction_effect
+
+    eff = None if seed >= 6000 else FRICTION_EFFECTS[(seed - 2000) % len(FRICTION_EFFECTS)]
+    prm = draw_friction_effect(eff, np.random.default_rng(seed))
+    prm["T"] = 300.0
+    return make_friction_case(tmp_path, seed, eff, params=prm)
+
+
+@pytest.mark.slow
+def test_a_room_temperature_null_needs_no_cause(tmp_path):
+    """Own null 6000 at a declared 300 K. Before session 61 it read *unexplained* (chi^2 3117 on 1734): one
+    retrace sample whose slip the tip made after the reversal (r = 29), and the tip's thermal force noise missing
+    from the interval means' variance. With the slip carried across the reversal and the thermal force noise added
+    to the detector's, nothing is claimed (measured: chi^2 1869 on 1731, p 0.011)."""
+    path, _ = _room_temperature_case(tmp_path, 6000)
+    res = diagnose(make_problem(path), only=["viscous-friction", "adhesion-load", "force-calibration"])
+    assert not res["findings"], [f["cause"] for f in res["findings"]]
+
+
+@pytest.mark.slow
+def test_a_hidden_adhesion_at_room_temperature_is_named(tmp_path):
+    """Own seed 2002 at a declared 300 K: an adhesion load of 13.5 nN. The baseline's activation had taken the
+    peaks' load dependence (attempt frequency 4e3 Hz, the Langevin tip's ~3e5 Hz) and the adhesion nested from
+    there lost to viscous friction (session 60: a miss). Its nested fit now also starts on the activation's ridge
+    walked over the load (``ThermalActivation.ridge_starts``), and adhesion is first. The load trades with the
+    attempt frequency along that ridge (basins at 13.2 and 16.8 nN within chi^2 52 of each other, measured), so the
+    load is asserted within 25 % (measured in the whole diagnosis: 14.95 nN, +10.8 %)."""
+    path, truth = _room_temperature_case(tmp_path, 2002)
+    res = diagnose(make_problem(path), only=["adhesion-load", "viscous-friction"])
+    assert res["findings"] and res["findings"][0]["cause"] == "adhesion-load", [f["cause"] for f in res["findings"]]
+    n = res["findings"][0]["parameters"]["n_adh"]["value"]
+    assert abs(n / truth["params"]["n_adh"] - 1.0) < 0.25, n
+
+
 # ---- the stick-slip loop as recorded: data-derived starts -----------------------------------
 
 
@@ -150,6 +187,107 @@ def test_slip_scatter_of_interval_means_is_the_branch_fraction():
     assert np.allclose(mean, Fs.mean(axis=0) - F0, atol=1e-3)
     assert np.allclose(var, Fs.var(axis=0), atol=1e-3)
     assert var[np.argmin(np.abs(x))] > 0.3  # the interval holding the slip scatters most
+
+
+def test_a_slip_not_made_before_a_reversal_is_carried_into_the_return():
+    """A slip point beyond the turn: the tip is still stuck when the support turns, and on the way back the
+    hazard keeps accumulating at the rate of the same support positions. With a constant hazard rate ln 2 per unit
+    support from the branch's start at -1 (median slip point 0, instability at 2) and the turn at 0.5, a returning
+    point sample at X is still on the old well's branch (the drop D above the path that slipped) with the survival
+    probability ``exp(-(2 H(0.5) - H(X))) = 2^-(2 - X)`` (memoryless hazard: closed form, not the quantile
+    mapping of the code). Its mean is shifted by D p and its variance is D^2 p (1 - p), to the quantile grid's 1/M;
+    the samples beyond the returning path's own slip, and before the turn's reach, are untouched."""
+    from probedyn.diagnose.friction import _scatter_moments
+
+    M, D, kb, ln2 = 4000, 2.0, 0.7, math.log(2.0)
+    q = (np.arange(M) + 0.5) / M
+    dq = np.minimum(-np.log1p(-q) / ln2 - 1.0, 2.0)  # the slip point's quantiles (the rest at the instability)
+    u_tab = np.linspace(-1.0, 2.0, 3001)
+    carry = (D, (u_tab, ln2 * (1.0 + u_tab)))
+    bf = np.linspace(-6.0, 0.5, 6501)
+    fwd = (bf, kb * bf + np.where(bf < 0, D, 0.0))
+    bb = bf[::-1]
+    back = (bb, kb * bb + np.where(bb < -3.0, -D, 0.0))  # the returning path's own slip at -3
+    xr = np.array([0.4, 0.2, -0.3, -0.8])
+    X = np.concatenate([[-5.0], xr, [-5.9]])
+    seg = np.array([0, 1, 1, 1, 1, 1])
+    slips = [(0, 0.0, 1.0), (1, -3.0, -1.0)]
+    mean, var = _scatter_moments(X, seg, slips, dq, True, [fwd, back], 1.0, carry=carry)
+    p = 2.0 ** -(2.0 - xr)
+    assert np.allclose(mean[1:5], D * p, atol=3 * D / M)
+    assert np.allclose(var[1:5], D * D * p * (1 - p), atol=3 * D * D / M)
+    assert mean[0] == 0.0 and var[0] == 0.0 and var[5] == 0.0
+    # without the reversal's carry (the earlier model) the returning samples had no scatter at all
+    mean0, var0 = _scatter_moments(X, seg, slips, dq, True, [fwd, back], 1.0)
+    assert np.all(var0[1:5] == 0.0)
+
+
+def test_thermal_force_noise_of_interval_means_is_the_ornstein_uhlenbeck_mean():
+    """The tip's thermal force noise (``thermal_force_variance``): a point sample carries the equipartition
+    variance ``k^2 k_B T / k_tot``; an interval mean over dt >> tau carries ``2 c k_B T k^2 / (k_tot^2 dt)``
+    (the zero-frequency spectrum); in between, the variance of interval means of an exactly discretised
+    Ornstein-Uhlenbeck position (an independent simulation) within its sampling error (4 standard errors)."""
+    from scipy.constants import k as kB
+
+    from probedyn.diagnose.friction import thermal_force_variance
+
+    k, U0, a, c, T = 1.0, 1e-19, 5e-10, 1e-6, 300.0
+    q = 2 * math.pi / a
+    kt = k + q * q * U0  # at the well's bottom (F = 0)
+    F = np.array([0.0])
+    assert math.isclose(thermal_force_variance(F, U0, a, k, c, T, 0.0)[0], k * k * kB * T / kt, rel_tol=1e-12)
+    dt_long = 1e4 * c / kt
+    assert math.isclose(thermal_force_variance(F, U0, a, k, c, T, dt_long)[0],
+                        2 * c * kB * T * k * k / (kt * kt * dt_long), rel_tol=2e-4)
+    # at the stick branch's stable end (F = q U0: the inflection) the well is as soft as the lever alone
+    assert math.isclose(thermal_force_variance(np.array([q * U0]), U0, a, k, c, T, 0.0)[0], k * kB * T, rel_tol=1e-12)
+    rng = np.random.default_rng(5)
+    tau = c / kt
+    h = tau / 20
+    for dt in (0.5 * tau, 3 * tau):
+        n_win, per = 4000, int(round(dt / h))
+        rho = math.exp(-h / tau)
+        s_x = math.sqrt(kB * T / kt)
+        x = np.empty(n_win * per)
+        xi = rng.standard_normal(n_win * per) * s_x * math.sqrt(1 - rho * rho)
+        x[0] = s_x * rng.standard_normal()
+        for i in range(1, len(x)):
+            x[i] = rho * x[i - 1] + xi[i]
+        means = k * x.reshape(n_win, per).mean(axis=1)
+        want = thermal_force_variance(F, U0, a, k, c, T, per * h)[0]
+        # windows of adjacent samples are correlated at lag one (neighbouring windows): the error of the variance
+        # is within about twice the independent sqrt(2 / n); the discrete mean of per samples vs the integral: 1/per
+        assert abs(np.var(means) / want - 1.0) < 4 * 2 * math.sqrt(2.0 / n_win) + 1.0 / per
+
+
+@pytest.mark.parametrize("part", ["detector", "total"])
+def test_thermal_force_noise_joins_the_stated_noise_as_declared(tmp_path, part):
+    """At a declared 300 K the friction example's samples carry the tip's thermal force noise: on top of a stated
+    detector noise (``force_part = "detector"``: every sample's variance the formula's, the ten times faster scan's
+    interval means about sqrt(10) times noisier in force), or shared out of a stated total (the default: the
+    mean variance over the fitted samples stays the stated one)."""
+    from probedyn.diagnose.friction import thermal_force_variance
+
+    src = Path(__file__).resolve().parents[1] / "examples" / "measurements"
+    (tmp_path / "ffm_stickslip_speeds.csv").write_bytes((src / "ffm_stickslip_speeds.csv").read_bytes())
+    side = (src / "ffm_stickslip_speeds.toml").read_text().replace("temperature = 0.01", "temperature = 300.0")
+    side = side.replace("force = 5e-12", f'force = 5e-12\nforce_part = "{part}"')
+    (tmp_path / "f.toml").write_text(side)
+    p = make_problem(tmp_path / "f.toml")
+    v = {q.name: q.null for q in p.base_params}  # the baseline start (the loop estimate)
+    p.predict(v)
+    th, use = p.thermal_var, p.use
+    if part == "total":
+        assert abs(float(np.mean(th[use]))) < 1e-9 * p.sigma**2 and np.ptp(th[use]) > 0
+        return
+    st = p.state(v)
+    sl_slow, sl_fast = p.slices[0], p.slices[1]
+    assert p.speeds[1] / p.speeds[0] == pytest.approx(10.0)
+    ratio = math.sqrt(np.median(th[sl_fast]) / np.median(th[sl_slow]))
+    assert 2.0 < ratio < math.sqrt(10.0) + 0.2  # sqrt(10) where dt >> tau: the stick branches' k_tot differ a little
+    s0 = p.data.scans[0]
+    want = thermal_force_variance(np.zeros(1), st.u0 * s0.load, st.a, p.data.k_x, p.c_tip, 300.0, p.sample_dt[0])[0]
+    assert float(np.min(th[sl_slow])) == pytest.approx(want, rel=0.05)  # the well's bottom: the stiffest, the least
 
 
 def test_slip_scatter_inside_a_transient_is_its_slope_times_the_shift():

@@ -84,7 +84,7 @@ TABLES: dict[str, dict[str, tuple[str, ...]]] = {
                           "sampling", "segments")},
     "medium": {"*": ("name", "density", "viscosity", "temperature")},
     "noise": {"modal": ("frequency_rel", "Q_rel"), "spectrum": ("frequency_rel", "Q_rel"),
-              "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force", "correlation"),
+              "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force", "force_part", "correlation"),
               "force": ("force", "deflection", "correlation")},
     "baseline": {"*": ("free",)},
     "lever": {"friction": ("k_x", "k_y", "m_x", "c_x", "Q_x"), "force": ("k", "sensitivity", "f0", "Q")},
@@ -258,6 +258,9 @@ class FrictionData(Measurement):
     sigma_force: float = 1e-11
     sampling: str = "interval-mean"
     noise_stated: bool = True
+    #: what the stated ``[noise] force`` covers: "total" (every source, the tip's thermal motion included: its mean
+    #: square is shared out by the thermal force noise's own pattern) or "detector" (the thermal force noise is added)
+    noise_part: str = "total"
     #: "stick-slip" (samples resolve the lattice: :mod:`..friction`) or "loop" (each sample averages many lattice
     #: periods: :mod:`..friction_loop`), from the sample spacing and the declared lattice
     regime: str = "stick-slip"

@@ -88,6 +88,9 @@ SCREEN_MARGIN = 0.05
 SCREEN_KEEP = 2
 #: factor by which the data's scatter must exceed the stated noise to replace it
 NOISE_EXCESS = 1.25
+#: the least share of a stated total force noise left to the detector where the tip's thermal force noise is
+#: shared out of it (FrictionProblem.predict)
+DETECTOR_MIN_SHARE = 0.05
 #: processes for the independent fits (candidate causes, cross-validation folds)
 WORKERS = 2
 #: registries of the y train of a misaligned scan tried over one lattice period (FrictionProblem._profile_two_trains)
@@ -115,6 +118,12 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
         raise DataFormatError(f"{side}: [lever] give c_x or Q_x, not both")
     lattice = _num(meta, "sample", "lattice", side, default=0.5e-9, positive=True, lo=5e-11, hi=1e-6, unit="m")
     sig, stated = _noise(meta, side, "force", 0.0, 1e-15, 1e-3, "N")
+    part = meta.get("noise", {}).get("force_part", "total")
+    if part not in ("total", "detector"):
+        raise DataFormatError(f"{side}: [noise] force_part must be 'total' (the stated force noise covers every source) "
+                              f"or 'detector' (the tip's thermal force noise comes on top), got {part!r}")
+    if "force_part" in meta.get("noise", {}) and not stated:
+        raise DataFormatError(f"{side}: [noise] force_part says what [noise] force covers: state force too")
     sampling = str(meta["measurement"].get("sampling", "interval-mean"))
     if sampling not in ("point", "interval-mean"):
         raise DataFormatError(f"{side}: [measurement] sampling must be 'point' or 'interval-mean', got {sampling!r}")
@@ -187,7 +196,7 @@ def read_friction(side: Path, csv: Path, meta: dict, common: dict) -> FrictionDa
     if not stated:
         sig = _scatter(scans)
     return FrictionData(**common, scans=scans, k_x=k_x, k_y=k_y, m_x=m_x, c_x=c_x, Q_x=Q_x, lattice=lattice,
-                        sigma_force=sig, sampling=sampling, noise_stated=stated, regime=regime)
+                        sigma_force=sig, sampling=sampling, noise_stated=stated, noise_part=part, regime=regime)
 
 
 #: the most support travel between samples, in lattice periods, for a record the stick-slip baseline can be
@@ -370,8 +379,9 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     :func:`thermal_slip_advance` gives the slip point's CDF ``1 - exp(-H)`` (the athermal
     instability ends the branch: the rest of the probability slips there). Returns the
     ``SLIP_QUANTILES`` mid-quantiles of the slip point relative to the median, in the direction of
-    motion, and the force drop k (x_after - x_before) at the median (the tip lands in the next
-    well). ``H``: the hazard along the table if already computed."""
+    motion, the force drop k (x_after - x_before) at the median (the tip lands in the next
+    well) and the cumulative hazard along the branch, ``(X - X_median, H)`` (a slip carried across a
+    reversal, :func:`_scatter_moments`). ``H``: the hazard along the table if already computed."""
     X, dE, Xc, xs, xm = tab
     H = thermal_hazard(tab, V, T, f0) if H is None else H
     C = np.append(1.0 - np.exp(-H), 1.0)
@@ -388,10 +398,40 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     g = k * (Xmed - xx) - F0 * np.sin(q * xx)
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     xa = float(xx[down[0]]) if len(down) else xb + a
-    return Xq - Xmed, k * (xa - xb)
+    return Xq - Xmed, k * (xa - xb), (X - Xmed, H)
 
 
-def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float):
+def thermal_force_variance(F: np.ndarray, U0: float, a: float, k: float, c: float, T: float, dt: float) -> np.ndarray:
+    """Variance of the lateral force sample ``k (X - x)`` from the tip's thermal motion in its well, per sample
+    of a stick branch whose quasi-static force is ``F`` (equipartition and fluctuation-dissipation).
+
+    In the well the tip is an oscillator of stiffness ``k_tot = k + U''(x)``, damping ``c`` and temperature T:
+    its position varies by ``k_B T / k_tot`` (equipartition) about the stick branch, with the correlation time
+    ``tau = c / k_tot`` of the overdamped limit. A sample that is the mean over an interval ``dt`` (an
+    instrument's interval mean) averages that motion: the variance of the mean of an Ornstein-Uhlenbeck
+    process, ``(k_B T / k_tot) (2 / u) (1 - (1 - exp(-u)) / u)`` with ``u = dt / tau``, which is the equipartition
+    value at ``dt = 0`` (a point sample) and ``2 c k_B T / (k_tot^2 dt)`` for ``dt >> tau`` (the zero-frequency
+    spectrum ``2 c k_B T / k_tot^2`` of the position, exact for an oscillator of any Q: its inertia sets only
+    how fast the limit is reached). The force sample ``k (X - x)`` carries ``k^2`` times it. On the stick branch
+    of the Prandtl-Tomlinson potential ``U0 cos(q x)`` the force is ``F = q U0 sin(q x)`` and
+    ``U'' = q^2 U0 cos(q x) = q^2 U0 sqrt(1 - (F / q U0)^2)``, taken on the well's stable side (``k_tot >= k``;
+    past the inflection, where the branch softens towards the slip, the slip-point scatter of the thermal
+    activation term carries the samples). ``F``: the train's model force [N] before the detector's gain."""
+    q = 2 * math.pi / a
+    F0 = max(q * U0, 1e-300)
+    sn = np.clip(np.asarray(F, float) / F0, -1.0, 1.0)
+    kt = k + q * q * max(U0, 0.0) * np.sqrt(1.0 - sn * sn)
+    var_x = K_B * T / kt
+    if dt > 0:
+        u = dt * kt / c
+        # (2 / u)(1 - (1 - e^-u) / u), by its series where u is small (cancellation)
+        shape = np.where(u > 1e-4, (2.0 / np.maximum(u, 1e-300)) * (1.0 - (-np.expm1(-u)) / np.maximum(u, 1e-300)),
+                         1.0 - u / 3.0)
+        var_x = var_x * shape
+    return k * k * var_x
+
+
+def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None):
     """Mean shift and variance of every sample from the stochastic slip points, on the model's own path.
 
     A slip at ``Y = X* + d delta`` instead of the path's ``X*`` translates the slip and its transient
@@ -405,7 +445,16 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float):
     a sample at -11.4 sigma). Each slip moves the samples from ``reach`` (its largest shift) before it to
     ``reach`` plus half a lattice period after it, and no others (the next slip's own scatter is its own).
     ``paths``: the model path's (support, force) per segment (:func:`_segments`); samples are point values
-    or interval means as the data's (``point``)."""
+    or interval means as the data's (``point``).
+
+    A slip near a reversal (``carry``: the force drop at the slip and the cumulative hazard ``H`` along the stick
+    branch against the offset from the median slip point): a slip point beyond the segment's turn is a tip still
+    stuck when the support turns. Going back, the support passes the same barriers again, so the hazard keeps
+    accumulating at the rate of the same positions: the realization whose slip point needs the hazard
+    ``H_j = -ln(1 - q_j)`` (its quantile) slips on the way back where ``H = 2 H_turn - H_j``, or not at all before
+    the returning path's own slip where that is negative. Until then the returning samples sit on the branch of the
+    old well, the drop above the path's (own seed 6000 at 300 K: the first retrace sample after a turn 0.1 nm past
+    the median slip point, at 29 sigma against the path that had slipped before the turn)."""
     n = len(Xl)
     mean = np.zeros(n)
     var = np.zeros(n)
@@ -438,6 +487,8 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float):
             cum = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * db)])
             prepared[sg] = (b, f, cum, kb)
         b, f, cum, kb = prepared[sg]
+        if carry is not None and np.any(seg_of == sg + 1):  # the data go on after the turn ending this segment
+            _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, dq, b, slips, carry, point, a)
         # samples from reach before the slip to reach + a / 2 after it, in the direction of motion d
         u_lo, u_hi = d * (np.minimum(lo, hi) - Xs), d * (np.maximum(lo, hi) - Xs)
         if d < 0:
@@ -457,6 +508,45 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float):
         mean[idx] += Fs[1:].mean(axis=0) - Fs[0]
         var[idx] += Fs[1:].var(axis=0)
     return mean, var
+
+
+def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, dq, b, slips, carry, point: bool,
+                       a: float) -> None:
+    """The part of a slip's scatter carried across the reversal that ends its segment (:func:`_scatter_moments`):
+    adds to ``mean`` and ``var`` of the returning segment's samples in place."""
+    drop, (u_tab, H_tab) = carry
+    M = len(dq)
+    Xt = float(b[-1]) if d > 0 else float(b[0])  # the turn: the segment's far end in the direction of motion
+    u_t = d * (Xt - Xs)  # the turn's offset from the median slip point, in the direction of motion
+    beyond = np.nonzero(dq > u_t)[0]
+    if not len(beyond) or u_t < float(u_tab[0]):
+        return
+    H_t = float(np.interp(u_t, u_tab, H_tab))
+    Hq = -np.log1p(-(np.arange(M) + 0.5) / M)  # the hazard each quantile's slip point needs
+    # the returning path's own first slip: beyond it the realizations are one again
+    back = [x for (g, x, dd) in slips if g == sg + 1]
+    X_end = back[0] if back else Xt - d * a
+    rest = 2.0 * H_t - Hq[beyond]
+    u_back = np.where(rest > float(H_tab[0]), np.interp(np.maximum(rest, float(H_tab[0])), H_tab, u_tab), np.nan)
+    X_back = np.where(np.isfinite(u_back), Xs + d * u_back, X_end)  # support position of the slip on the way back
+    idx = np.nonzero((seg_of == sg + 1) & (d * np.maximum(lo, hi) > d * X_end - 1e-15) & (d * np.minimum(lo, hi) < d * Xt))[0]
+    if not len(idx):
+        return
+    # each carried realization: the samples between its slip on the way back and the turn are the drop higher
+    # (in the direction of the slip: d * drop), by the share of each sample's interval they cover
+    s_lo = np.minimum(X_back, Xt)[:, None]
+    s_hi = np.maximum(X_back, Xt)[:, None]
+    if point:
+        x = 0.5 * (lo[idx] + hi[idx])[None, :]
+        share = ((x >= s_lo) & (x <= s_hi)).astype(float)
+    else:
+        l_, h_ = np.minimum(lo[idx], hi[idx])[None, :], np.maximum(lo[idx], hi[idx])[None, :]
+        w = np.maximum(h_ - l_, 1e-300)
+        share = np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / w, 0.0, 1.0)
+    dF = np.zeros((M, len(idx)))
+    dF[beyond] = d * drop * share
+    mean[idx] += dF.mean(axis=0)
+    var[idx] += dF.var(axis=0)
 
 
 def _centre(scan: FrictionScan) -> float:
@@ -600,7 +690,8 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
         for j, (s0, e0) in enumerate(zip(starts, ends)):
             seg_of[s0:e0] = j
         paths = _segments(res, len(turns) - 2)
-        mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a)
+        mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
+                                     carry=(scat[1], scat[2]))
         F = F + mean
     if var_out is not None:
         var_out.append(var)
@@ -685,7 +776,7 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
         # activated slips close to the instability: the athermal path (its slips resolved by the
         # integrator, the saddle-node delay included) with every slip's scatter about the instability
         res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
-        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1])
+        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1], (scat[2][0] - adv, scat[2][1]))
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
     xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
@@ -1070,6 +1161,18 @@ class FrictionProblem:
             CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period", starts=a_starts),
         ]
         self.temperature = data.temperature
+        # the tip's thermal force noise (thermal_force_variance): at a declared temperature, with the stated noise
+        # not replaced by the record's scatter (which would already hold it); added to a stated detector noise
+        # ([noise] force_part = "detector"), shared out of a stated total (the default: predict).
+        # At 300 K on the own generator's fast scan (10 x 50 nm/s, 40 interval means per 0.5 nm) it is 2.5-3.4 pN
+        # beside 5 pN of detector noise; at 1 K, 0.2 pN
+        stated = bool(data.noise_stated and not self.noise_excess)
+        self.thermal_noise_T = float(data.temperature) if (stated and data.temperature and data.temperature > 0) else 0.0
+        self.c_tip = float(_ffm(data, 1e-30, self.a_est, 0.0).cantilever["c_x"])
+        self.sample_dt = [0.0 if data.sampling == "point" or len(s_.time) < 2 else float(np.median(np.abs(np.diff(s_.time))))
+                          for s_ in sc]
+        self.thermal_var = np.zeros(self.n)  # its variance per sample (set by predict; part of every model)
+        self._last_thermal = None
         self.N_mean = N
         self.v_max = float(self.speeds.max())
         self.drift_clock, self.t_drift = drift_clock(sc)
@@ -1143,6 +1246,47 @@ class FrictionProblem:
                     # profiled in (a, U0), where the reference leaves the data beyond their noise
                     if j < len(own) and ridge and "a" in ridge[0] and self._beyond_noise(ref_values, ref_causes):
                         out += [self._period_profile(cands[i], c2, causes) for c2, i in scored[:RIDGE_KEEP]]
+                out += self._term_ridge_starts(clipped_starts(self.base_params, ref_values, new,
+                                                              lambda cc, c=c: data[c] if cc is c else []), causes)
+        return out
+
+    def _term_ridge_starts(self, starts: list[dict], causes: tuple) -> list[dict]:
+        """A baseline term's parameters (a declared temperature's attempt frequency) started again along the term's
+        ridge (``ridge_starts``: the corrugation that gives the recorded peaks at each attempt frequency) at each
+        data start of a new cause, the best :data:`RIDGE_KEEP` by the whole model's chi^2. The baseline's term was
+        fitted without the cause and may have taken part of its effect: own seed 2002 at a declared 300 K, an
+        adhesion load of 13.5 nN, the activation's attempt frequency went to 4e3 Hz to mimic the peaks' load
+        dependence (the Langevin tip's is ~3e5 Hz), and the adhesion nested from there, with that frequency,
+        lost to viscous friction. The ridge's corrugation is per unit total load; the start's own corrugation
+        parameter is scaled by the ratio to the state's (a cause may define u0 at a reference load). A ridge may
+        also move a free parameter of the cause that it reads (an adhesion load: ``ridge_starts``)."""
+        terms = [t for t in self.base_terms if hasattr(t, "ridge_starts")]
+        if not terms or self.loop is None:
+            return []
+        out = []
+        for v0 in starts:
+            try:
+                st = self.state(v0, causes)
+            except ProbedynError:
+                continue
+            ref = {**v0, "a": st.a}
+            if st.n_adh and "n_adh" not in v0:
+                ref["n_adh"] = st.n_adh  # a load the model carries but does not fit here
+            cands = []
+            for t in terms:
+                for r in t.ridge_starts(self, ref):
+                    w = dict(v0)
+                    w.update({k: float(x) for k, x in r.items() if k != "u0" and k in w})
+                    if "u0" in r:
+                        try:
+                            sw = self.state(w, causes)
+                        except ProbedynError:
+                            continue
+                        if sw.u0 > 0:
+                            w["u0"] = float(w["u0"]) * float(r["u0"]) / sw.u0
+                    cands.append(w)
+            scored = sorted(((float(np.sum(self.residuals(w, causes) ** 2)), i) for i, w in enumerate(cands)))
+            out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
         return out
 
     def _beyond_noise(self, values: dict, causes: tuple) -> bool:
@@ -1270,6 +1414,13 @@ class FrictionProblem:
         w = [math.cos(st.theta), math.sin(st.theta)] if weights is None else list(weights)
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
+        if self.thermal_noise_T:  # the tip's thermal motion in its well, per train (independent axes)
+            U0 = st.u0 * max(s.load + st.n_adh, 0.0)
+            th = st.gain**2 * sum(wt**2 * thermal_force_variance(p, U0, st.a, self.data.k_x, self.c_tip,
+                                                                  self.thermal_noise_T, self.sample_dt[i])
+                                  for wt, p in zip(w, parts))
+            var = var + th
+            self._last_thermal = th
         F = F + self._zero(i, st)
         for tf in st.transforms:
             F = tf(self, s, F)
@@ -1447,6 +1598,7 @@ class FrictionProblem:
         out = np.empty(self.n)
         nu = self.fixed_nuisance if self.fixed_nuisance is not None else self.nuisance(values, causes)
         self.model_var = np.zeros(self.n)
+        self.thermal_var = np.zeros(self.n)
         # the registry profile of a model is the best registry known for it (nuisance()): a held
         # registry is replaced where the same model was seen with a better one, and remembered
         # where it is the best (so that the same model always gives the same residuals, whichever
@@ -1462,8 +1614,16 @@ class FrictionProblem:
                     F, var = self._scan_model(i, st, known[0])
                 else:
                     self._remember((mkey, i, mk), nu[i], c2)
-            self.model_var[self.slices[i]] = var
+            th = self._last_thermal if self.thermal_noise_T else 0.0
+            self.thermal_var[self.slices[i]] = th
+            self.model_var[self.slices[i]] = var - th
             out[self.slices[i]] = F
+        if self.thermal_noise_T and self.data.noise_part == "total":
+            # the stated noise is the samples' total: the thermal part's mean square is taken out of it and shared
+            # out by its own pattern (the fast scan's interval means and the soft ends of the stick branches carry
+            # more), so that the mean variance stays the stated one; a thermal part beyond 95 % of the stated
+            # variance leaves the detector 5 % (the statement then understates the noise)
+            self.thermal_var -= min(float(np.mean(self.thermal_var[self.use])), (1.0 - DETECTOR_MIN_SHARE) * self.sigma**2)
         return out
 
     def variance_fitted(self, values, causes=()) -> bool:
@@ -1479,7 +1639,8 @@ class FrictionProblem:
 
     def variance_logdet(self, values, causes=()) -> float:
         """``sum ln(1 + var / sigma^2)`` over the fitted samples: the part of ``-2 ln L`` that the chi-square leaves
-        out where the model carries a variance of its own (the thermal slip scatter). A likelihood-ratio test of such
+        out where the model carries a variance of its own (the thermal slip scatter, and the tip's thermal force noise,
+        whose well stiffness the model sets: :func:`thermal_force_variance`). A likelihood-ratio test of such
         a model against one without adds it to the model's chi-square: a widened scatter lowers chi^2 by down-weighting
         the worst samples even where there is no scatter to model (own seed 7 at 0.01 K: chi^2 -17.9 with a scatter up to
         2 sigma^2 on a few samples, of which the log term takes back 6.5)."""
@@ -1487,15 +1648,16 @@ class FrictionProblem:
             self.predict(values, causes)
         except ProbedynError:
             return 0.0
-        return float(np.sum(np.log1p(self.model_var[self.use] / self.sigma**2)))
+        return float(np.sum(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2)))
 
     def residuals(self, values, causes=()) -> np.ndarray:
         try:
             m = self.predict(values, causes)
         except ProbedynError:
             return np.full(int(self.use.sum()), 1e6)
-        # the stochastic slip-position scatter (thermal activation) adds its variance sample by sample
-        return ((self.force - m) / np.sqrt(self.sigma**2 + self.model_var))[self.use]
+        # the stochastic slip-position scatter (thermal activation) and, at a declared temperature, the tip's
+        # thermal force noise (thermal_force_variance) add their variances sample by sample
+        return ((self.force - m) / np.sqrt(self.sigma**2 + self.thermal_var + self.model_var))[self.use]
 
     def physical_rms(self, r) -> float:
         return float(np.sqrt(np.mean(np.asarray(r) ** 2)) * self.sigma)
@@ -1558,6 +1720,12 @@ class FrictionProblem:
                 "noise_stated": d.noise_stated, "sigma_stated_N": d.sigma_force, "sigma_scatter_N": self.sigma_scatter,
                 "noise_excess": self.noise_excess, "sampling": d.sampling, "lattice_estimate_m": self.a_est,
                 "temperature_K": d.temperature, "medium": d.medium_name or "not declared",
+                "thermal_force_noise": (f"the tip's thermal force noise at {self.thermal_noise_T:g} K (equipartition in the "
+                                        "well, averaged over each sample's interval) "
+                                        + ("added to the stated detector noise" if d.noise_part == "detector" else
+                                           "shared out of the stated total noise by its own pattern")
+                                        if self.thermal_noise_T else "not added (no temperature declared, or the noise "
+                                        "is the record's own scatter)"),
                 "drift_clock": ("one clock through the record" if self.drift_clock == "record"
                                 else "each scan's own clock (the time between scans unknown)")}
 

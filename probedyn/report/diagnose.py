@@ -123,6 +123,9 @@ def summary(res: dict[str, Any]) -> str:
         lines.append(f"noise: each recording sequence on its own scale ({sc} x the sigma; for a force curve approach, "
                      f"retract), their second differences differing beyond chance (chi2 {nz['sequence_scale_chi2']:.0f} "
                      f"against {nz['sequence_scale_threshold']:.1f})")
+    th = (res.get("data") or {}).get("thermal_force_noise", "")
+    if th.startswith("the tip's"):
+        lines.append(f"noise: {th}")
     if res.get("peaks"):
         rej = [p for p in res["peaks"]["peaks"] if not p["accepted"]]
         acc = [p for p in res["peaks"]["peaks"] if p["accepted"]]
