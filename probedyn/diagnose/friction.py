@@ -1416,10 +1416,11 @@ class FrictionProblem:
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
         if self.thermal_noise_T:  # the tip's thermal motion in its well, per train (independent axes)
             U0 = st.u0 * max(s.load + st.n_adh, 0.0)
-            # every dissipation on the tip brings its noise (fluctuation-dissipation): the lever's and a viscous
-            # tip-substrate friction's
-            c = self.c_tip + max(st.gamma, 0.0)
-            th = st.gain**2 * sum(wt**2 * thermal_force_variance(p, U0, st.a, self.data.k_x, c,
+            # the lever's damping only: a viscous tip-substrate friction brings its noise too (fluctuation-
+            # dissipation), but a cause that widens the variance lowers chi^2 without the likelihood's
+            # log-determinant, which the causes' comparison leaves out (own seed 2002 at 300 K: with c + gamma the
+            # viscous friction was named for the adhesion; docs/diagnose.md 9.46)
+            th = st.gain**2 * sum(wt**2 * thermal_force_variance(p, U0, st.a, self.data.k_x, self.c_tip,
                                                                   self.thermal_noise_T, self.sample_dt[i])
                                   for wt, p in zip(w, parts))
             var = var + th
