@@ -262,7 +262,8 @@ def test_thermal_force_noise_of_interval_means_is_the_ornstein_uhlenbeck_mean():
 
 @pytest.mark.parametrize("part", ["detector", "total"])
 def test_thermal_force_noise_joins_the_stated_noise_as_declared(tmp_path, part):
-    """At a declared 300 K the friction example's samples carry the tip's thermal force noise: on top of a stated
+    """At a declared 300 K the friction example's samples carry the tip's thermal force noise (at 0.01 K, 3e4 times
+    less, it is left out: below 1 % of the stated variance): on top of a stated
     detector noise (``force_part = "detector"``: every sample's variance the formula's, the ten times faster scan's
     interval means about sqrt(10) times noisier in force), or shared out of a stated total (the default: the
     mean variance over the fitted samples stays the stated one)."""
@@ -274,6 +275,10 @@ def test_thermal_force_noise_joins_the_stated_noise_as_declared(tmp_path, part):
     side = side.replace("force = 5e-12", f'force = 5e-12\nforce_part = "{part}"')
     (tmp_path / "f.toml").write_text(side)
     p = make_problem(tmp_path / "f.toml")
+    assert p.thermal_noise_T == 300.0 and p._thermal_share() > 0.1  # 2-3 pN beside 5 pN
+    # the example as recorded, at 0.01 K: the thermal part is 3e4 times smaller, below THERMAL_NOISE_MIN_SHARE
+    (tmp_path / "cold.toml").write_text(side.replace("temperature = 300.0", "temperature = 0.01"))
+    assert make_problem(tmp_path / "cold.toml").thermal_noise_T == 0.0
     v = {q.name: q.null for q in p.base_params}  # the baseline start (the loop estimate)
     p.predict(v)
     th, use = p.thermal_var, p.use
