@@ -1179,6 +1179,7 @@ class FrictionProblem:
         self.thermal_var = np.zeros(self.n)  # its variance per sample (set by predict; part of every model)
         if self.thermal_noise_T and self._thermal_share() < THERMAL_NOISE_MIN_SHARE:
             self.thermal_noise_T = 0.0
+        self._last_thermal = None
         self.N_mean = N
         self.v_max = float(self.speeds.max())
         self.drift_clock, self.t_drift = drift_clock(sc)
@@ -1414,10 +1415,9 @@ class FrictionProblem:
     def _mask_key(self):
         return None if self.train_mask is None else hash(np.asarray(self.train_mask, bool).tobytes())
 
-    def _scan_model(self, i: int, st: FrictionState, phis) -> tuple[np.ndarray, np.ndarray, Any]:
+    def _scan_model(self, i: int, st: FrictionState, phis) -> tuple[np.ndarray, np.ndarray]:
         """Model lateral force of scan i at registry ``phis`` (both lattice trains, gain, offset,
-        drift and transforms applied), its variance from stochastic slip points and the thermal force noise's
-        (:meth:`_combine`)."""
+        drift and transforms applied) and its variance from stochastic slip points."""
         s = self.data.scans[i]
         if _coupled(st):
             return self._combine(i, st, [simulate_scan_2d(self.data, st, s, phis)], [np.zeros(len(s.force))],
@@ -1429,16 +1429,14 @@ class FrictionProblem:
             parts.append(simulate_scan(self.data, st, s, phis, train=tr, var_out=vs))
         return self._combine(i, st, parts, vs)
 
-    def _combine(self, i: int, st: FrictionState, parts, vs, weights=None) -> tuple[np.ndarray, np.ndarray, Any]:
-        """Lateral force of scan i, its variance from the simulated trains' slip points and the tip's thermal force
-        noise's (:func:`thermal_force_variance`; 0 where left out), from the trains ``parts`` (x, then y for a
-        misaligned scan) and their slip-point variances ``vs``: weights cos/sin theta (``weights``: others, e.g. 1
-        for the coupled trains' force along the scan), gain, offset, drift and transforms."""
+    def _combine(self, i: int, st: FrictionState, parts, vs, weights=None) -> tuple[np.ndarray, np.ndarray]:
+        """Lateral force of scan i and its variance from the simulated trains ``parts`` (x, then y
+        for a misaligned scan) and their slip-point variances ``vs``: weights cos/sin theta (``weights``: others,
+        e.g. 1 for the coupled trains' force along the scan), gain, offset, drift and transforms."""
         s = self.data.scans[i]
         w = [math.cos(st.theta), math.sin(st.theta)] if weights is None else list(weights)
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
-        th: Any = 0.0
         if self.thermal_noise_T:  # the tip's thermal motion in its well, per train (independent axes)
             U0 = st.u0 * max(s.load + st.n_adh, 0.0)
             # the lever's damping only: a viscous tip-substrate friction brings its noise too (fluctuation-
@@ -1448,19 +1446,21 @@ class FrictionProblem:
             th = st.gain**2 * sum(wt**2 * thermal_force_variance(p, U0, st.a, self.data.k_x, self.c_tip,
                                                                   self.thermal_noise_T, self.sample_dt[i])
                                   for wt, p in zip(w, parts))
+            var = var + th
+            self._last_thermal = th
         F = F + self._zero(i, st)
         for tf in st.transforms:
             F = tf(self, s, F)
-        return F, var, th
+        return F, var
 
     def _zero(self, i: int, st: FrictionState) -> np.ndarray:
         """The detector's zero at scan i's samples: the offset and the drift, one rate on the drift clock."""
         return st.offset + st.drift * self.t_drift[i] / self.t_ref
 
-    def _scan_chi2(self, i: int, F: np.ndarray, var: np.ndarray, th: Any = 0.0) -> float:
+    def _scan_chi2(self, i: int, F: np.ndarray, var: np.ndarray) -> float:
         """The weighted squared residuals of scan i over the samples the fit uses."""
         s = self.data.scans[i]
-        r = (s.force - F) / np.sqrt(self.sigma**2 + var + th)
+        r = (s.force - F) / np.sqrt(self.sigma**2 + var)
         return float(np.sum(r[self._fit_mask(i)] ** 2))
 
     def _remember(self, key, phis, c2: float) -> None:
@@ -1536,8 +1536,8 @@ class FrictionProblem:
         U0 = st.u0 * max(self.data.scans[i].load + st.n_adh, 0.0)
         if not (2 * math.pi / st.a) ** 2 * U0 / self.data.k_x > MULTISLIP_ETA:
             return phis
-        F0, v0, t0 = self._scan_model(i, st, phis)
-        c2 = self._scan_chi2(i, F0, v0, t0)
+        F0, v0 = self._scan_model(i, st, phis)
+        c2 = self._scan_chi2(i, F0, v0)
         n_fit = int(np.sum(self._fit_mask(i)))
         if c2 <= n_fit + 4.0 * math.sqrt(2.0 * n_fit):
             return phis
@@ -1633,16 +1633,17 @@ class FrictionProblem:
         mkey = self._model_key(st)
         mk = self._mask_key()
         for i, s in enumerate(self.data.scans):
-            F, var, th = self._scan_model(i, st, nu[i])
+            F, var = self._scan_model(i, st, nu[i])
             if mkey is not None:
-                c2 = self._scan_chi2(i, F, var, th)
+                c2 = self._scan_chi2(i, F, var)
                 known = self._registry.get((mkey, i, mk))
                 if known is not None and known[1] < c2:
-                    F, var, th = self._scan_model(i, st, known[0])
+                    F, var = self._scan_model(i, st, known[0])
                 else:
                     self._remember((mkey, i, mk), nu[i], c2)
+            th = self._last_thermal if self.thermal_noise_T else 0.0
             self.thermal_var[self.slices[i]] = th
-            self.model_var[self.slices[i]] = var
+            self.model_var[self.slices[i]] = var - th
             out[self.slices[i]] = F
         if self.thermal_noise_T and self.data.noise_part == "total":
             # the stated noise is the samples' total: the thermal part's mean square is taken out of it and shared
