@@ -1263,7 +1263,7 @@ class FrictionProblem:
                 for j, ridge in enumerate(ridges):
                     cands = clipped_starts(self.base_params, ref_values, new,
                                            lambda cc, c=c, ridge=ridge: ridge if cc is c else [])
-                    scored = sorted(((float(np.sum(self.residuals(v, causes) ** 2)), i) for i, v in enumerate(cands)))
+                    scored = self._ranked(cands, causes)
                     out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
                     # a cause's own ridge that carries the reference's period along the scan: its kept starts
                     # profiled in (a, U0), where the reference leaves the data beyond their noise
@@ -1272,6 +1272,10 @@ class FrictionProblem:
                 out += self._term_ridge_starts(clipped_starts(self.base_params, ref_values, new,
                                                               lambda cc, c=c: data[c] if cc is c else []), causes)
         return out
+
+    def _ranked(self, cands: list[dict], causes: tuple) -> list[tuple[float, int]]:
+        """``(chi^2, index)`` of the candidate starts ``cands`` of the model with ``causes``, best first."""
+        return sorted((float(np.sum(self.residuals(v, causes) ** 2)), i) for i, v in enumerate(cands))
 
     def _term_ridge_starts(self, starts: list[dict], causes: tuple) -> list[dict]:
         """A baseline term's parameters (a declared temperature's attempt frequency) started again along the term's
@@ -1308,8 +1312,7 @@ class FrictionProblem:
                         if sw.u0 > 0:
                             w["u0"] = float(w["u0"]) * float(r["u0"]) / sw.u0
                     cands.append(w)
-            scored = sorted(((float(np.sum(self.residuals(w, causes) ** 2)), i) for i, w in enumerate(cands)))
-            out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
+            out += [cands[i] for _, i in self._ranked(cands, causes)[:RIDGE_KEEP]]
         return out
 
     def _beyond_noise(self, values: dict, causes: tuple) -> bool:
