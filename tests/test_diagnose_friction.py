@@ -472,10 +472,12 @@ def test_a_coupled_scan_past_the_multislip_threshold_starts_in_the_well_that_fit
 def test_a_data_start_that_moves_the_period_profiles_the_corrugation_at_its_eta(tmp_path):
     """Own study seed 2025 (a scanner bow of -0.095, eta 5.5 and 11; missed in session 48): the scanner's start from
     the slip positions has the bow and the period right, but the baseline's U0 has absorbed part of the bow, and the
-    basin in U0 is a few per cent wide. The problem's corrugation ridge (``friction.eta_ridge``: eta kept, U0 on a
-    1 % grid) gives the fit a start in the truth's basin: chi^2 below 1/100 of the data start's at the baseline's U0
-    (measured 2.5e3 against 9.6e5, n = 1709), and its U0 within 2 % of the truth's (measured 0.9 %: the ridge's step)."""
-    from probedyn.diagnose.friction import eta_ridge
+    basin in U0 is under a per cent wide. The problem's corrugation ridge (``friction.eta_ridge``: eta kept, U0 on a
+    0.5 % grid) gives the fit a start in the truth's basin: chi^2 within a factor 2 of the truth's corrugation at the
+    data start's period and bow (session 62: 4.0e3 and 2.9e3; the data start at the baseline's U0 3e5-4e5, n = 1709),
+    and its U0 within 2 % of the truth's (measured 0.05 %). On the 1 % grid before session 62 the nearest points lay
+    0.4 % and 0.5 % from the truth (1.6e4 and 3.8e4) once the baseline's registry profile had moved its U0 by 2 %."""
+    from probedyn.diagnose.friction import ETA_RIDGE_HALF, eta_ridge
 
     path, truth = make_friction_case(tmp_path, 2025, "scanner-nonlinearity")
     prob = make_problem(path)
@@ -484,14 +486,15 @@ def test_a_data_start_that_moves_the_period_profiles_the_corrugation_at_its_eta(
     ref = dict(base.values)
     scanner = {c.key: c for c in prob.causes}["scanner-nonlinearity"]
     (data_start,) = scanner.data_starts(prob, ref)
-    assert len(eta_ridge(data_start, ref)) == 13 and eta_ridge({"bow": 0.1}, ref) == []
+    assert len(eta_ridge(data_start, ref)) == 2 * ETA_RIDGE_HALF + 1 and eta_ridge({"bow": 0.1}, ref) == []
 
     def c2(v):
         return float(np.sum(prob.residuals({**ref, **v}, (scanner,)) ** 2))
 
     starts = prob.nested_starts(ref, (), (scanner,))
     best = min(starts, key=c2)
-    assert c2(best) < 0.01 * c2(data_start)
+    at_truth = c2({**data_start, "u0": truth["u0"]})  # the basin's floor at the data start's period and bow
+    assert c2(best) < 2 * at_truth
     assert best["u0"] == pytest.approx(truth["u0"], rel=0.02)
 
 
@@ -716,10 +719,27 @@ def test_coexisting_slip_patterns_the_start_well_is_profiled(tmp_path, monkeypat
     r = prob.residuals(v, ())
     n = len(r)
     assert abs(float(np.sum(r**2)) - n) < 4 * math.sqrt(2 * n), (float(np.sum(r**2)), n)
-    assert prob.nuisance(v, ())[0][2] == 1.0
+    # one period behind or ahead: either start leads into the same pattern (the odd wells) after the pre-roll, and the
+    # polished registries of the two fit alike (session 62: -1 chosen, at the noise as asserted above)
+    assert abs(prob.nuisance(v, ())[0][2]) == 1.0
     monkeypatch.setattr(fr, "MULTISLIP_WELLS", 0)
     r0 = make_problem(path).residuals(v, ())
     assert float(np.sum(r0**2)) > 100 * n
+
+
+def test_the_registry_polish_walks_back_from_a_biased_phase(tmp_path, monkeypatch):
+    """The lattice registry's first estimate, the phase of the fundamental, is biased by the reversals' transients and
+    the activated slips' scatter by up to ~1e-2 a (blind f08's fast scan at 300 K: 1.1e-2 a, chi^2 720 where the
+    registry's optimum gives 255 on 323 samples). Here it is made 2e-2 a off on the multislip record (generated at
+    0.1 a): the polish on the scan's chi^2 returns to the generator's registry within 1e-3 a (the two fixed
+    parabolas before session 62 could walk 1e-2 a at most)."""
+    import probedyn.diagnose.friction as fr
+
+    path, v, F, F0 = _multislip_record(tmp_path, 0)
+    a = v["a"]
+    monkeypatch.setattr(fr.FrictionProblem, "_align", lambda self, i, st, train, m0, target: 0.12 * a)
+    phi = make_problem(path).nuisance(v, ())[0][0]
+    assert abs(phi - 0.1 * a) < 1e-3 * a, phi / a
 
 
 def test_a_slip_past_the_next_well_is_told_by_the_force_it_releases():
@@ -740,6 +760,47 @@ def test_a_slip_past_the_next_well_is_told_by_the_force_it_releases():
         assert _largest_slip(F, d) == pytest.approx(slip * k * a, rel=1e-9)
     assert _largest_slip(np.concatenate([single, -single]), np.r_[np.ones(len(single)), -np.ones(len(single))]) \
         < MULTISLIP_DROP * k * a < 1.9 * k * a
+
+
+def test_a_slip_one_well_further_is_that_well_s_stick_branch_until_the_path_catches_up(tmp_path):
+    """``_skip_regions`` against probedyn's FFM integrator, independently: at eta = 6 (past the 4.6 at which the well
+    beyond the next holds the tip at the instability) a trace of single slips; after its third slip the tip is
+    instead put at rest at the bottom of the well beyond and integrated on. Once its landing transient has decayed
+    (a quarter period of support travel) its force is the path's plus the region's change to 1e-3 of a slip's drop
+    (the bisection's equilibrium is the integrator's stick branch), and the region ends where the path's own
+    next slip brings its tip into that well: from there the two tips' forces agree. Below eta = 4.6 there is no
+    such region (Medyanik et al. 2006)."""
+    from probedyn.diagnose.friction import _ffm, _ffm_path, _skip_regions
+
+    a, k, m, N, V = 0.5e-9, 1.0, 1e-12, 5e-9, 1e-7
+    (tmp_path / "s.csv").write_text("scan,position_m,lateral_force_N\n" + "".join(f"0,{i * a / 8!r},{i * 1e-12!r}\n" for i in range(64)))
+    (tmp_path / "s.toml").write_text(
+        f'[measurement]\nkind = "friction"\ndata = "s.csv"\nsampling = "point"\n[lever]\nk_x = {k}\nm_x = {m}\n'
+        f'Q_x = 1.0\n[sample]\nlattice = {a}\n[noise]\nforce = 5e-12\n[[scans]]\nid = 0\nspeed = {V}\nload = {N}\n')
+    data = make_problem(tmp_path / "s.toml").data
+    Xl = np.arange(0.0, 8 * a, a / 40)
+    for eta, expect in ((6.0, True), (4.5, False)):
+        U0 = eta * k * a * a / (4 * math.pi**2)
+        ffm = _ffm(data, U0, a, 0.0)
+        hmax = 0.5 * (a / 40) / V
+        res = _ffm_path(ffm, [-a, Xl[-1]], V, hmax, (-a, 0.0, 0.0))
+        regions = _skip_regions(res, 1, Xl, [0], [len(Xl)], "point", a, k, U0)
+        if not expect:
+            assert regions == []
+            continue
+        F = np.interp(Xl, res.base, res.lateral_force)
+        drop = float(np.max(F) - np.min(F))
+        w = np.round(res.x / a)
+        p0 = int(np.nonzero(np.diff(w) > 0)[0][2] + 1)  # the third slip
+        idx, dF = next((i, d) for i, d in regions if np.min(Xl[i]) >= res.base[p0 - 1] - a / 40
+                       and np.min(Xl[i]) <= res.base[p0] + a / 40)
+        further = _ffm_path(ffm, [res.base[p0], Xl[-1]], V, hmax, ((w[p0] + 1) * a, 0.0, 0.0))
+        Ff = np.interp(Xl, further.base, further.lateral_force)
+        settled = idx[Xl[idx] > res.base[p0] + a / 4]
+        assert len(settled) > 10
+        assert np.max(np.abs(F[settled] + dF[Xl[idx] > res.base[p0] + a / 4] - Ff[settled])) < 1e-3 * drop
+        after = np.arange(idx.max() + 2, idx.max() + 12)  # the path's tip has caught up: the same well, one force
+        assert np.max(np.abs(F[after] - Ff[after])) < 1e-3 * drop
 
 
 @pytest.mark.slow
