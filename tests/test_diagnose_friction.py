@@ -818,7 +818,7 @@ def test_a_wrong_baseline_does_not_switch_start_wells_under_a_nested_fit(tmp_pat
 
 
 def test_thermal_activation_starts_from_the_reference_raised_by_its_peak_lowering():
-    """ThermalActivation._reference_starts: the reference model fits the peaks athermally, so an activated start
+    """ThermalActivation.reference_starts: the reference model fits the peaks athermally, so an activated start
     raises its corrugation by the ratio of the athermal peak to the median activated slip's force. That ratio
     is 1 on a cold record (0.5 K: the slip comes after the branch's force maximum) and grows with the
     temperature and the attempt frequency (300 K: the peak lowered by a quarter to a half, the range the declared
@@ -834,7 +834,7 @@ def test_thermal_activation_starts_from_the_reference_raised_by_its_peak_lowerin
     for T in (0.5, 50.0, 300.0):
         c = ThermalActivation()
         c.T = T
-        st = c._reference_starts(prob, ref)
+        st = c.reference_starts(prob, ref)
         assert [s["log10_f0"] for s in st] == list(REFERENCE_F0)
         factors[T] = [s["u0"] / ref["u0"] for s in st]
     assert factors[0.5] == [1.0, 1.0, 1.0]

@@ -1377,7 +1377,12 @@ class FrictionProblem:
         the slip drop to the peak force). The stick-slip chi^2 surface is rugged: from the null
         start a factor of 1.9 is not found (the baseline's corrugation has absorbed it)."""
         if self.loop is None:
-            return []
+            # a record without a loop (trace only) gives a cause only the starts it reads from the reference model:
+            # an activation's corrugation raised by its peak lowering at each REFERENCE_F0 (blind f21, 2 K, trace
+            # only: from the declared starts, u0 raised 1.3-2 times for 300 K, the term's fit ended at 5 Hz, chi^2
+            # 1446 on 358, where 1e6 Hz gives 392)
+            return clipped_starts(self.base_params, ref_values, new, lambda c: c.reference_starts(self, dict(ref_values))
+                                  if hasattr(c, "reference_starts") else [])
         data = {c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [] for c in new}
         out = clipped_starts(self.base_params, ref_values, new, lambda c: data[c])
         if mask is None:  # a cause's ridge of starts (parameters that trade), ranked by the whole model's chi^2

@@ -26,7 +26,7 @@ import numpy as np
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
 
-#: attempt frequencies [log10 Hz] of the starts relative to the reference model (:meth:`ThermalActivation._reference_starts`)
+#: attempt frequencies [log10 Hz] of the starts relative to the reference model (:meth:`ThermalActivation.reference_starts`)
 REFERENCE_F0 = (5.0, 7.0, 9.0)
 #: factors of an adhesion load's start over which the activation's ridge is walked where the load is free
 #: (:meth:`ThermalActivation.ridge_starts`), and the number of the best (by the peaks' misfit) kept
@@ -73,11 +73,11 @@ class ThermalActivation(Cause):
 
     def data_starts(self, problem, ref: dict) -> list[dict]:
         """The two best starts of :meth:`_peak_ridge` by the recorded peaks' misfit, and the reference's own
-        corrugation raised by the peak lowering of each of :data:`REFERENCE_F0` (:meth:`_reference_starts`)."""
+        corrugation raised by the peak lowering of each of :data:`REFERENCE_F0` (:meth:`reference_starts`)."""
         return ([{"log10_f0": lf, "u0": u0} for _, lf, u0 in sorted(self._peak_ridge(problem, ref))[:2]]
-                + self._reference_starts(problem, ref))
+                + self.reference_starts(problem, ref))
 
-    def _reference_starts(self, problem, ref: dict) -> list[dict]:
+    def reference_starts(self, problem, ref: dict) -> list[dict]:
         """Starts relative to the model being extended: at attempt frequency f0 the median activated slip of the
         slowest scan comes at a peak force lower than the athermal instability's by the ratio ``phi`` (the
         quasi-static barrier, :func:`probedyn.diagnose.friction.thermal_hazard`); the reference already fits the
