@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any, Callable
 
 import numpy as np
@@ -838,40 +839,23 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
             spans.append((j % 2, p0, p0 + stop - 1))
     if not spans:
         return []
-    segs = []  # per data segment: path index range, the sorted support and the two parities' running integrals
-    for sj, (mb, _, _) in enumerate(seg_model[:len(starts)]):
-        i0 = int(bounds[sj])
-        order = np.argsort(mb)
-        bo = mb[order]
-        if sampling == "point":
-            cums = [d[i0:i0 + len(mb)][order] for d in dF]
-        else:
-            cums = [np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * np.diff(bo))])
-                    for f in (d[i0:i0 + len(mb)][order] for d in dF)]
-        segs.append((i0, i0 + len(mb) - 1, mb, bo, cums))
+    # the two parities' changes sampled as the data are (a sample straddling two regions gets each one's share)
+    sampled = [_sample_path(SimpleNamespace(base=b, lateral_force=d, t=res.t), Xl, starts, ends, n_seg, sampling)
+               for d in dF]
     out = []
     for par, p0, p1 in spans:
-        idx, vals = [], []
-        for sj, (i0, i1, mb, bo, cums) in enumerate(segs):
+        idx = []
+        for sj, (mb, _, _) in enumerate(seg_model[:len(starts)]):
+            i0, i1 = int(bounds[sj]), int(bounds[sj]) + len(mb) - 1
             if i1 < p0 or i0 > p1:
                 continue
             reach = mb[max(p0, i0) - i0:min(p1, i1) - i0 + 1]
-            blo, bhi = float(np.min(reach)), float(np.max(reach))
             lo_s, hi_s = lo_hi[sj]
-            sel = np.nonzero((np.maximum(lo_s, hi_s) >= blo) & (np.minimum(lo_s, hi_s) <= bhi))[0]
-            if len(sel) == 0:
-                continue
-            xs = Xl[starts[sj]:ends[sj]][sel]
-            if sampling == "point":
-                v = np.interp(xs, bo, cums[par])
-            else:
-                width = hi_s[sel] - lo_s[sel]
-                v = (np.interp(hi_s[sel], bo, cums[par]) - np.interp(lo_s[sel], bo, cums[par])) / np.where(
-                    np.abs(width) > 0, width, 1.0)
+            sel = np.nonzero((np.maximum(lo_s, hi_s) >= np.min(reach)) & (np.minimum(lo_s, hi_s) <= np.max(reach)))[0]
             idx.append(starts[sj] + sel)
-            vals.append(v)
-        if idx:
-            out.append((np.concatenate(idx), np.concatenate(vals)))
+        idx = np.concatenate(idx) if idx else np.zeros(0, int)
+        if len(idx):
+            out.append((idx, sampled[par][idx]))
     return out
 
 
