@@ -592,6 +592,13 @@ def _polish(fun, x: float, cx: float, steps, repeat: int = 1) -> tuple[float, fl
     return x, cx
 
 
+def _intervals(xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The support interval of each interval-mean sample at positions ``xs`` (one monotone segment): from the midpoint
+    with the previous sample to the midpoint with the next, the segment's ends at its first and last sample."""
+    mid = 0.5 * (xs[1:] + xs[:-1])
+    return np.concatenate([[xs[0]], mid]), np.concatenate([mid, [xs[-1]]])
+
+
 def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str) -> np.ndarray:
     """The model's lateral force at a scan's samples from a path result along the support coordinate ``Xl``:
     the value at the sample's position (``sampling = "point"``) or its mean over the sample's interval, per
@@ -607,9 +614,7 @@ def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str) -
             F[s0:e0] = np.interp(xs, b, fz)
         else:
             cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
-            mid = 0.5 * (xs[1:] + xs[:-1])
-            lo = np.concatenate([[xs[0]], mid])
-            hi = np.concatenate([mid, [xs[-1]]])
+            lo, hi = _intervals(xs)
             width = hi - lo
             Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -803,14 +808,8 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
     # the sample intervals along the support per data segment, and which path points belong to which segment
     seg_model = _segments(res, n_seg)
     bounds = np.cumsum([0] + [len(m[0]) - 1 for m in seg_model])  # path index of each segment's first point
-    lo_hi = []
-    for s0, e0 in zip(starts, ends):
-        xs = Xl[s0:e0]
-        if sampling == "point" or len(xs) < 2:
-            lo_hi.append((xs, xs))
-        else:
-            mid = 0.5 * (xs[1:] + xs[:-1])
-            lo_hi.append((np.concatenate([[xs[0]], mid]), np.concatenate([mid, [xs[-1]]])))
+    lo_hi = [(Xl[s0:e0], Xl[s0:e0]) if sampling == "point" or e0 - s0 < 2 else _intervals(Xl[s0:e0])
+             for s0, e0 in zip(starts, ends)]
     # per path point after the first slip: the direction of the last slip, and the further well's root of
     # g(x') = k (b - x') - q U0 sin(q x'), which falls monotonically over the well's stable interval
     # |q (x' - c)| < arccos(-k / (q^2 U0)): a root there is the stable one (bisection, to 2^-30 of the interval)
