@@ -1649,8 +1649,8 @@ class FrictionProblem:
     def _profile_one_train(self, i: int, st: FrictionState, well: int) -> list[float]:
         """Registry of an aligned scan with the tip starting the pre-roll ``well`` periods from the support:
         the model at registry 0 aligned with the data by the phase of the fundamental, then polished on the scan's
-        chi^2 (:func:`_polish`, steps :data:`REGISTRY_STEPS`). The phase of the fundamental is biased by the reversal transients and by the
-        activated slips' scatter by up to about 1e-2 a (blind f08's fast scan at 300 K: 1.1e-2 a, chi^2 720 where
+        chi^2 (:func:`_polish`, steps :data:`REGISTRY_STEPS`). The phase of the fundamental is biased by the reversal
+        transients and by the activated slips' scatter by up to about 1e-2 a (blind f08's fast scan at 300 K: 1.1e-2 a, chi^2 720 where
         the polished registry gives 255 on 323 samples; the two fixed parabolas before session 62 reached 1e-2 a
         at most and weighed the samples equally, so a slip one well further, 120 sigma off, set them)."""
         s = self.data.scans[i]
