@@ -116,10 +116,12 @@ class ThermalActivation(Cause):
         gives the slowest scan's recorded peak at that frequency), for the problem to rank by the whole model's
         chi-square: f0 and u0 trade along that ridge, and the peaks alone, read quasi-statically, may rank a
         wrong stretch of it first (a blind generator's 300 K record, session 30: the best two at 10^9.5-10^10 Hz,
-        u0 16 % high, where the fit from them stalled; the truth near 10^5.5 Hz, chi^2 879 against 2566)."""
+        u0 16 % high, where the fit from them stalled; the truth near 10^5.5 Hz, chi^2 879 against 2566). Best first
+        by the peaks' misfit."""
         n0 = float(ref.get("n_adh", 0.0))
         if "n_adh" not in ref or not n0 > 0:
-            return [{"log10_f0": lf, "u0": u0} for _, lf, u0 in self._peak_ridge(problem, ref) if float(lf).is_integer()]
+            return [{"log10_f0": lf, "u0": u0} for _, lf, u0 in sorted(self._peak_ridge(problem, ref))
+                    if float(lf).is_integer()]
         # a model whose adhesion load is free (an adhesion cause beside the activation): the scans' peaks at two
         # loads and two speeds fix the load and the attempt frequency together (activation lowers the slow scans'
         # peaks, adhesion the low load's share), so the ridge is also walked over the load, about the start's:
