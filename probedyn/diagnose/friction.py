@@ -1181,7 +1181,12 @@ def eta_ridge(start: dict, ref: dict) -> list[dict]:
     if "a" not in start or "u0" in start or "a" not in ref or "u0" not in ref:
         return []
     u = float(ref["u0"]) * (float(start["a"]) / float(ref["a"])) ** 2
-    return [{**start, "u0": u * (1.0 + ETA_RIDGE_STEP * k)} for k in range(-ETA_RIDGE_HALF, ETA_RIDGE_HALF + 1)]
+    return u0_grid(start, u, ETA_RIDGE_STEP, ETA_RIDGE_HALF)
+
+
+def u0_grid(start: dict, u: float, step: float, half: int) -> list[dict]:
+    """``start`` with its corrugation per unit load at ``u`` times 1 + k ``step``, |k| <= ``half``."""
+    return [{**start, "u0": u * (1.0 + step * k)} for k in range(-half, half + 1)]
 
 
 def clipped_starts(base_params, ref_values: dict, new: tuple, starts_of) -> list[dict]:
@@ -1442,8 +1447,7 @@ class FrictionProblem:
             kept = [cands[i] for _, i in self._ranked(cands, causes)[:RIDGE_KEEP]]
             lead = cands[0]  # the ridge's first: the best by the recorded peaks, its U0 profiled
             if "u0" in lead:
-                grid = [{**lead, "u0": float(lead["u0"]) * (1.0 + TERM_RIDGE_STEP * j)}
-                        for j in range(-TERM_RIDGE_HALF, TERM_RIDGE_HALF + 1)]
+                grid = u0_grid(lead, float(lead["u0"]), TERM_RIDGE_STEP, TERM_RIDGE_HALF)
                 kept.append(grid[self._ranked(grid, causes)[0][1]])
             out += kept
         return out
