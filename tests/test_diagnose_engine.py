@@ -550,6 +550,48 @@ def test_a_rugged_parameter_is_swept_past_its_first_basin():
     assert d["evidence"] == pytest.approx(0.5 * d["dchi2"] - 1)  # Akaike, on the swept gain
 
 
+def test_a_declared_term_s_sweep_stops_within_a_large_model_error():
+    """``Fitter.swept`` for a declared term (``Cause.declared``: a declared temperature's activation, engine
+    ``_test_term``): a point counts as a new lowest only when it is lower by more than ``SWEEP_GAIN (phi - 1)``,
+    ``phi = chi^2 / dof`` of the fit swept. The tilted wells of the test above (the deepest lower by 8 and more than
+    the first) beside ten rows of a misfit no parameter reaches (phi ~ 900, a hidden effect's): the term's sweep gives
+    up after ``SWEEP_PATIENCE`` steps and its fit stays in the first wells, where the same parameter as a cause walks
+    on to the deepest one; without the misfit (phi < 1) the declared term's sweep is the cause's."""
+    from probedyn.diagnose.causes import Cause, CauseParam
+    from probedyn.diagnose.engine import SWEEP_GAIN
+
+    class Tilted(Cause):
+        key = "tilted-wells"
+        kind = "friction"
+
+    class Wells:
+        base_params = (CauseParam("b", "1", -1.0, 1.0, 0.0),)
+
+        def __init__(self, declared, misfit):
+            c = Tilted((CauseParam("s", "1", 0.0, 3.5, 0.0, sweep=0.25),))
+            c.declared = declared
+            self.causes = (c,)
+            self.misfit = misfit
+
+        def residuals(self, v, causes):
+            s = v.get("s", 0.0)
+            return np.concatenate([[np.sqrt(20.0 * (2.0 - np.cos(2 * np.pi * s) - 0.2 * s)), v["b"] - 0.3],
+                                   np.full(10, self.misfit)])
+
+    def fit(declared, misfit):
+        prob = Wells(declared, misfit)
+        F = Fitter(prob)
+        return F.nested(F.baseline(), prob.causes)
+
+    s_deep = 3 + np.arcsin(0.2 / (2 * np.pi)) / (2 * np.pi)
+    term, cause = fit(True, 30.0), fit(False, 30.0)
+    assert term.chi2 / term.dof > 800 and SWEEP_GAIN * (term.chi2 / term.dof - 1) > 8.0
+    assert cause.values["s"] == pytest.approx(s_deep, abs=2e-3) and cause.start.endswith("+sweep")
+    assert term.values["s"] < 1.5 and not term.start.endswith("+sweep") and term.chi2 > cause.chi2 + SWEEP_GAIN
+    near = fit(True, 0.0)  # phi < 1: every lower point counts, as for a cause
+    assert near.chi2 / near.dof < 1 and near.values["s"] == pytest.approx(s_deep, abs=2e-3)
+
+
 def test_pool_workers_end_with_their_parent(tmp_path):
     """The engine's forked workers do not outlive a parent killed outright (SIGKILL, e.g. by ``timeout``), and take
     SIGTERM's default action rather than the command line's handler they would inherit (``_pool_worker_init``;

@@ -985,6 +985,18 @@ class LoopEstimate:
     slips: list  # per scan: list of (direction, slip positions of one segment)
 
 
+def _stick_slip_range(f: np.ndarray, groups: list, sigma: float) -> float:
+    """The force range of a segment's steady stick-slip (1st to 99th percentile), from its first slip on: a
+    segment that begins at a reversal begins with the reversal's stick, where the force crosses the whole loop
+    (twice the peak), and a threshold read from that range can exceed every slip's drop (the three-scan example's
+    fast retrace: range 1040 pN with the reversal, slips of 130-180 pN over several samples, and the loop unread).
+    The first slip is the first run of falling samples (``groups``) that falls by more than 10 sigma; a segment
+    without one keeps its whole range."""
+    first = next((g[0] for g in groups if f[g[0]] - f[g[-1] + 1] > 10.0 * sigma), None)
+    h = f[first:] if first is not None and len(f) - first >= 8 else f
+    return float(np.percentile(h, 99) - np.percentile(h, 1))
+
+
 def loop_estimate(data: FrictionData, use: np.ndarray, slices: list, a: float, sigma: float) -> LoopEstimate | None:
     """Read the stick-slip loop of each scan (the samples marked ``use``: steady, after the first slip)."""
     peaks, drops, slips, wells = [], [], [], []
@@ -1001,7 +1013,6 @@ def loop_estimate(data: FrictionData, use: np.ndarray, slices: list, a: float, s
             d = int(s.direction[seg[0]])
             f = d * s.force[seg]
             x = s.position[seg]
-            thr = max(10.0 * sigma, 0.2 * float(np.percentile(f, 99) - np.percentile(f, 1)))
             falls = np.nonzero(f[:-1] - f[1:] > 3.0 * sigma)[0]
             # slip groups: runs of falling samples whose total drop exceeds the threshold
             groups, cur = [], []
@@ -1012,6 +1023,7 @@ def loop_estimate(data: FrictionData, use: np.ndarray, slices: list, a: float, s
                 cur.append(j)
             if cur:
                 groups.append(cur)
+            thr = max(10.0 * sigma, 0.2 * _stick_slip_range(f, groups, sigma))
             pos = []
             for grp in groups:
                 j0, j1 = grp[0], grp[-1] + 1
