@@ -96,23 +96,83 @@ def lu_solve_small(A, b):
 
 
 @njit(cache=True)
+def lu_factor_small(M, piv):
+    """Factor the small dense matrix ``M`` in place (Gaussian elimination, partial pivoting, LAPACK's layout: the
+    multipliers below the diagonal, whole rows swapped, ``piv[i]`` the row swapped with row ``i``). The
+    arithmetic is :func:`lu_solve_small`'s, so :func:`lu_solve_factored` gives its result bit for bit."""
+    n = M.shape[0]
+    for i in range(n):
+        p = i
+        best = abs(M[i, i])
+        for r in range(i + 1, n):
+            if abs(M[r, i]) > best:
+                best = abs(M[r, i])
+                p = r
+        piv[i] = p
+        if p != i:
+            for cc in range(n):
+                tmp = M[i, cc]
+                M[i, cc] = M[p, cc]
+                M[p, cc] = tmp
+        for r in range(i + 1, n):
+            fct = M[r, i] / M[i, i]
+            for cc in range(i + 1, n):
+                M[r, cc] -= fct * M[i, cc]
+            M[r, i] = fct
+
+
+@njit(cache=True)
+def lu_solve_factored(M, piv, x):
+    """Solve in place ``A x = b`` (``x`` holds ``b``) with ``M, piv`` from :func:`lu_factor_small`: the row swaps,
+    then forward substitution with the stored multipliers (each entry receives the same operations, in the same
+    order, as in :func:`lu_solve_small`), then back substitution."""
+    n = M.shape[0]
+    for i in range(n):
+        p = piv[i]
+        if p != i:
+            tmp = x[i]
+            x[i] = x[p]
+            x[p] = tmp
+    for i in range(n):
+        for r in range(i + 1, n):
+            x[r] -= M[r, i] * x[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for cc in range(i + 1, n):
+            s -= M[i, cc] * x[cc]
+        x[i] = s / M[i, i]
+
+
+@njit(cache=True)
 def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
     """Integrate ``system`` (module docstring) from ``y0`` at ``t = 0`` to ``T`` [s], first step ``h0``, steps at
     most ``hmax``; ``atol`` per state. Returns ``(t, y, F, n_steps, n_rejected)`` on the accepted steps (``F``
-    the force ``system`` records); ``n_steps`` is -1 if ``max_steps`` were taken before ``T``."""
+    the force ``system`` records); ``n_steps`` is -1 if ``max_steps`` were taken before ``T``.
+
+    ``W`` is factored once per step and the three stages solved with that factorisation; the stages and the
+    output (grown by doubling, not allocated for ``max_steps`` at once) live in buffers allocated once per call.
+    Until session 65 every stage eliminated ``W`` again and every vector expression allocated an array (some 25
+    per step): the same arithmetic, bit for bit (``tests/test_rosenbrock.py``), 2-3 times slower."""
     d = 1.0 / (2.0 + math.sqrt(2.0))
     e32 = 6.0 + math.sqrt(2.0)
     n = y0.shape[0]
-    ts = np.empty(max_steps + 1)
-    ys = np.empty((max_steps + 1, n))
-    Fs = np.empty(max_steps + 1)
+    cap = min(max_steps + 1, 1024)
+    ts = np.empty(cap)
+    ys = np.empty((cap, n))
+    Fs = np.empty(cap)
     y = y0.copy()
+    yn = np.empty(n)
+    ym = np.empty(n)
+    k1 = np.empty(n)
+    k2 = np.empty(n)
+    k3 = np.empty(n)
     t = 0.0
     f0 = np.empty(n)
     f1 = np.empty(n)
     f2 = np.empty(n)
     J = np.empty((n, n))
     W = np.empty((n, n))
+    piv = np.empty(n, np.int64)
     Tt = np.zeros(n)
     Fr = system(kern, ctx, t, y, f0, J, Tt, True)
     ts[0] = 0.0
@@ -126,17 +186,29 @@ def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
             return ts[: i + 1], ys[: i + 1], Fs[: i + 1], -1, n_rej
         if t + h > T:
             h = T - t
+        hd = h * d
         for a in range(n):
             for b in range(n):
                 W[a, b] = -h * d * J[a, b]
             W[a, a] += 1.0
-        k1 = lu_solve_small(W, f0 + h * d * Tt)
-        ym = y + 0.5 * h * k1
+        lu_factor_small(W, piv)
+        for a in range(n):
+            k1[a] = f0[a] + hd * Tt[a]
+        lu_solve_factored(W, piv, k1)
+        hh = 0.5 * h
+        for a in range(n):
+            ym[a] = y[a] + hh * k1[a]
         system(kern, ctx, t + 0.5 * h, ym, f1, J, Tt, False)
-        k2 = lu_solve_small(W, f1 - k1) + k1
-        yn = y + h * k2
+        for a in range(n):
+            k2[a] = f1[a] - k1[a]
+        lu_solve_factored(W, piv, k2)
+        for a in range(n):
+            k2[a] = k2[a] + k1[a]
+            yn[a] = y[a] + h * k2[a]
         system(kern, ctx, t + h, yn, f2, J, Tt, False)
-        k3 = lu_solve_small(W, f2 - e32 * (k2 - f1) - 2.0 * (k1 - f0) + h * d * Tt)
+        for a in range(n):
+            k3[a] = f2[a] - e32 * (k2[a] - f1[a]) - 2.0 * (k1[a] - f0[a]) + hd * Tt[a]
+        lu_solve_factored(W, piv, k3)
         err = 0.0
         for a in range(n):
             sc = atol[a] + rtol * max(abs(y[a]), abs(yn[a]))
@@ -144,9 +216,19 @@ def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
             err = max(err, abs(e))
         if err <= 1.0 or h < 1e-22:
             t = t + h
-            y = yn
+            for a in range(n):
+                y[a] = yn[a]
             Fr = system(kern, ctx, t, y, f0, J, Tt, True)
             i += 1
+            if i >= ts.shape[0]:  # grow the output by doubling
+                cap = min(2 * ts.shape[0], max_steps + 1)
+                ts2 = np.empty(cap)
+                ys2 = np.empty((cap, n))
+                Fs2 = np.empty(cap)
+                ts2[:i] = ts[:i]
+                ys2[:i] = ys[:i]
+                Fs2[:i] = Fs[:i]
+                ts, ys, Fs = ts2, ys2, Fs2
             ts[i] = t
             ys[i] = y
             Fs[i] = Fr
@@ -158,4 +240,4 @@ def ros23(system, kern, ctx, T, y0, rtol, atol, h0, hmax, max_steps):
     return ts[: i + 1], ys[: i + 1], Fs[: i + 1], i, n_rej
 
 
-__all__ = ["lu_solve_small", "ros23", "stable_identity"]
+__all__ = ["lu_factor_small", "lu_solve_factored", "lu_solve_small", "ros23", "stable_identity"]

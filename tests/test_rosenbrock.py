@@ -88,3 +88,39 @@ def test_a_new_process_finds_the_integrator_in_the_disk_cache(tmp_path):
         assert r.returncode == 0, r.stderr[-2000:]
     hits, misses = map(int, runs[1].stdout.split())
     assert (hits, misses) == (2, 0)
+
+
+def test_the_factored_solve_is_the_elimination_bit_for_bit():
+    """``ros23`` factors ``W`` once per step and solves its three stages with that factorisation
+    (:func:`lu_factor_small`, :func:`lu_solve_factored`); until session 65 each stage eliminated ``W`` again
+    (:func:`lu_solve_small`). Each entry of the right-hand side receives the same operations in the same order, so
+    the two agree bit for bit, on matrices that need row swaps (a zero or small pivot) as on diagonally dominant
+    ones, and the integrations of the FFM models are those of before (measured: every sample of the three-scan
+    example's residuals)."""
+    from probedyn.schemes.rosenbrock import lu_factor_small, lu_solve_factored, lu_solve_small
+
+    rng = np.random.default_rng(65)
+    mats = [rng.normal(size=(n, n)) for n in (1, 2, 3, 4, 6) for _ in range(20)]
+    mats += [np.array([[0.0, 1.0, 0.0], [-8e12, -1e7, -3.0], [1.0, 0.0, -1e3]]),  # an FFM W's pattern: swaps
+             np.eye(4) - 1e-9 * rng.normal(size=(4, 4))]
+    for A in mats:
+        b = rng.normal(size=A.shape[0])
+        M, piv = A.copy(), np.zeros(A.shape[0], np.int64)
+        lu_factor_small(M, piv)
+        x = b.copy()
+        lu_solve_factored(M, piv, x)
+        assert np.array_equal(x, lu_solve_small(A, b))
+        assert np.allclose(A @ x, b, rtol=1e-8, atol=1e-8 * np.abs(A).max() * np.abs(x).max())
+
+
+def test_the_output_grows_past_its_first_allocation_and_stops_at_max_steps():
+    """The accepted steps are kept in arrays grown by doubling (from 1024 rows; not ``max_steps`` rows allocated
+    on every call): a run of some 10^4 steps keeps every one, in order, and a run cut at ``max_steps`` returns
+    ``n = -1`` with exactly ``max_steps + 1`` rows."""
+    ts, y, F, n, exact = _run(-1.0, 1e-9, T=20.0)
+    assert n > 3000 and len(ts) == n + 1 and np.all(np.diff(ts) > 0) and ts[-1] == pytest.approx(20.0, rel=1e-12)
+    assert np.max(np.abs(y - exact)) < n * 2e-9
+    ts2, ys2, F2, n2, _ = ros23(_prothero_robinson, None, (-1.0,), 20.0, np.array([0.0]), 1e-9, np.array([1e-9]),
+                                1e-6, 1.0, 1500)
+    assert n2 == -1 and len(ts2) == len(ys2) == len(F2) == 1501
+    assert np.array_equal(ts2, ts[:1501]) and np.array_equal(ys2[:, 0], y[:1501])
