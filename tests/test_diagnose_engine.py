@@ -23,6 +23,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from diagnose_truth import make_force_case, make_friction_case, make_modal_case  # noqa: E402
 
+from probedyn.diagnose.causes import Cause  # noqa: E402
 from probedyn.diagnose.engine import Fitter, diagnose  # noqa: E402
 from probedyn.diagnose.problems import make_problem  # noqa: E402
 
@@ -590,6 +591,116 @@ def test_a_declared_term_s_sweep_stops_within_a_large_model_error():
     assert term.values["s"] < 1.5 and not term.start.endswith("+sweep") and term.chi2 > cause.chi2 + SWEEP_GAIN
     near = fit(True, 0.0)  # phi < 1: every lower point counts, as for a cause
     assert near.chi2 / near.dof < 1 and near.values["s"] == pytest.approx(s_deep, abs=2e-3)
+
+
+def _sweep_as_it_was(F, f, p, step, tol):
+    """``Fitter.swept``'s walk before session 65, both directions in turn, sharing the lowest (the reference)."""
+    from probedyn.diagnose.engine import SWEEP_MAX, SWEEP_PATIENCE, _u_bounds, _from_u
+
+    lo, hi = _u_bounds(p)
+    best_c, best_st = f.chi2, None
+    for d in (step, -step):
+        g, u, misses, k = f, f.u[0], 0, 0
+        while misses < SWEEP_PATIENCE and k < SWEEP_MAX:
+            u, k = u + d, k + 1
+            if not lo <= u <= hi:
+                break
+            held = {p.name: _from_u(p, u)}
+            g = F.fit(f.causes, [g.as_start(**held)], fixed=held)
+            if g.chi2 < best_c - 1e-9 * max(1.0, best_c):
+                misses = 0 if g.chi2 < best_c - tol else misses + 1
+                best_c, best_st = g.chi2, g.as_start()
+            else:
+                misses += 1
+    return best_c, best_st
+
+
+def test_a_sweep_s_directions_walked_apart_replay_to_the_sweep_in_turn():
+    """With a worker pool ``Fitter.swept`` walks its two directions at once: the second with its own lowest
+    (``_sweep_points`` from the fit's chi^2), which walks at least as far as the walk in turn (whose lowest also holds
+    the first direction's), and ``_sweep_replay`` then takes the points in turn and stops where that walk stops. On
+    200 random rugged profiles (sums of cosines on a slope, a declared term's tolerance or none) the lowest point and
+    its start are those of the walk as it was before session 65, in turn or apart; and the second direction walked
+    apart is longer on some of them (the replay is needed, not a formality)."""
+    from probedyn.diagnose.causes import CauseParam
+    from probedyn.diagnose.engine import Fit, _span, _sweep_replay, _to_u
+
+    p = CauseParam("s", "1", -12.0, 12.0, 0.0, sweep=0.25)
+
+    class Profile(Fitter):
+        def __init__(self, chi2):
+            self.chi2 = chi2
+
+        def fit(self, causes, starts, mask=None, fixed=None, max_nfev=None):
+            s = fixed["s"]
+            return Fit((), [p], np.array([_to_u(p, s)]), {"s": s}, None, float(self.chi2(s)), 50)
+
+    rng = np.random.default_rng(65)
+    du = p.sweep / _span(p)
+    longer = 0
+    for _ in range(200):
+        amp, k, ph = rng.uniform(0, 6, 4), rng.uniform(0.3, 4, 4), rng.uniform(0, 2 * np.pi, 4)
+        slope = rng.normal(0, 1.5)
+
+        def chi2(s, amp=amp, k=k, ph=ph, slope=slope):
+            return 100.0 + float(np.sum(amp * np.cos(k * s + ph))) + slope * s
+
+        F = Profile(chi2)
+        f = F.fit((), [{}], fixed={"s": 0.0})
+        tol = float(rng.choice([0.0, 2.0]))
+        old = _sweep_as_it_was(F, f, p, du, tol)
+        first = _sweep_replay(F._sweep_points(f, "s", du, tol, f.chi2), f.chi2, None, tol)
+        second = F._sweep_points(f, "s", -du, tol, first[0])
+        assert _sweep_replay(second, *first, tol) == old
+        alone = F._sweep_points(f, "s", -du, tol, f.chi2)
+        assert alone[: len(second)] == second  # the same points, at least as far
+        assert _sweep_replay(alone, *first, tol) == old
+        longer += len(alone) > len(second)
+    assert longer >= 10
+
+
+class _PoolWells:
+    """The tilted wells of ``test_a_rugged_parameter_is_swept_past_its_first_basin`` as a problem whose fits go
+    through a pool of two workers (module level: its cause is pickled by key, its fits by value)."""
+
+    def __init__(self, workers):
+        from probedyn.diagnose.causes import CauseParam
+
+        self.base_params = (CauseParam("b", "1", -1.0, 1.0, 0.0),)
+        self.causes = (_PoolTilted((CauseParam("s", "1", 0.0, 3.5, 0.0, starts=(0.6,), sweep=0.25),)),)
+        self.workers = workers
+        self.screen_nfev = 3  # screened starts (Fitter.map_fits), then the best run on
+
+    def residuals(self, v, causes):
+        s = v.get("s", 0.0)
+        return np.array([np.sqrt(20.0 * (2.0 - np.cos(2 * np.pi * s) - 0.2 * s)), v["b"] - 0.3])
+
+
+class _PoolTilted(Cause):
+    key = "pool-tilted-wells"
+    kind = "friction"
+
+
+def test_a_fit_with_a_pool_is_the_fit_in_turn():
+    """A full-data nested fit through a pool of two forked workers (its screened starts and the starts run on:
+    ``Fitter.map_fits``; its sweep's two directions at once: ``Fitter.swept``) ends where the same fit in one process
+    ends: the same values, chi^2, start and evaluations, on the tilted wells (the deepest well reached by the sweep)."""
+    fits = []
+    for workers in (1, 2):
+        prob = _PoolWells(workers)
+        F = Fitter(prob)
+        base = F.baseline()
+        F.open_pool()
+        try:
+            assert (F._pool is not None) == (workers > 1)
+            f = F.nested(base, prob.causes)
+        finally:
+            F.close_pool()
+        fits.append((f, F.nfev))
+    (a, na), (b, nb) = fits
+    assert a.values == b.values and a.chi2 == b.chi2 and a.start == b.start and a.start.endswith("+sweep")
+    assert a.values["s"] == pytest.approx(3 + np.arcsin(0.2 / (2 * np.pi)) / (2 * np.pi), abs=2e-3)
+    assert nb >= na  # the second direction walked apart may take more points, never fewer
 
 
 def test_pool_workers_end_with_their_parent(tmp_path):

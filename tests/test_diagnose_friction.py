@@ -1020,3 +1020,47 @@ def test_the_thermal_slip_scatter_is_a_fitted_variance(tmp_path):
     assert not prob.variance_fitted(dict(base.values), ())
     assert prob.variance_fitted({**base.values, "log10_f0": 5.0}, (c,))
     assert not prob.variance_fitted({**base.values, "log10_f0": 0.0}, (c,))  # the cause's null: no activation
+
+
+def test_the_registry_memory_crosses_the_pool_in_the_jobs_order():
+    """A friction problem remembers the best lattice registry it profiled per model (so that a model gives the same
+    residuals whichever fit reached it). Through the engine's pool (session 65) every job starts from the memory as
+    the worker forked it (``memo_fork``, ``memo_reset``: a map's pool is forked at the map, from the parent as it
+    stands), returns what it added or improved (``memo_delta``), and the parent merges the jobs in their order,
+    keeping the better registry of a model (``memo_merge``). Then the ridge of the misaligned example's starts ranked
+    through a pool of two workers gives the chi^2 the parent gives in turn, bit for bit, and the parent then knows
+    the registries the workers profiled."""
+    prob = make_problem(Path(__file__).resolve().parents[1] / "examples" / "measurements"
+                        / "ffm_stickslip_speeds.toml")
+    # the protocol on entries of the memory
+    prob._registry = {"m1": ([0.1], 5.0)}
+    prob.memo_fork()
+    prob._registry["m9"] = ([0.9], 1.0)  # a job that ran before in the same worker: gone at the next job's start
+    prob.memo_reset()
+    assert prob._registry == {"m1": ([0.1], 5.0)}
+    prob._remember("m2", [0.2], 3.0)
+    prob._remember("m1", [0.3], 4.0)  # a better registry of a known model
+    prob._remember("m1", [0.4], 4.5)  # a worse one: not kept
+    delta = prob.memo_delta()
+    assert delta == {"m1": ([0.3], 4.0), "m2": ([0.2], 3.0)}
+    prob._registry = {"m1": ([0.1], 5.0), "m2": ([0.25], 2.0)}  # the parent: a better m2 merged from an earlier job
+    prob.memo_merge(delta)
+    assert prob._registry == {"m1": ([0.3], 4.0), "m2": ([0.25], 2.0)}
+    # ranked through the pool as in turn
+    prob._registry = {}
+    F = Fitter(prob)
+    base = F.baseline()
+    items = [({**base.values, "u0": base.values["u0"] * f},) for f in (0.97, 0.99, 1.01, 1.03)]
+    before = dict(prob._registry)  # the baseline's fit
+    serial = [prob._chi2_at(*it, ()) for it in items]
+    found = {k: v for k, v in prob._registry.items() if k not in before}
+    assert found
+    prob._registry = dict(before)
+    F.open_pool()
+    try:
+        assert F._pool is not None and prob.parallel == F.map_calls
+        pooled = prob._map("_chi2_at", items, ())
+    finally:
+        F.close_pool()
+    assert pooled == serial
+    assert all(prob._registry.get(k) == v for k, v in found.items())  # the workers' registries, merged

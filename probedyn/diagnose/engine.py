@@ -125,7 +125,7 @@ import os
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -234,16 +234,27 @@ def _inactive_rows(problem, values, causes) -> int:
 class Fitter:
     """Least-squares fits of a problem's baseline and its nested extensions.
 
-    Independent fits (the candidate causes, the cross-validation folds) go through
-    :meth:`map_nested`: in a pool of ``problem.workers`` forked processes when the problem asks
-    for one (friction: every evaluation is an integration), else one after the other. The
-    results are the same either way (each fit is deterministic)."""
+    Independent fits go through a pool of ``problem.workers`` forked processes when the problem asks
+    for one (friction: every evaluation is an integration), else one after the other: the candidate
+    causes and the cross-validation folds (:meth:`map_nested`), a multi-start fit's screened starts and
+    the starts it runs on (:meth:`map_fits`), a profile sweep's two directions (:meth:`swept`) and a
+    problem's own independent evaluations (:meth:`map_calls`, ``problem.parallel``: friction's ridges
+    of starts). A problem may remember what it profiled per model (friction: the lattice registry, so
+    that a model gives the same residuals whichever fit reached it); every pool job starts from that
+    memory as the pool forked it, and the parent merges what each job added in the jobs' order, so a
+    map's results do not depend on which worker ran which job. They can differ from the same fits made
+    in one process where a fit meets a model that an earlier job of the same map had profiled: in the
+    three-scan friction example the declared activation's gain by 0.5 (of 2.3e4) at the baseline and by
+    0.3 after the claim, the verdict and findings the same (docs/diagnose.md 9.50)."""
 
     def __init__(self, problem) -> None:
         self.problem = problem
         self.nfev = 0
         self._pool = None
+        self._pool_used = False
         self.white = None  # an AR1Whitener once the noise is found correlated (:mod:`.noise`)
+        if hasattr(problem, "parallel"):  # a problem's independent evaluations go through the pool (map_calls)
+            problem.parallel = self.map_calls
 
     def _workers(self) -> int:
         w = int(getattr(self.problem, "workers", 1) or 1)
@@ -256,11 +267,22 @@ class Fitter:
             _POOL_FITTER = self
             self._pool = ProcessPoolExecutor(self._workers(), mp_context=multiprocessing.get_context("fork"),
                                              initializer=_pool_worker_init, initargs=(os.getpid(),))
+            self._pool_used = False
 
     def close_pool(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+
+    def _fresh_pool(self):
+        """The pool for the next map: forked again if it has run a map since it forked, so that every map's workers
+        start from the parent as it stands (the problem's memory of what it profiled included; the pool forks at
+        its first job). The fork costs a few tens of milliseconds."""
+        if self._pool is not None and self._pool_used:
+            self.close_pool()
+            self.open_pool()
+        self._pool_used = True
+        return self._pool
 
     def map_nested(self, jobs: list[tuple]) -> list["Fit"]:
         """``jobs``: ``(ref, new_causes, mask[, warm[, only_starts]])`` (a nested fit) or ``(None, (), mask[, warm])``
@@ -268,14 +290,53 @@ class Fitter:
         if self._pool is None or len(jobs) < 2:
             return [_run_job(self, j) for j in jobs]
         by_key = _by_key(self.problem)
+        # a full-data nested fit's data-derived starts are made here, where the problem can spread their ranking
+        # over the workers (map_calls; the lattice misalignment's ridge and period profiles were a third of the
+        # three-scan example's run time, in one worker while the other waited)
+        extra = [self.nested_starts(j[0], tuple(j[1])) if (j[0] is not None and j[2] is None and
+                 (len(j) < 4 or j[3] is None) and (len(j) < 5 or j[4] is None)) else None for j in jobs]
         packed = [(j[0], tuple(c.key for c in j[1]), j[2], j[3] if len(j) > 3 else None,
-                   j[4] if len(j) > 4 else None) for j in jobs]
-        out = []
-        for fit, nfev in self._pool.map(_pool_job, packed):
-            self.nfev += nfev
+                   j[4] if len(j) > 4 else None, x) for j, x in zip(jobs, extra)]
+        out = _merged(self, self._fresh_pool().map(_pool_job, packed))
+        for fit in out:
             fit.causes = tuple(by_key.get(c.key, c) for c in fit.causes)  # the parent's cause objects
-            out.append(fit)
         return out
+
+    def map_fits(self, jobs: list[tuple]) -> list["Fit"]:
+        """Least-squares runs ``(causes, starts, mask, fixed, max_nfev, rounds)`` (:meth:`_fit`): a fit's screened
+        starts, the starts it then runs to convergence. In the pool where one is open (the parent's phases with one
+        model: a declared term's test, the candidates), else in turn; the same fits either way."""
+        if self._pool is None or len(jobs) < 2:
+            return [self._run_fit(*j) for j in jobs]
+        by_key = _by_key(self.problem)
+        packed = [(tuple(c.key for c in j[0]), *j[1:]) for j in jobs]
+        out = _merged(self, self._fresh_pool().map(_pool_fit, packed))
+        for fit in out:
+            fit.causes = tuple(by_key.get(c.key, c) for c in fit.causes)
+        return out
+
+    def _run_fit(self, causes, starts, mask, fixed, max_nfev, rounds) -> "Fit":
+        """One :meth:`_fit` job of :meth:`map_fits`, the problem's training mask set as :meth:`fit` sets it."""
+        plist = list(self.problem.base_params) + [p for c in causes for p in c.params]
+        free = [p for p in plist if p.name not in fixed]
+        had = hasattr(self.problem, "train_mask")
+        old = self.problem.train_mask if had else None
+        if had:
+            self.problem.train_mask = mask
+        try:
+            return self._fit(tuple(causes), starts, mask, fixed, max_nfev, plist, free, rounds)
+        finally:
+            if had:
+                self.problem.train_mask = old
+
+    def map_calls(self, method: str, items: list[tuple], causes: tuple) -> list:
+        """``problem.<method>(*item, causes)`` for every item: in the pool where one is open, else in turn. The
+        problem's way to spread independent evaluations (a ridge of starts ranked by chi^2, the profiles of the
+        kept ones: :meth:`FrictionProblem.nested_starts`) over the workers; set as ``problem.parallel``."""
+        if self._pool is None or len(items) < 2:
+            return [getattr(self.problem, method)(*it, tuple(causes)) for it in items]
+        keys = tuple(c.key for c in causes)
+        return _merged(self, self._fresh_pool().map(_pool_call, [(method, it, keys) for it in items]))
 
     def residuals(self, values: dict[str, float], causes, mask=None) -> np.ndarray:
         """The problem's whitened residuals; with correlated noise (``self.white``) whitened over the
@@ -317,7 +378,7 @@ class Fitter:
         prob = self.problem
         screen = getattr(prob, "screen_nfev", None)
         if screen and len(starts) > 1 and free and max_nfev is None:
-            scored = [self._fit(causes, [st], mask, fixed, screen, plist, free, rounds=1) for st in starts]
+            scored = self.map_fits([(causes, [st], mask, fixed, screen, 1) for st in starts])
             for si, f in enumerate(scored):
                 f.start = str(si)
             ranked = sorted(scored, key=lambda f: f.chi2)
@@ -325,8 +386,8 @@ class Fitter:
             kept = [f for f in ranked[: max(1, getattr(prob, "screen_keep", 1))]
                     if f.chi2 <= (1.0 + margin) * ranked[0].chi2]
             best_g: Fit | None = None
-            for f_s in kept:
-                g = self._fit(causes, [f_s.as_start()], mask, fixed, None, plist, free, rounds)
+            runs = self.map_fits([(causes, [f_s.as_start()], mask, fixed, None, rounds) for f_s in kept])
+            for f_s, g in zip(kept, runs):
                 g.start = f_s.start
                 g = g if g.chi2 <= f_s.chi2 else f_s
                 if best_g is None or g.chi2 < best_g.chi2:
@@ -498,23 +559,18 @@ class Fitter:
         phi = f.chi2 / max(f.dof, 1)
         tol = SWEEP_GAIN * max(phi - 1.0, 0.0) if any(getattr(c, "declared", False) for c in new) else 0.0
         for p in [p for c in new for p in c.params if p.sweep > 0 and p.sweep_claimed == claimed]:
-            j = next(i for i, q in enumerate(f.plist) if q.name == p.name)
-            lo, hi = _u_bounds(p)
-            best_c, best_st = f.chi2, None
             du = p.sweep if p.scale == "log" else p.sweep / _span(p)
-            for step in (du, -du):
-                g, u, misses, k = f, f.u[j], 0, 0
-                while misses < SWEEP_PATIENCE and k < SWEEP_MAX:
-                    u, k = u + step, k + 1
-                    if not lo <= u <= hi:
-                        break
-                    held = {p.name: _from_u(p, u)}
-                    g = self.fit(f.causes, [g.as_start(**held)], fixed=held)
-                    if g.chi2 < best_c - 1e-9 * max(1.0, best_c):
-                        misses = 0 if g.chi2 < best_c - tol else misses + 1
-                        best_c, best_st = g.chi2, g.as_start()
-                    else:
-                        misses += 1
+            if self._pool is not None:
+                # both directions at once: the second is walked with its own lowest, which walks at least as far as
+                # the lowest of both would (a point that is a new lowest of both is one of its own), and the walk in
+                # turn is replayed over the points (_sweep_replay): the same sweep, in the time of the longer walk
+                keys, fk = tuple(c.key for c in f.causes), replace(f, causes=())  # causes by key
+                jobs = [(keys, fk, p.name, step, tol, f.chi2) for step in (du, -du)]
+                walks = _merged(self, self._fresh_pool().map(_pool_sweep, jobs))
+                best_c, best_st = _sweep_replay(walks[1], *_sweep_replay(walks[0], f.chi2, None, tol), tol)
+            else:
+                best_c, best_st = _sweep_replay(self._sweep_points(f, p.name, du, tol, f.chi2), f.chi2, None, tol)
+                best_c, best_st = _sweep_replay(self._sweep_points(f, p.name, -du, tol, best_c), best_c, best_st, tol)
             if best_st is None:
                 continue
             h = self.fit(f.causes, [best_st])
@@ -523,10 +579,43 @@ class Fitter:
                 f = h
         return f
 
-    def nested(self, ref: Fit, new: tuple, mask=None, only_starts: list[int] | None = None) -> Fit:
+    def _sweep_points(self, f: Fit, name: str, step: float, tol: float, best_c: float) -> list[tuple[float, dict]]:
+        """One direction of :meth:`swept`: the fits with parameter ``name`` held at ``step`` after ``step`` (in its
+        fitting coordinate) from ``f``'s optimum, each started from the previous one's, until :data:`SWEEP_PATIENCE`
+        points in a row are no new lowest below ``best_c`` (by more than ``tol``), :data:`SWEEP_MAX` steps or the
+        bound. Returns ``(chi^2, start at the point)`` per point."""
+        j = next(i for i, q in enumerate(f.plist) if q.name == name)
+        p = f.plist[j]
+        lo, hi = _u_bounds(p)
+        out: list[tuple[float, dict]] = []
+        g, u, misses, k = f, f.u[j], 0, 0
+        while misses < SWEEP_PATIENCE and k < SWEEP_MAX:
+            u, k = u + step, k + 1
+            if not lo <= u <= hi:
+                break
+            held = {p.name: _from_u(p, u)}
+            g = self.fit(f.causes, [g.as_start(**held)], fixed=held)
+            out.append((g.chi2, g.as_start()))
+            if g.chi2 < best_c - 1e-9 * max(1.0, best_c):
+                misses = 0 if g.chi2 < best_c - tol else misses + 1
+                best_c = g.chi2
+            else:
+                misses += 1
+        return out
+
+    def nested_starts(self, ref: Fit, new: tuple, mask=None) -> list[dict]:
+        """The problem's data-derived starts of ``new`` nested in ``ref`` (``problem.nested_starts``; none if it
+        offers none)."""
+        extra = getattr(self.problem, "nested_starts", None)
+        new = tuple(c for c in new if c not in ref.causes)
+        return [dict(x) for x in extra(dict(ref.values), tuple(ref.causes), new, mask)] if extra is not None else []
+
+    def nested(self, ref: Fit, new: tuple, mask=None, only_starts: list[int] | None = None,
+               extra_starts: list[dict] | None = None) -> Fit:
         """Fit ``ref.causes + new`` starting from ``ref`` with the new parameters at their null
         values, plus the new causes' declared starts (``only_starts``: indices of the declared
-        start combinations to use); never worse than ``ref``."""
+        start combinations to use); never worse than ``ref``. ``extra_starts``: the data-derived starts
+        (:meth:`nested_starts`) if already made."""
         new = tuple(c for c in new if c not in ref.causes)
         causes = tuple(ref.causes) + new
         newp = [p for c in new for p in c.params]
@@ -535,9 +624,8 @@ class Fitter:
         for i, combo in enumerate(_start_sets(new, ref.values)[: getattr(self.problem, "max_starts", MAX_STARTS)], start=1):
             if only_starts is None or i in only_starts:
                 starts.append({**ref.values, **combo})
-        extra = getattr(self.problem, "nested_starts", None)  # data-derived starts a problem may offer
-        if extra is not None and only_starts is None:
-            starts += [dict(x) for x in extra(dict(ref.values), tuple(ref.causes), new, mask)]
+        if only_starts is None:  # data-derived starts a problem may offer
+            starts += self.nested_starts(ref, new, mask) if extra_starts is None else [dict(x) for x in extra_starts]
         f = self.fit(causes, starts, mask)
         if only_starts is not None and f.start != "0":
             f.start = str(only_starts[int(f.start) - 1])
@@ -572,11 +660,12 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
     ref, new, mask = job[:3]
     warm = job[3] if len(job) > 3 else None
     only = job[4] if len(job) > 4 else None
+    extra = job[5] if len(job) > 5 else None
     new = tuple(new)
     if ref is None and not new:
         return F.fit((), [dict(warm)], mask) if warm is not None else F.baseline(mask)
     if warm is None:
-        return F.nested(ref, new, mask, only_starts=only)
+        return F.nested(ref, new, mask, only_starts=only, extra_starts=extra)
     newp = [p.name for c in new for p in c.params]
     f0 = F.nested(ref, new, mask, only_starts=[])
     # ``cv_warm_all`` (a rugged chi^2 surface, e.g. stick-slip patterns): the second start is the full-data
@@ -614,6 +703,16 @@ def _pool_worker_init(parent: int) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, name="probedyn-orphan-watch", daemon=True).start()
+    # the worker's copy of the fitter runs its jobs in turn (the parent's pool is the parent's), and the problem's
+    # per-fit state is set by each job (a pool forked within a fit inherits that fit's training mask)
+    F = _POOL_FITTER
+    if F is not None:
+        F._pool = None
+        for name in ("train_mask", "fixed_nuisance"):
+            if hasattr(F.problem, name):
+                setattr(F.problem, name, None)
+        if hasattr(F.problem, "memo_fork"):
+            F.problem.memo_fork()
 
 
 #: how often a pool worker checks that its parent is alive [s]
@@ -625,16 +724,81 @@ def _by_key(problem) -> dict[str, Any]:
     return {c.key: c for c in (*problem.causes, *(getattr(problem, "declared_terms", ()) or ()))}
 
 
-def _pool_job(packed: tuple) -> tuple["Fit", int]:
-    """In a worker: the fit of one job (causes passed by key), and the evaluations it took."""
+def _pool_job(packed: tuple) -> tuple:
+    """In a worker: the fit of one :meth:`Fitter.map_nested` job (causes passed by key)."""
+    ref, keys, mask, warm, only, extra = packed
+
+    def run(F: Fitter) -> "Fit":
+        by_key = _by_key(F.problem)
+        if ref is not None:
+            ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
+        return _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm, only, extra))
+
+    return _in_worker(run)
+
+
+def _sweep_replay(points: list[tuple[float, dict]], best_c: float, best_st, tol: float) -> tuple[float, Any]:
+    """A sweep direction's points (:meth:`Fitter._sweep_points`) taken in turn from the lowest ``best_c`` so far,
+    up to where the walk stops (:data:`SWEEP_PATIENCE` points without a new lowest): ``(lowest chi^2, its
+    start)``."""
+    misses = 0
+    for c2, st in points:
+        if misses >= SWEEP_PATIENCE:
+            break
+        if c2 < best_c - 1e-9 * max(1.0, best_c):
+            misses = 0 if c2 < best_c - tol else misses + 1
+            best_c, best_st = c2, st
+        else:
+            misses += 1
+    return best_c, best_st
+
+
+def _in_worker(run: Callable[[Fitter], Any]) -> tuple[Any, int, dict | None]:
+    """A pool job in a worker: ``run(fitter)`` from the memory as forked (a problem's ``memo_reset``); returns its
+    result, the evaluations it took and what it added to the memory (``memo_delta``), which the parent merges in
+    the jobs' order (:func:`_merged`): a map's results do not depend on which worker ran which job."""
     F = _POOL_FITTER
-    ref, keys, mask, warm, only = packed
-    by_key = _by_key(F.problem)
-    if ref is not None:
-        ref.causes = tuple(by_key.get(c.key, c) for c in ref.causes)
+    prob = F.problem
+    if hasattr(prob, "memo_reset"):
+        prob.memo_reset()
     n0 = F.nfev
-    fit = _run_job(F, (ref, tuple(by_key[k] for k in keys), mask, warm, only))
-    return fit, F.nfev - n0
+    out = run(F)
+    return out, F.nfev - n0, (prob.memo_delta() if hasattr(prob, "memo_delta") else None)
+
+
+def _merged(F: "Fitter", results) -> list:
+    """In the parent: the results of a pool map (:func:`_in_worker`), their evaluations counted and their memory
+    merged in order."""
+    out = []
+    for res, nfev, delta in results:
+        F.nfev += nfev
+        if delta:
+            F.problem.memo_merge(delta)
+        out.append(res)
+    return out
+
+
+def _pool_fit(packed: tuple) -> tuple:
+    """In a worker: one :meth:`Fitter.map_fits` job (causes by key)."""
+    keys, *rest = packed
+    return _in_worker(lambda F: F._run_fit(tuple(_by_key(F.problem)[k] for k in keys), *rest))
+
+
+def _pool_call(packed: tuple) -> tuple:
+    """In a worker: one :meth:`Fitter.map_calls` item (causes by key)."""
+    method, item, keys = packed
+    return _in_worker(lambda F: getattr(F.problem, method)(*item, tuple(_by_key(F.problem)[k] for k in keys)))
+
+
+def _pool_sweep(packed: tuple) -> tuple:
+    """In a worker: one direction of a profile sweep (:meth:`Fitter._sweep_points`; causes by key)."""
+    keys, f, *rest = packed
+
+    def run(F: Fitter) -> list:
+        f.causes = tuple(_by_key(F.problem)[k] for k in keys)
+        return F._sweep_points(f, *rest)
+
+    return _in_worker(run)
 
 
 def _start_sets(causes, ref_values: dict[str, float] | None = None) -> list[dict[str, float]]:
@@ -1392,14 +1556,22 @@ def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[
     per term, what was found (for the report)."""
     problem = F.problem
     out: list[dict[str, Any]] = []
-    for t in list(getattr(problem, "declared_terms", ()) or ()):
-        g, row = _test_term(F, base, t, alpha)
-        if row["taken"]:
-            problem.base_params = list(problem.base_params) + list(t.params)
-            problem.base_terms = tuple(problem.base_terms) + (t,)
-            base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask,
-                       start=f"{base.start}+{t.key}", nuisance=g.nuisance)
-        out.append(row)
+    terms = list(getattr(problem, "declared_terms", ()) or ())
+    if terms:
+        F.open_pool()  # the term's screened starts and its sweep's two directions (Fitter.map_fits, swept)
+    try:
+        for t in terms:
+            g, row = _test_term(F, base, t, alpha)
+            if row["taken"]:
+                problem.base_params = list(problem.base_params) + list(t.params)
+                problem.base_terms = tuple(problem.base_terms) + (t,)
+                base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask,
+                           start=f"{base.start}+{t.key}", nuisance=g.nuisance)
+                F.close_pool()  # the workers were forked with the baseline without the term
+                F.open_pool()
+            out.append(row)
+    finally:
+        F.close_pool()  # the noise's reading may whiten the fits from here on: the next pool is forked after it
     return base, out
 
 

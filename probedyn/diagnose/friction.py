@@ -36,6 +36,7 @@ of stick-slip traces is rugged).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -313,7 +314,19 @@ def _ffm(data: FrictionData, U0: float, a: float, gamma: float) -> FFM:
 
 def _barrier_table(U0: float, a: float, k: float, n: int = 400):
     """Quasi-static PT: for support positions X on the branch of the well at 0 up to its
-    instability X_c, the barrier to the next well. Returns (X, dE, X_c, x_s(X))."""
+    instability X_c, the barrier to the next well. Returns (X, dE, X_c, x_s(X), x_m(X)), the arrays read-only.
+    Memoised (:data:`BARRIER_MEMORY` tables): a scan's table depends on its corrugation, period and stiffness only,
+    and the registry's profile integrates the same model a dozen times (7000 tables in the three-scan example)."""
+    return _barrier_table_memo(float(U0), float(a), float(k), int(n))
+
+
+#: barrier tables kept (:func:`_barrier_table`)
+BARRIER_MEMORY = 64
+
+
+@functools.lru_cache(maxsize=BARRIER_MEMORY)
+def _barrier_table_memo(U0: float, a: float, k: float, n: int):
+    """:func:`_barrier_table` computed."""
     q = 2 * math.pi / a
     F0 = q * U0
     eta = q * F0 / k
@@ -338,7 +351,10 @@ def _barrier_table(U0: float, a: float, k: float, n: int = 400):
     E = lambda x, Xi: -U0 * np.cos(q * x) + 0.5 * k * (Xi - x) ** 2  # noqa: E731
     dE = E(xs, X) - E(xm, X)
     Xc = xc + (F0 / k) * math.sin(q * xc)
-    return X, np.maximum(dE, 0.0), Xc, xs, xm
+    dE = np.maximum(dE, 0.0)
+    for arr in (X, dE, xs, xm):
+        arr.setflags(write=False)
+    return X, dE, Xc, xs, xm
 
 
 def thermal_slip_advance(U0: float, a: float, k: float, V: float, T: float, f0: float) -> tuple[float, Any]:
@@ -729,6 +745,23 @@ def _ffm_path(ffm: FFM, turns, V: float, hmax: float, y0):
 def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Split a path result into its monotone support segments (at the reversals)."""
     b = res.base
+    edges = _path_edges(res)
+    out = []
+    for i0, i1 in zip(edges[:-1], edges[1:]):
+        sl = slice(i0, i1 + 1)
+        out.append((b[sl], res.lateral_force[sl], res.t[sl]))
+    if len(out) != n_seg:
+        raise ProbedynError(f"FFM path: expected {n_seg} monotone segments, found {len(out)}")
+    return out
+
+
+def _path_edges(res) -> np.ndarray:
+    """The path points where a path result's support reverses (and its ends), kept on the result (``_edges``): a
+    scan's path is split by the sampling, the slips' scatter and the landing wells, each once per model evaluation."""
+    edges = getattr(res, "_edges", None)
+    if edges is not None:
+        return edges
+    b = res.base
     db = np.diff(b)
     # steps below 1e-9 of the path's span are round-off where integrated pieces meet (the end
     # of one piece, X_a + V T, may overshoot the start of the next by an ulp): no direction
@@ -737,13 +770,11 @@ def _segments(res, n_seg: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]
     d = d[nz[np.maximum(np.searchsorted(nz, np.arange(len(d)), side="right") - 1, 0)]]
     cuts = np.nonzero(d[1:] * d[:-1] < 0)[0] + 1
     edges = np.concatenate([[0], cuts, [len(b) - 1]])
-    out = []
-    for i0, i1 in zip(edges[:-1], edges[1:]):
-        sl = slice(i0, i1 + 1)
-        out.append((b[sl], res.lateral_force[sl], res.t[sl]))
-    if len(out) != n_seg:
-        raise ProbedynError(f"FFM path: expected {n_seg} monotone segments, found {len(out)}")
-    return out
+    try:
+        res._edges = edges
+    except AttributeError:  # pragma: no cover - a result that takes no attributes
+        pass
+    return edges
 
 
 #: median advance of an activated slip (in lattice periods) from which the tip is placed over the saddle at
@@ -820,26 +851,34 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
     half = math.acos(-k / (q * q * U0)) / q
     lo, hi = c - half, c + half
     ok = after & (k * (b - lo) - q * U0 * np.sin(q * lo) >= 0) & (k * (b - hi) - q * U0 * np.sin(q * hi) <= 0)
-    for _ in range(30):
-        mid = 0.5 * (lo + hi)
-        up = k * (b - mid) - q * U0 * np.sin(q * mid) > 0
-        lo, hi = np.where(up, mid, lo), np.where(up, hi, mid)
-    dF_all = np.where(ok, k * (x - 0.5 * (lo + hi)), 0.0)  # k (b - x') - k (b - x)
     # each slip's region: from the slip to the path's next slip or the first point the further well cannot hold;
     # regions alternate in parity, so a sample straddling the boundary of two is shared out by the parity's integral
     spans = []
-    dF = [np.zeros(len(b)), np.zeros(len(b))]
+    used = np.zeros(len(b), bool)
     for j, p0 in enumerate(ch):
         p1 = ch[j + 1] if j + 1 < len(ch) else len(b)
         bad = np.nonzero(~ok[p0:p1])[0]
         stop = int(bad[0]) if len(bad) else p1 - p0
         if stop:
-            dF[j % 2][p0:p0 + stop] = dF_all[p0:p0 + stop]
+            used[p0:p0 + stop] = True
             spans.append((j % 2, p0, p0 + stop - 1))
+    # the further well's root where a region uses it (the bisection on those points only: session 65)
+    sel = np.nonzero(used)[0]
+    bs, los, his = b[sel], lo[sel], hi[sel]
+    for _ in range(30):
+        mid = 0.5 * (los + his)
+        up = k * (bs - mid) - q * U0 * np.sin(q * mid) > 0
+        los, his = np.where(up, mid, los), np.where(up, his, mid)
+    dF_all = np.zeros(len(b))
+    dF_all[sel] = k * (x[sel] - 0.5 * (los + his))  # k (b - x') - k (b - x)
+    dF = [np.zeros(len(b)), np.zeros(len(b))]
+    for par, p0, p1 in spans:
+        dF[par][p0:p1 + 1] = dF_all[p0:p1 + 1]
     if not spans:
         return []
     # the two parities' changes sampled as the data are (a sample straddling two regions gets each one's share)
-    sampled = [_sample_path(SimpleNamespace(base=b, lateral_force=d, t=res.t), Xl, starts, ends, n_seg, sampling)
+    sampled = [_sample_path(SimpleNamespace(base=b, lateral_force=d, t=res.t, _edges=_path_edges(res)), Xl, starts,
+                            ends, n_seg, sampling)
                for d in dF]
     out = []
     for par, p0, p1 in spans:
@@ -1320,6 +1359,8 @@ class FrictionProblem:
         self.t_ref = max(max(s.time[-1] - s.time[0], 1e-12) for s in sc)
         self.train_mask = None
         self.fixed_nuisance = None
+        #: the engine's map over its worker pool (``Fitter.map_calls``), None: in turn (:meth:`_map`)
+        self.parallel = None
         # (model key, scan, training mask) -> (registry, chi^2 of the scan): the best registry seen
         # for each model (nuisance(), predict())
         self._registry: dict = {}
@@ -1407,14 +1448,25 @@ class FrictionProblem:
                     # a cause's own ridge that carries the reference's period along the scan: its kept starts
                     # profiled in (a, U0), where the reference leaves the data beyond their noise
                     if j < len(own) and ridge and "a" in ridge[0] and self._beyond_noise(ref_values, ref_causes):
-                        out += [self._period_profile(cands[i], c2, causes) for c2, i in scored[:RIDGE_KEEP]]
+                        out += self._map("_period_profile", [(cands[i], c2) for c2, i in scored[:RIDGE_KEEP]], causes)
                 out += self._term_ridge_starts(clipped_starts(self.base_params, ref_values, new,
                                                               lambda cc, c=c: data[c] if cc is c else []), causes)
         return out
 
     def _ranked(self, cands: list[dict], causes: tuple) -> list[tuple[float, int]]:
         """``(chi^2, index)`` of the candidate starts ``cands`` of the model with ``causes``, best first."""
-        return sorted((float(np.sum(self.residuals(v, causes) ** 2)), i) for i, v in enumerate(cands))
+        return sorted((c2, i) for i, c2 in enumerate(self._map("_chi2_at", [(v,) for v in cands], causes)))
+
+    def _chi2_at(self, values: dict, causes: tuple) -> float:
+        """The model's chi^2 at ``values`` (its registry profiled)."""
+        return float(np.sum(self.residuals(values, causes) ** 2))
+
+    def _map(self, method: str, items: list[tuple], causes: tuple) -> list:
+        """``self.<method>(*item, causes)`` for every item, through ``parallel`` where the engine has set one (its
+        worker pool: :meth:`probedyn.diagnose.engine.Fitter.map_calls`), else in turn."""
+        if self.parallel is not None:
+            return self.parallel(method, items, causes)
+        return [getattr(self, method)(*it, causes) for it in items]
 
     def _term_ridge_starts(self, starts: list[dict], causes: tuple) -> list[dict]:
         """A baseline term's parameters (a declared temperature's attempt frequency) started again along the term's
@@ -1657,6 +1709,27 @@ class FrictionProblem:
         s = self.data.scans[i]
         r = (s.force - F) / np.sqrt(self.sigma**2 + var)
         return float(np.sum(r[self._fit_mask(i)] ** 2))
+
+    # -- the registry memory across processes (engine: pool jobs) -----------------------------
+    def memo_fork(self) -> None:
+        """In a forked worker: the registry memory as forked is the state every job starts from (:meth:`memo_reset`),
+        so that a job's result does not depend on which jobs the same worker ran before it."""
+        self._memo_base = dict(self._registry)
+
+    def memo_reset(self) -> None:
+        """Before a worker's job: the memory as forked."""
+        self._registry = dict(getattr(self, "_memo_base", self._registry))
+
+    def memo_delta(self) -> dict:
+        """After a worker's job: the registries it found (new models, or better ones), for the parent's memory."""
+        base = getattr(self, "_memo_base", {})
+        return {k: v for k, v in self._registry.items() if base.get(k) is not v}
+
+    def memo_merge(self, delta: dict) -> None:
+        """In the parent: a job's registries merged into the memory (each kept where it is the best seen); the parent
+        merges the jobs of one map in their order, whichever worker ran them."""
+        for key, (phis, c2) in delta.items():
+            self._remember(key, phis, c2)
 
     def _remember(self, key, phis, c2: float) -> None:
         """Keep the registry of a scan at a model if it is the best seen there (bounded memory)."""
