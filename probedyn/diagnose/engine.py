@@ -240,12 +240,13 @@ class Fitter:
     the starts it runs on (:meth:`map_fits`), a profile sweep's two directions (:meth:`swept`) and a
     problem's own independent evaluations (:meth:`map_calls`, ``problem.parallel``: friction's ridges
     of starts). A problem may remember what it profiled per model (friction: the lattice registry, so
-    that a model gives the same residuals whichever fit reached it); every pool job starts from that
-    memory as the pool forked it, and the parent merges what each job added in the jobs' order, so a
-    map's results do not depend on which worker ran which job. They can differ from the same fits made
-    in one process where a fit meets a model that an earlier job of the same map had profiled: in the
-    three-scan friction example the declared activation's gain by 0.5 (of 2.3e4) at the baseline and by
-    0.3 after the claim, the verdict and findings the same (docs/diagnose.md 9.50)."""
+    that a model gives the same residuals whichever fit reached it). Every map forks its pool from the
+    parent as it stands (:meth:`_fresh_pool`), every job starts from the memory as its worker forked,
+    and the parent merges what each job added in the jobs' order: a map's results do not depend on
+    which worker ran which job. They can differ from the same fits made in one process only where a job
+    meets a model that an earlier job of the same map profiled: the three-scan friction example and
+    blind f05 give one process's results, and the 24 blind friction records session 64's
+    (docs/diagnose.md 9.50)."""
 
     def __init__(self, problem) -> None:
         self.problem = problem
