@@ -62,8 +62,9 @@ def stable_identity(fn: Any, owner: str) -> None:
 
 @njit(cache=True)
 def lu_solve_small(A, b):
-    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting); compiled,
-    for the Rosenbrock steps of the FFM models."""
+    """Solve A x = b for a small dense matrix (Gaussian elimination, partial pivoting); compiled. The Rosenbrock step
+    solved each stage with it until session 65; now the reference that :func:`lu_factor_small` and
+    :func:`lu_solve_factored` reproduce bit for bit (``tests/test_rosenbrock.py``, ``benchmarks/rosenbrock_stages.py``)."""
     n = A.shape[0]
     M = A.copy()
     x = b.copy()
