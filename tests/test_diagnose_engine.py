@@ -703,6 +703,51 @@ def test_a_fit_with_a_pool_is_the_fit_in_turn():
     assert nb >= na  # the second direction walked apart may take more points, never fewer
 
 
+def test_the_costliest_jobs_go_first_and_the_results_come_in_order():
+    """``_longest_first``: the pool receives the jobs costliest first (ties in their order) and the results come back
+    in the jobs' order; a job's error reaches the caller. ``map_nested``
+    orders its jobs by ``Fitter._job_cost``: the starts a fit will run, times the parameters it fits."""
+    from concurrent.futures import Future
+
+    from probedyn.diagnose.engine import _longest_first
+
+    class Recording:  # runs each job as it is submitted, in the order submitted
+        def __init__(self):
+            self.order, self.futures = [], []
+
+        def submit(self, fn, item):
+            self.order.append(item)
+            fut = Future()
+            try:
+                fut.set_result(fn(item))
+            except Exception as e:  # noqa: BLE001
+                fut.set_exception(e)
+            self.futures.append(fut)
+            return fut
+
+    pool = Recording()
+    items, cost = ["a", "b", "c", "d", "e"], [1.0, 5.0, 1.0, 9.0, 5.0]
+    assert _longest_first(pool, str.upper, items, cost) == ["A", "B", "C", "D", "E"]
+    assert pool.order == ["d", "b", "e", "a", "c"]
+
+    def fails(x):
+        if x == "b":
+            raise ValueError("b")
+        return x
+
+    pool = Recording()
+    with pytest.raises(ValueError):
+        _longest_first(pool, fails, items, cost)
+    # the job costs of the tilted wells: the baseline's starts, then a nested fit's null, declared and given starts
+    prob = _PoolWells(1)
+    F = Fitter(prob)
+    base = F.baseline()
+    assert F._job_cost((None, (), None), None) == len(F.base_starts()) * 2
+    assert F._job_cost((base, prob.causes, None), None) == (1 + 1) * 3  # null + one declared start, 2 parameters
+    assert F._job_cost((base, prob.causes, None), [{}, {}]) == (1 + 1 + 2) * 3
+    assert F._job_cost((base, prob.causes, None, None, []), None) == 1 * 3  # only the null start
+
+
 def test_pool_workers_end_with_their_parent(tmp_path):
     """The engine's forked workers do not outlive a parent killed outright (SIGKILL, e.g. by ``timeout``), and take
     SIGTERM's default action rather than the command line's handler they would inherit (``_pool_worker_init``;

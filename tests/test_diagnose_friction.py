@@ -300,9 +300,12 @@ def test_thermal_force_noise_joins_the_stated_noise_as_declared(tmp_path, part):
 
 def test_a_scan_s_model_at_the_same_registry_is_integrated_once(tmp_path, monkeypatch):
     """The registry's profile ends at the registry it returns, which the start well's test, the registry memory and
-    the prediction evaluate again: the last model of each scan is kept (``FrictionProblem._scan_model``). Kept only
-    for the same scan, state, registry, training mask and noise: it returns what an integration returns (the force,
-    its variance and the thermal part ``predict`` reads), as copies, and anything else integrates again."""
+    the prediction evaluate again, and fits come back to models evaluated before: the models evaluated are kept
+    (``FrictionProblem._scan_model``; session 66, before only the last of each scan) up to a memory bound, the least
+    recently used dropped. Kept only for the same scan, state, registry, training mask and noise: it returns what an
+    integration returns (the force, its variance and the thermal part ``predict`` reads), as copies, and anything
+    else integrates again."""
+    import probedyn.diagnose.friction as fr
     from probedyn.diagnose.friction import FrictionProblem
 
     src = Path(__file__).resolve().parents[1] / "examples" / "measurements"
@@ -338,6 +341,27 @@ def test_a_scan_s_model_at_the_same_registry_is_integrated_once(tmp_path, monkey
     calls.clear()
     p._scan_model(1, st, phis)
     assert calls == [1]
+    # every model within the bound: the first of four registries again without an integration, the force and the
+    # thermal part the first evaluation's; the bound counts the arrays kept
+    p.train_mask = None
+    regs = [[2e-11 + j * 1e-12, 0.0] for j in range(1, 5)]
+    calls.clear()
+    first = [p._scan_model(1, st, r) for r in regs]
+    again, th_again = p._scan_model(1, st, regs[0])[0], np.array(p._last_thermal)
+    assert calls == [1, 1, 1, 1] and np.array_equal(again, first[0][0])
+    once(p, 1, st, regs[0])  # integrated again: the thermal part it sets is the kept one
+    assert np.array_equal(th_again, np.array(p._last_thermal))
+    n_arr = sum(v.nbytes for v in (first[0][0], first[0][1]))
+    assert p._scan_memo_bytes >= len(p._scan_memo) * n_arr
+    # a bound of one model's arrays: only the last is kept, the first integrates again
+    monkeypatch.setattr(fr, "SCAN_MEMORY_BYTES", n_arr)
+    calls.clear()
+    regs = [[3e-11 + j * 1e-12, 0.0] for j in range(4)]
+    for r in regs:
+        p._scan_model(1, st, r)
+    assert len(p._scan_memo) == 1
+    p._scan_model(1, st, regs[0])
+    assert calls == [1, 1, 1, 1, 1]
 
 
 def test_slip_scatter_inside_a_transient_is_its_slope_times_the_shift():
@@ -590,7 +614,7 @@ def test_a_misaligned_ridge_start_profiled_in_period_and_corrugation_is_fitted_i
     """Own study seed 2019 (10.2 deg to the rows, k_y = 2.56 k_x; missed in sessions 48-49): the misalignment's ridge
     keeps the baseline's period along the scan (``a = a_ref cos(theta)``), but on a lever stiffer across the scan the
     force has two periods and the baseline's one lies ~1 % off the x train's, where the chi^2 basin is ~0.5 % wide.
-    The ridge point from the data (the declared lattice constant) profiled in (a, U0) (``_period_profile``) lowers
+    The ridge point from the data (the declared lattice constant) profiled in (a, U0) (``_period_profiles``) lowers
     chi^2 several-fold (measured 6.6e5 -> 1.8e5), and the least-squares fit from it ends where the diagnosis claims a
     cause (its gain over the baseline above the chi^2 - dof it leaves: chi^2 below half the baseline's; measured
     1.4e4 against 5.7e5, the truth's own 2.8e4) with the angle within the issue's 10 % (measured 2.7 %; k_y / k_x
@@ -601,7 +625,7 @@ def test_a_misaligned_ridge_start_profiled_in_period_and_corrugation_is_fitted_i
     (start, _) = mis.data_starts(prob, ref)  # the angle from the declared lattice, on the isotropic lever
     raw = {**ref, **start, "ky_ratio": 3.0}
     c_raw = c2(raw)
-    prof = prob._period_profile(raw, c_raw, (mis,))
+    prof = prob._period_profiles([(raw, c_raw)], (mis,))[0]
     assert c2(prof) < 0.5 * c_raw
     fit = F.fit((mis,), [prof])
     assert fit.chi2 < 0.5 * base.chi2
@@ -1064,3 +1088,58 @@ def test_the_registry_memory_crosses_the_pool_in_the_jobs_order():
         F.close_pool()
     assert pooled == serial
     assert all(prob._registry.get(k) == v for k, v in found.items())  # the workers' registries, merged
+
+
+def _period_profile_as_it_was(prob, v: dict, c0: float, causes: tuple) -> dict:
+    """``FrictionProblem._period_profile`` of sessions 50-65, verbatim (one start, its trials in turn): the reference
+    of ``_period_profiles``."""
+    from probedyn.diagnose.friction import PERIOD_HALF, PERIOD_STEP, U0_HALF, U0_STEP
+
+    bounds = {p.name: (p.lo, p.hi) for p in prob.base_params}
+
+    def clip(name, x):
+        lo, hi = bounds.get(name, (-math.inf, math.inf))
+        return min(max(x, lo), hi)
+
+    best = (c0, v)
+
+    def trial(w):
+        nonlocal best
+        c2 = float(np.sum(prob.residuals(w, causes) ** 2))
+        if c2 < best[0]:
+            best = (c2, w)
+
+    for k in range(-PERIOD_HALF, PERIOD_HALF + 1):
+        f = 1.0 + PERIOD_STEP * k
+        if k:
+            trial({**v, "a": clip("a", v["a"] * f), "u0": clip("u0", v["u0"] * f * f)})
+    b = best[1]
+    for k in range(-U0_HALF, U0_HALF + 1):
+        if k:
+            trial({**b, "u0": clip("u0", b["u0"] * (1.0 + U0_STEP * k))})
+    return best[1]
+
+
+def test_the_period_profiles_through_the_pool_are_the_profiles_in_turn():
+    """``_period_profiles`` (session 66) spreads each grid's trials of every start over the engine's pool as one map
+    of ``_chi2_at``; each start keeps the first of its lowest trials in the grid's order. On the three-scan example's
+    baseline, two starts off its period (1.2 % and 0.6 % short, corrugation at their eta): the profiles through a
+    pool of two workers, in one process, and the session-65 loop per start in turn are the same dicts; and each
+    profile lowers chi^2 (the starts lie off the baseline's optimum, which the period grid reaches within a step)."""
+    prob = make_problem(Path(__file__).resolve().parents[1] / "examples" / "measurements"
+                        / "ffm_stickslip_speeds.toml")
+    F = Fitter(prob)
+    base = F.baseline()
+    starts = [{**base.values, "a": base.values["a"] * f, "u0": base.values["u0"] * f * f} for f in (0.988, 0.994)]
+    c0 = [prob._chi2_at(v, ()) for v in starts]
+    ref = [_period_profile_as_it_was(prob, v, c, ()) for v, c in zip(starts, c0)]
+    serial = prob._period_profiles(list(zip(starts, c0)), ())
+    F.open_pool()
+    try:
+        assert F._pool is not None and prob.parallel == F.map_calls
+        pooled = prob._period_profiles(list(zip(starts, c0)), ())
+    finally:
+        F.close_pool()
+    assert serial == ref and pooled == ref
+    assert all(prob._chi2_at(r, ()) < c for r, c in zip(ref, c0))
+

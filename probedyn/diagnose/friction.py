@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -104,6 +105,9 @@ WORKERS = 2
 Y_GRID = 8
 #: registries remembered per problem (model, scan, training mask): ~ the evaluations of a diagnosis
 REGISTRY_MEMORY = 200_000
+#: bytes of scan models kept per process (:meth:`FrictionProblem._scan_model`), the least recently used dropped first:
+#: ~3000 models of the three-scan example's scans
+SCAN_MEMORY_BYTES = 64 * 2**20
 
 
 # ------------------------------------------------------------------------------------------
@@ -737,6 +741,11 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     return F
 
 
+def _nbytes(*arrays) -> int:
+    """Bytes held by the arrays among ``arrays`` (a kept scan model, :meth:`FrictionProblem._scan_model`)."""
+    return sum(a.nbytes for a in arrays if isinstance(a, np.ndarray))
+
+
 def _ffm_path(ffm: FFM, turns, V: float, hmax: float, y0):
     """The FFM line scan along ``turns`` from state ``y0`` at the diagnosis' tolerances."""
     return line_scan_path(ffm, turns, speed=V, y0=y0, hmax=hmax, rtol=RTOL, atol_rel=RTOL, atol_v=100 * abs(V))
@@ -1206,7 +1215,7 @@ RIDGE_KEEP = 2
 ETA_RIDGE_STEP = 0.005
 ETA_RIDGE_HALF = 8
 #: the period profile of a kept ridge start that carries the reference's period along the scan
-#: (:meth:`FrictionProblem._period_profile`): ``a`` times 1 + k PERIOD_STEP, |k| <= PERIOD_HALF, at the start's eta
+#: (:meth:`FrictionProblem._period_profiles`): ``a`` times 1 + k PERIOD_STEP, |k| <= PERIOD_HALF, at the start's eta
 #: (U0 with a^2), then U0 times 1 + k U0_STEP, |k| <= U0_HALF. The chi^2 basin is ~0.5 % wide in a on a scan of
 #: 8 periods (a relative change f moves the last slips by 8 f periods) and a few per cent in U0
 PERIOD_STEP = 0.005
@@ -1351,7 +1360,8 @@ class FrictionProblem:
         if self.thermal_noise_T and self._thermal_share() < THERMAL_NOISE_MIN_SHARE:
             self.thermal_noise_T = 0.0
         self._last_thermal = None
-        self._last_scan: dict = {}  # scan -> (key, (F, var, thermal var)) of its last model (_scan_model)
+        self._scan_memo: OrderedDict = OrderedDict()  # key -> (F, var, thermal var): the scan models kept (_scan_model)
+        self._scan_memo_bytes = 0
         self.N_mean = N
         self.v_max = float(self.speeds.max())
         self.drift_clock, self.t_drift = drift_clock(sc)
@@ -1448,7 +1458,7 @@ class FrictionProblem:
                     # a cause's own ridge that carries the reference's period along the scan: its kept starts
                     # profiled in (a, U0), where the reference leaves the data beyond their noise
                     if j < len(own) and ridge and "a" in ridge[0] and self._beyond_noise(ref_values, ref_causes):
-                        out += self._map("_period_profile", [(cands[i], c2) for c2, i in scored[:RIDGE_KEEP]], causes)
+                        out += self._period_profiles([(cands[i], c2) for c2, i in scored[:RIDGE_KEEP]], causes)
                 out += self._term_ridge_starts(clipped_starts(self.base_params, ref_values, new,
                                                               lambda cc, c=c: data[c] if cc is c else []), causes)
         return out
@@ -1528,8 +1538,8 @@ class FrictionProblem:
         r = self.residuals(values, causes)
         return bool(chi2_dist.sf(float(np.sum(r**2)), max(len(r) - len(values), 1)) < ALPHA)
 
-    def _period_profile(self, v: dict, c0: float, causes: tuple) -> dict:
-        """A ridge start ``v`` (chi^2 ``c0``) profiled in the period and corrugation: ``a`` on a grid of
+    def _period_profiles(self, starts: list[tuple[dict, float]], causes: tuple) -> list[dict]:
+        """Ridge starts ``(v, c0)`` (a start and its chi^2) each profiled in the period and corrugation: ``a`` on a grid of
         ``PERIOD_STEP`` with U0 at the start's eta (U0 with a^2), then U0 on a grid of ``U0_STEP``, each kept where
         the whole model's chi^2 falls. A ridge that keeps the reference's period along the scan (a misaligned
         scan's x train, ``a = a_ref cos(theta)``) inherits that period's error: on a lever stiffer across the scan
@@ -1537,30 +1547,33 @@ class FrictionProblem:
         ~1 % from the first, where the basin is ~0.5 % wide. Own study, 2019 (10.2 deg, k_y = 2.56 k_x): the
         ridge point from the lattice constant (10.9 deg, k_y / k_x = 3) has chi^2 6.6e5 at the baseline's period and
         1.8e5 profiled; the least-squares fit from the profiled point ends at 1.4e4 (the truth's own 2.8e4; theta
-        within 2.7 %), from the raw point at 4.9e5 (the baseline's 5.7e5)."""
+        within 2.7 %), from the raw point at 4.9e5 (the baseline's 5.7e5).
+
+        The trials are the whole model's chi^2 at independent points, so each of the two grids of every start goes
+        through :meth:`_map` as one map of ``_chi2_at`` (the engine's pool: 20 trials, then 12, spread over the
+        workers; until session 66 one job per start, 10.5 s and 7.6 s, the second worker idle for the difference).
+        Each start keeps the first of its lowest trials in the grid's order, as when the trials ran in turn."""
         bounds = {p.name: (p.lo, p.hi) for p in self.base_params}
 
         def clip(name: str, x: float) -> float:
             lo, hi = bounds.get(name, (-math.inf, math.inf))
             return min(max(x, lo), hi)
 
-        best = (c0, v)
+        best = [(c0, v) for v, c0 in starts]
 
-        def trial(w: dict) -> None:
-            nonlocal best
-            c2 = float(np.sum(self.residuals(w, causes) ** 2))
-            if c2 < best[0]:
-                best = (c2, w)
+        def grid(trials: list[list[dict]]) -> None:
+            c2s = iter(self._map("_chi2_at", [(w,) for ws in trials for w in ws], causes))
+            for j, ws in enumerate(trials):
+                for w in ws:
+                    c2 = next(c2s)
+                    if c2 < best[j][0]:
+                        best[j] = (c2, w)
 
-        for k in range(-PERIOD_HALF, PERIOD_HALF + 1):
-            f = 1.0 + PERIOD_STEP * k
-            if k:
-                trial({**v, "a": clip("a", v["a"] * f), "u0": clip("u0", v["u0"] * f * f)})
-        b = best[1]
-        for k in range(-U0_HALF, U0_HALF + 1):
-            if k:
-                trial({**b, "u0": clip("u0", b["u0"] * (1.0 + U0_STEP * k))})
-        return best[1]
+        grid([[{**v, "a": clip("a", v["a"] * f), "u0": clip("u0", v["u0"] * f * f)}
+               for f in (1.0 + PERIOD_STEP * k for k in range(-PERIOD_HALF, PERIOD_HALF + 1) if k)] for _, v in best])
+        grid([[{**b, "u0": clip("u0", b["u0"] * (1.0 + U0_STEP * k))} for k in range(-U0_HALF, U0_HALF + 1) if k]
+              for _, b in best])
+        return [b for _, b in best]
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
@@ -1622,21 +1635,31 @@ class FrictionProblem:
 
     def _scan_model(self, i: int, st: FrictionState, phis) -> tuple[np.ndarray, np.ndarray]:
         """Model lateral force of scan i at registry ``phis`` (both lattice trains, gain, offset,
-        drift and transforms applied) and its variance from stochastic slip points. The last evaluation of each scan
-        is kept (:meth:`_scan_model_once`): the registry's profile ends at the registry it returns, which the start
-        well's test, the registry memory and the prediction then evaluate again (up to three integrations of the
-        same scan and model)."""
+        drift and transforms applied) and its variance from stochastic slip points. The models evaluated are kept
+        (:meth:`_scan_model_once`; at most :data:`SCAN_MEMORY_BYTES`, the least recently used dropped), keyed by
+        everything they depend on: the scan, the registry, the training mask, the noise and every field of the state.
+        The registry's profile ends at the registry it returns, which the start well's test, the registry memory and
+        the prediction then evaluate again (up to three integrations of the same scan and model); a fit's steps,
+        its finite differences and the polishing of registries come back to models evaluated a few hundred
+        evaluations before. Until session 66 only the last model of each scan was kept: in the three-scan example
+        3658 of 24280 evaluations (13 s of 87 s) were models evaluated before. A kept model is the one evaluated, so
+        the diagnosis' numbers do not depend on what is kept."""
         if st.transforms:  # a transform is a function: no key for it
             return self._scan_model_once(i, st, phis)
         key = (i, tuple(float(p) for p in phis), self._mask_key(), float(self.sigma), float(self.thermal_noise_T),
                *(getattr(st, f.name) for f in fields(st) if f.name != "transforms"))
-        last = self._last_scan.get(i)
-        if last is not None and last[0] == key:
-            F, var, th = last[1]
+        memo = self._scan_memo
+        hit = memo.get(key)
+        if hit is not None:
+            memo.move_to_end(key)
+            F, var, th = hit
         else:
             F, var = self._scan_model_once(i, st, phis)
             th = self._last_thermal
-            self._last_scan[i] = (key, (F, var, th))
+            memo[key] = (F, var, th)
+            self._scan_memo_bytes += _nbytes(F, var, th)
+            while self._scan_memo_bytes > SCAN_MEMORY_BYTES and len(memo) > 1:
+                self._scan_memo_bytes -= _nbytes(*memo.popitem(last=False)[1])
         self._last_thermal = th
         return F.copy(), var.copy()
 
