@@ -1143,3 +1143,29 @@ def test_the_period_profiles_through_the_pool_are_the_profiles_in_turn():
     assert serial == ref and pooled == ref
     assert all(prob._chi2_at(r, ()) < c for r, c in zip(ref, c0))
 
+
+
+def test_a_period_profile_that_found_nothing_lower_is_not_offered_twice(monkeypatch):
+    """``nested_starts``: the misalignment's kept ridge starts are offered, then their period profiles; a profile that
+    found nothing lower returns its start, which is then not offered again (a duplicate start costs a screened fit of
+    the 2D model and may take a kept run's place). The example's ridge, its ranking and the term's ridge stubbed."""
+    from probedyn.diagnose.friction import FrictionProblem
+
+    prob = make_problem(Path(__file__).resolve().parents[1] / "examples" / "measurements"
+                        / "ffm_stickslip_speeds.toml")
+    mis = {c.key: c for c in prob.causes}["lattice-misalignment"]
+    ref = {q.name: q.null for q in prob.base_params}
+    monkeypatch.setattr(FrictionProblem, "_ranked", lambda self, cands, causes: [(0.0, i) for i in range(len(cands))])
+    monkeypatch.setattr(FrictionProblem, "_beyond_noise", lambda self, values, causes: True)
+    monkeypatch.setattr(FrictionProblem, "_term_ridge_starts", lambda self, starts, causes: [])
+
+    def keys(starts):
+        return [tuple(sorted(s.items())) for s in starts]
+
+    monkeypatch.setattr(FrictionProblem, "_period_profiles", lambda self, starts, causes: [v for v, _ in starts])
+    same = prob.nested_starts(ref, (), (mis,))
+    assert len(same) >= 2 and len(set(keys(same))) == len(same)
+    moved = lambda self, starts, causes: [{**v, "a": v["a"] * 1.005} for v, _ in starts]  # noqa: E731
+    monkeypatch.setattr(FrictionProblem, "_period_profiles", moved)
+    more = prob.nested_starts(ref, (), (mis,))
+    assert len(more) == len(same) + 2 and len(set(keys(more))) == len(more)

@@ -1454,11 +1454,14 @@ class FrictionProblem:
                     cands = clipped_starts(self.base_params, ref_values, new,
                                            lambda cc, c=c, ridge=ridge: ridge if cc is c else [])
                     scored = self._ranked(cands, causes)
-                    out += [cands[i] for _, i in scored[:RIDGE_KEEP]]
+                    kept = [cands[i] for _, i in scored[:RIDGE_KEEP]]
+                    out += kept
                     # a cause's own ridge that carries the reference's period along the scan: its kept starts
-                    # profiled in (a, U0), where the reference leaves the data beyond their noise
+                    # profiled in (a, U0), where the reference leaves the data beyond their noise; a profile that
+                    # found nothing lower is its start, kept already, and is not offered twice
                     if j < len(own) and ridge and "a" in ridge[0] and self._beyond_noise(ref_values, ref_causes):
-                        out += self._period_profiles([(cands[i], c2) for c2, i in scored[:RIDGE_KEEP]], causes)
+                        profiled = self._period_profiles([(cands[i], c2) for c2, i in scored[:RIDGE_KEEP]], causes)
+                        out += [pr for pr, v in zip(profiled, kept) if pr != v]
                 out += self._term_ridge_starts(clipped_starts(self.base_params, ref_values, new,
                                                               lambda cc, c=c: data[c] if cc is c else []), causes)
         return out
