@@ -106,7 +106,7 @@ Y_GRID = 8
 #: registries remembered per problem (model, scan, training mask): ~ the evaluations of a diagnosis
 REGISTRY_MEMORY = 200_000
 #: bytes of scan models kept per process (:meth:`FrictionProblem._scan_model`), the least recently used dropped first:
-#: ~3000 models of the three-scan example's scans
+#: ~6500 models of the three-scan example's scans (639 samples each)
 SCAN_MEMORY_BYTES = 64 * 2**20
 
 
