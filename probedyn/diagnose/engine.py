@@ -307,8 +307,8 @@ class Fitter:
     def _job_cost(self, job: tuple, extra: list | None) -> float:
         """A :meth:`map_nested` job's cost, for the order the pool takes the jobs in (:func:`_longest_first`): the
         starts the fit will run (:meth:`nested`: the null start, the declared ones, the data-derived ones), each
-        weighted by the free parameters it fits; a sweep and the cross-validation folds are in proportion. A guess,
-        which decides only when a job starts, not what it computes."""
+        weighted by the free parameters it fits. The folds' warm-started jobs are costed alike (they are alike: their
+        order matters little). A guess, which decides only when a job starts, not what it computes."""
         ref, new = job[0], tuple(job[1])
         if ref is None:
             return float(len(self.base_starts()) * (1 + len(self.problem.base_params)))
