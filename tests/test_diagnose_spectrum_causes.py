@@ -12,6 +12,7 @@ must then name the width error first and recover its ratio.
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -281,6 +282,40 @@ def test_the_labelling_screen_skips_only_labellings_that_cannot_compete(monkeypa
                 assert got[j][0] >= full[j] - 1e-9 and got[j][0] - best >= 2 * EVIDENCE_MARGIN
         skipped_any |= len(calls) < n
     assert skipped_any  # the bound did prune some screens
+
+
+def test_a_labelling_far_from_the_declared_probe_is_dropped_not_the_record(monkeypatch):
+    """Blind spectrum p07 (second set, session 67: a lever in water-glycerol declared as water, flapwise 1 at
+    37.6 kHz and nothing else above the background): a heavy point mass's hypothesis labels that line lateral 1,
+    1.34 MHz in the declared probe's model. Its modal problem refuses rows 36 times from the probe's modes (the
+    units check), and that error ended the whole diagnosis ("check the units"). Such a labelling is no reading
+    of the spectrum: it scores infinity and the others go on; only when every labelling is refused does the
+    record's error stand."""
+    from probedyn.core.errors import DataFormatError
+    from probedyn.diagnose import spectrum as S
+
+    class Fake:
+        def __init__(self, j):
+            self.j = j
+
+    def problem(meas, tab, b, L):
+        if tab[0]["far"]:
+            raise DataFormatError("p07.toml: the measured frequencies are 0.0281 times the probe model's")
+        return Fake(tab[0]["j"])
+
+    monkeypatch.setattr(S, "_modal_problem", problem)
+    monkeypatch.setattr(S, "_labelling_score", lambda prob, hint=None, baseline_only=False: (2.6 + prob.j, None, {}))
+    monkeypatch.setattr(S, "_threshold_min", lambda prob: 9.2)
+    monkeypatch.setattr(S, "_unlabelled_price", lambda tab: 0.0)
+
+    def options(far):
+        return [((j,), [{"j": j, "far": f, "accepted": True}], {"cause": None if j == 0 else "point-mass"}, 1.0)
+                for j, f in enumerate(far)]
+
+    got = S._labelling_scores(None, options([False, True, False]), None, None)
+    assert [g[0] for g in got] == [pytest.approx(2.6), math.inf, pytest.approx(4.6)]
+    with pytest.raises(DataFormatError, match="0.0281 times"):
+        S._labelling_scores(None, options([True, True]), None, None)
 
 
 def test_a_hypothesis_places_two_close_lines_one_to_one():

@@ -1364,14 +1364,26 @@ def _labelling_scores(meas: SpectrumData, options: list[tuple], base: FEMBaselin
     from probedyn.diagnose.engine import EVIDENCE_MARGIN
 
     rows = []
+    refused = []
     for lab, tab, h, sh in options:
         price = _unlabelled_price(tab)
         if not any(t["accepted"] for t in tab):  # places no peak: fits nothing (chi^2 0 on no rows), only its price
             rows.append((price, price, None, h, price))
             continue
-        prob = _modal_problem(meas, tab, base, L)
+        try:
+            prob = _modal_problem(meas, tab, base, L)
+        except DataFormatError as e:
+            # the modal problem's units check: this labelling's peaks lie more than 30 times from the declared
+            # probe's modes (a heavy point mass's hypothesis naming a water-loaded flapwise 1 lateral 1, blind
+            # p07 of the second spectrum set). That is no reading of the spectrum, not a units error of the
+            # record -- unless no labelling is any better (then the record's error stands)
+            refused.append(e)
+            rows.append((math.inf, math.inf, None, h, price))
+            continue
         b = _labelling_score(prob, baseline_only=True)
         rows.append((b[0] + price, price + min(b[0], _threshold_min(prob)), prob, h, price))
+    if refused and all(math.isinf(r[0]) for r in rows):
+        raise refused[0]
     scores: list[tuple[float, str | None, dict]] = [(up, None, {}) for up, *_ in rows]
     best = min(scores)[0]
     for j in sorted(range(len(rows)), key=lambda j: rows[j][0]):
