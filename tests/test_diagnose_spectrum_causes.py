@@ -318,6 +318,27 @@ def test_a_labelling_far_from_the_declared_probe_is_dropped_not_the_record(monke
         S._labelling_scores(None, options([True, True]), None, None)
 
 
+def test_an_unresolved_line_of_thermal_area_costs_its_frequency_when_left_out():
+    """Blind spectrum p01 (second set, session 67: a 400 x 40 x 2 um lever in vacuum under +22.6 kPa of axial
+    stress): flapwise 1 and 2 (Q 2400-3300, 19 Hz bins) are narrower than a bin. Unresolved lines cost nothing
+    when a labelling left them out, so the labelling without them (chi^2 0.9) beat the nominal one (99) and the
+    prestress went unseen. An unresolved line whose area is thermal motion of a mode now costs its frequency's
+    chi^2_1 quantile at the engine's level; a spur (no thermal area) still costs nothing, a resolved mode line
+    its frequency and Q."""
+    from probedyn.diagnose import spectrum as S
+    from probedyn.diagnose.engine import ALPHA
+    from probedyn.diagnose.tails import chi2
+
+    n = 4
+    one, two = float(chi2.ppf(1 - ALPHA / n, 1)), float(chi2.ppf(1 - ALPHA / n, 2))
+    line = {"accepted": False, "_mode_line": False, "_thermal_line": False, "Q": math.nan}
+    table = [dict(line, _thermal_line=True),  # unresolved, thermal area: an unresolved mode
+             dict(line),  # unresolved, no thermal area: a spur
+             dict(line, _mode_line=True, Q=3000.0),  # resolved mode line
+             dict(line, accepted=True, _mode_line=True, _thermal_line=True, Q=2500.0)]  # placed: free
+    assert S._unlabelled_price(table) == pytest.approx(one + two)
+
+
 def test_a_hypothesis_places_two_close_lines_one_to_one():
     """Blind spectrum s18 (session 47): a <110> silicon lever, torsion 10.6 % below the isotropic model, 1.7 %
     above lateral 1. Under the crystal hypothesis nearest the truth on its grid (a = 0.8, after the common scale

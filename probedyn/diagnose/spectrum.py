@@ -1095,6 +1095,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
     for t in table:
         t.pop("_c_cal", None)
         t.pop("_mode_line", None)
+        t.pop("_thermal_line", None)
     # the frequency scale reported is the nominal probe's (measured / nominal frequencies of the
     # matched modes); the labels may come from a hypothesis with its own scale s
     s_nominal = scored[0][3]
@@ -1234,12 +1235,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
                            f"{near['order']} at {s * near['f_Hz']:.5g} Hz after the common scale {s:.3g})")
         unresolved = ft["fwhm_bins"] < 2.0
         df = bin_width(meas.freq, ft["f0_Hz"])
+        spur_shape = False  # an unresolved line no mode of this lever could make (too sharp, or in a fluid)
         if unresolved:
             # a sinusoid (spur) or a resonance narrower than the resolution: only the second is
             # possible where the model's damping would also leave the line unresolved
             wide = np.isfinite(near["Q_fluid"]) and s * near["f_Hz"] / near["Q_fluid"] / df > 3.0
             q_min = ft["f0_Hz"] / (2.0 * df)
             sharp = q_min > Q_SPREAD * q_res_max
+            spur_shape = bool(wide or sharp)
             if wide or sharp or abs(dev) > MATCH_TOL:
                 reasons.append(f"unresolved line ({ft['fwhm_bins']:.2g} bins wide)"
                                + (f" where the {meas.medium_name}-damped mode would be {s * near['f_Hz'] / near['Q_fluid'] / df:.2g} bins wide"
@@ -1267,6 +1270,7 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
         if "notes" in ft:  # a list per table (notes are added to the chosen labelling's table)
             ft = {**ft, "notes": list(ft["notes"])}
         rows[i_ft] = {**ft, "accepted": accepted, "_mode_line": mode_line, "thermal_ratio": ratio,
+                      "_unresolved_mode": unresolved and not spur_shape,
                       "family": near["family"] if accepted else None,
                       "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
                       "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons}
@@ -1277,11 +1281,18 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     # AREA_FACTOR away from c times its thermal area is not thermal motion of that mode
     ratios = [t["thermal_ratio"] for t in table if t["accepted"] and t["thermal_ratio"]]
     c_cal = float(np.median(ratios)) if ratios else None
+    # an unresolved line that could be a mode by its shape (not too sharp for this lever's Qs, not in a fluid) and
+    # whose area is the thermal motion of its nearest mode times that factor is thermal motion of a mode, whatever
+    # a labelling calls it: its frequency is evidence (_unlabelled_price). Without the area (no declared temperature,
+    # no factor) nothing tells it from a spur
+    for t in table:
+        r = t.pop("_unresolved_mode") and t["thermal_ratio"]
+        t["_thermal_line"] = bool(r and c_cal and len(ratios) > 1 and 1 / AREA_FACTOR < r / c_cal < AREA_FACTOR)
     if c_cal is not None and len(ratios) > 1:
         for t in table:
             r = t["thermal_ratio"]
             if t["accepted"] and r and not (1 / AREA_FACTOR < r / c_cal < AREA_FACTOR):
-                t["accepted"] = t["_mode_line"] = False
+                t["accepted"] = t["_mode_line"] = t["_thermal_line"] = False
                 t["reasons"] = [f"peak area {t['area_m2']:.3g} m^2 is {r / c_cal:.3g} x the thermal k_B T / k_eff of "
                                 f"{t['family']} {t['order']} (times the spectrum's common factor {c_cal:.3g})"]
                 t["family"] = t["order"] = None
@@ -1301,9 +1312,12 @@ def _unlabelled_price(table: list[dict]) -> float:
     look-elsewhere correction over the peaks). A labelling that places the line is therefore
     preferred whenever its fit of it is consistent with the noise (incl. the model-form floor), and a
     labelling that places it only by mislabelling other peaks -- a fit worse than any correct label
-    could give -- loses to the one that leaves it out. Unresolved lines (a spur, or a mode whose Q the
-    spectrum cannot measure) and lines whose Q or area no mode of the lever could have carry no such
-    evidence and cost nothing."""
+    could give -- loses to the one that leaves it out. An unresolved line (a spur, or a mode whose Q the
+    spectrum cannot measure) costs its frequency's quantile (one degree of freedom) where its shape allows a mode
+    of this lever and its area is thermal motion (within ``AREA_FACTOR`` of its nearest mode's equipartition times
+    the spectrum's common factor: ``_thermal_line``): blind p01 of the second spectrum set, whose flapwise 1 and 2
+    were narrower than a bin, was labelled without them for free, and the prestress that moved them went unseen.
+    Lines whose Q or area no mode of the lever could have carry no such evidence and cost nothing."""
     from probedyn.diagnose.tails import chi2 as chi2_dist
 
     from probedyn.diagnose.engine import ALPHA
@@ -1311,9 +1325,15 @@ def _unlabelled_price(table: list[dict]) -> float:
     n = max(len(table), 1)
     price = 0.0
     for t in table:
-        if t.get("_mode_line") and not t["accepted"]:
+        if t["accepted"]:
+            continue
+        if t.get("_mode_line"):
             d = 1 + int(bool(np.isfinite(t.get("Q", math.nan))))
-            price += float(chi2_dist.ppf(1 - ALPHA / n, d))
+        elif t.get("_thermal_line"):
+            d = 1  # an unresolved mode: its frequency only
+        else:
+            continue
+        price += float(chi2_dist.ppf(1 - ALPHA / n, d))
     return price
 
 
