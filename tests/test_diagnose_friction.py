@@ -1169,3 +1169,24 @@ def test_a_period_profile_that_found_nothing_lower_is_not_offered_twice(monkeypa
     monkeypatch.setattr(FrictionProblem, "_period_profiles", moved)
     more = prob.nested_starts(ref, (), (mis,))
     assert len(more) == len(same) + 2 and len(set(keys(more))) == len(more)
+
+
+def test_an_adhesion_load_reports_how_little_the_level_follows_the_load():
+    """Blind friction set 2 (session 67): its nulls hold the corrugation fixed across loads of 1 and 3 nN, which
+    the baseline's law (U0 proportional to the load) cannot, and read as an adhesion load of 56 nN. The finding now
+    says what that means: the level changes (N_max + N_adh) / (N_min + N_adh) = 1.03 from the lowest load to the
+    highest, where the baseline's law gives N_max / N_min = 3; at N_adh = 0 the two agree."""
+    import types
+
+    import numpy as np
+
+    from probedyn.diagnose.causes.adhesion_load import AdhesionLoad
+
+    problem = types.SimpleNamespace(loads=np.array([1e-9, 1e-9, 3e-9]), N_mean=5e-9 / 3, regime="stick-slip")
+    c = AdhesionLoad()
+    c.N_ref = problem.N_mean
+    d = c.derived({"n_adh": 56.4e-9, "u0": 1.0e-11}, problem)
+    assert d["baseline_level_ratio_highest_to_lowest_load"] == pytest.approx(3.0)
+    assert d["level_ratio_highest_to_lowest_load"] == pytest.approx(59.4 / 57.4)
+    d0 = c.derived({"n_adh": 0.0, "u0": 1.0e-11}, problem)
+    assert d0["level_ratio_highest_to_lowest_load"] == pytest.approx(d0["baseline_level_ratio_highest_to_lowest_load"])

@@ -74,5 +74,15 @@ class AdhesionLoad(Cause):
         s.n_adh += v["n_adh"]
 
     def derived(self, v, problem):
+        """The corrugation per unit total load, and how much the friction level (stick-slip: the corrugation;
+        loops: the kinetic friction) changes from the lowest load to the highest, with this adhesion load and
+        under the baseline's law (proportional to the load): an adhesion load far above the loads says the
+        level hardly follows the load at all (a fixed corrugation is the limit N_adh -> infinity, docs 9.52)."""
         n_ref = getattr(self, "N_ref", None) or 1.0
-        return {"u0_per_unit_total_load_J_per_N": v["u0"] * n_ref / (n_ref + v["n_adh"]), "reference_load_N": n_ref}
+        out = {"u0_per_unit_total_load_J_per_N": v["u0"] * n_ref / (n_ref + v["n_adh"]), "reference_load_N": n_ref}
+        loads = getattr(problem, "loads", None)
+        if loads is not None and len(loads) and float(np.min(loads)) > 0:
+            lo, hi = float(np.min(loads)), float(np.max(loads))
+            out["level_ratio_highest_to_lowest_load"] = (hi + v["n_adh"]) / (lo + v["n_adh"])
+            out["baseline_level_ratio_highest_to_lowest_load"] = hi / lo
+        return out
