@@ -1224,6 +1224,7 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     # beside a fluid-broadened flapwise 3 took its label, and the mode was "already taken"
     rank = sorted(range(len(fits)), key=lambda j: (fits[j]["fwhm_bins"] < 2.0, -fits[j].get("area_m2", 0.0)))
     rows: dict[int, dict] = {}
+    unresolved_modes: set[int] = set()  # unresolved lines whose shape allows a mode of this lever
     for i_ft in rank:
         ft = fits[i_ft]
         reasons = []
@@ -1235,14 +1236,14 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
                            f"{near['order']} at {s * near['f_Hz']:.5g} Hz after the common scale {s:.3g})")
         unresolved = ft["fwhm_bins"] < 2.0
         df = bin_width(meas.freq, ft["f0_Hz"])
-        spur_shape = False  # an unresolved line no mode of this lever could make (too sharp, or in a fluid)
         if unresolved:
             # a sinusoid (spur) or a resonance narrower than the resolution: only the second is
             # possible where the model's damping would also leave the line unresolved
             wide = np.isfinite(near["Q_fluid"]) and s * near["f_Hz"] / near["Q_fluid"] / df > 3.0
             q_min = ft["f0_Hz"] / (2.0 * df)
             sharp = q_min > Q_SPREAD * q_res_max
-            spur_shape = bool(wide or sharp)
+            if not (wide or sharp):
+                unresolved_modes.add(i_ft)
             if wide or sharp or abs(dev) > MATCH_TOL:
                 reasons.append(f"unresolved line ({ft['fwhm_bins']:.2g} bins wide)"
                                + (f" where the {meas.medium_name}-damped mode would be {s * near['f_Hz'] / near['Q_fluid'] / df:.2g} bins wide"
@@ -1270,7 +1271,6 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
         if "notes" in ft:  # a list per table (notes are added to the chosen labelling's table)
             ft = {**ft, "notes": list(ft["notes"])}
         rows[i_ft] = {**ft, "accepted": accepted, "_mode_line": mode_line, "thermal_ratio": ratio,
-                      "_unresolved_mode": unresolved and not spur_shape,
                       "family": near["family"] if accepted else None,
                       "order": near["order"] if accepted else None, "predicted_Hz": s * near["f_Hz"],
                       "predicted_Q_fluid": near["Q_fluid"], "reasons": reasons}
@@ -1285,8 +1285,8 @@ def _label_table(meas: SpectrumData, fits: list[dict], preds: list[dict], s: flo
     # whose area is the thermal motion of its nearest mode times that factor is thermal motion of a mode, whatever
     # a labelling calls it: its frequency is evidence (_unlabelled_price). Without the area (no declared temperature,
     # no factor) nothing tells it from a spur
-    for t in table:
-        r = t.pop("_unresolved_mode") and t["thermal_ratio"]
+    for j, t in enumerate(table):
+        r = j in unresolved_modes and t["thermal_ratio"]
         t["_thermal_line"] = bool(r and c_cal and len(ratios) > 1 and 1 / AREA_FACTOR < r / c_cal < AREA_FACTOR)
     if c_cal is not None and len(ratios) > 1:
         for t in table:
