@@ -35,10 +35,13 @@ def expected_cause(effect: str) -> str | None:
 
 def _parameter_errors(expected: str, fitted: dict, key: dict) -> dict:
     """Relative error of each fitted parameter the key states under the catalog's name (additive where the
-    null is zero and the truth is too: then the absolute difference)."""
+    null is zero and the truth is too: then the absolute difference). A key that states the offset at its record's
+    middle as well as at its clock's zero is compared at the middle, where the catalog defines it (§3)."""
     out = {}
     for p in CAUSES.get(expected).params:
         t = key.get(p.name)
+        if p.name == "offset":  # the catalog's offset is the zero at the record clock's middle (docs/diagnose.md §3)
+            t = next((key[k] for k in ("offset_at_record_mid", "offset_at_record_middle_N") if k in key), t)
         if t is None or p.name not in fitted or fitted[p.name] is None:
             continue
         out[p.name] = fitted[p.name] / t - 1.0 if t != 0 else fitted[p.name] - t
@@ -59,7 +62,10 @@ def score_case(case_toml: Path, key: dict) -> dict:
     exp = expected_cause(key["effect"])
     row = {"effect": key["effect"], "expected": exp, "verdict": res["verdict"],
            "findings": [x["cause"] for x in f], "group": [first, *f[0].get("confounded_with", [])] if f else [],
-           "parameters": {n: p.get("value") for n, p in f[0]["parameters"].items()} if f else {},
+           # a parameter a finding reports as derived (an adhesion load on the load-independent baseline, which the
+           # cause fits as the share of the load the corrugation follows)
+           "parameters": ({**{n: v for n, v in (f[0].get("derived") or {}).items() if isinstance(v, (int, float))},
+                           **{n: p.get("value") for n, p in f[0]["parameters"].items()}} if f else {}),
            "baseline_p": res["baseline"]["p_value"], "targeted_test": res["baseline"].get("targeted_test"),
            "noise_model": (res["method"].get("noise") or {}).get("model"), "cpu_s": _cpu() - c0,
            # effects the declared conditions imply, taken into the baseline (thermal activation at a declared

@@ -833,11 +833,12 @@ def draw_friction_effect(effect: str | None, rng) -> dict:
 
 def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: float = 5e-12,
                        sampling: str = "interval-mean", length_periods: int = 8, params: dict | None = None,
-                       name: str | None = None) -> tuple[Path, dict]:
+                       name: str | None = None, corrugation_follows_load: bool = True) -> tuple[Path, dict]:
     """Three scans (two speeds a decade apart at one load, and the lower speed at twice the load) of a
     Langevin PT truth with a hidden effect, trace and retrace, written as a friction measurement.
     ``params``: the effect's parameters (default: drawn from ``seed``); ``name``: the file stem
-    (default ``friction_<seed>``)."""
+    (default ``friction_<seed>``). ``corrugation_follows_load``: False holds the corrugation at the first
+    scan's on every scan (the plain PT model's, whose corrugation knows no load; blind friction set 2's nulls)."""
     rng = np.random.default_rng(seed)
     drawn = draw_friction_effect(effect, rng)
     params = drawn if params is None else dict(params)
@@ -856,7 +857,7 @@ def make_friction_case(outdir: Path, seed: int, effect: str | None, *, noise: fl
     tom = []
     runs = []
     for sid, v, N in scans:
-        U0 = u0 * (N + params.get("n_adh", 0.0))
+        U0 = u0 * ((N if corrugation_follows_load else N1) + params.get("n_adh", 0.0))
         runs.append(langevin_scan(U0=U0, a=a, k=k, m=m, Q=Q, speed=v, length=length_periods * a, T=T,
                                   gvisc=params.get("gvisc", 0.0), theta=math.radians(params.get("theta_deg", 0.0)),
                                   bow=params.get("bow", 0.0), sampling=sampling, seed=seed * 10 + sid,

@@ -81,14 +81,19 @@ def _with_reversal(sub: np.ndarray, other: np.ndarray, d: float, k_x: float, dx:
 
 def make_loop_case(folder: Path, seed: int, effect: str | None,
                    load_factors: tuple[float, ...] | None = None,
-                   adhesion_ratio: float | None = None, drift_rate: float = 0.0) -> tuple[Path, dict]:
+                   adhesion_ratio: float | None = None, drift_rate: float = 0.0,
+                   contact_stiffness: float | None = None, overrides: dict | None = None) -> tuple[Path, dict]:
     """One loop record. ``load_factors``: the scans' loads as multiples of the drawn load ``L`` (cycled over
     the scans, at least one scan each; default: every scan at ``L``, the draws of earlier sessions).
     ``adhesion_ratio``: the adhesion load as a multiple of ``L`` instead of the drawn 0-0.5 (0: none).
     ``effect``: None (flat surface), ``"surface-slope"`` (relief), ``"adhesion-load"`` (flat; the adhesion
     is the hidden effect, which scans at two loads can show). ``drift_rate`` [N/s]: the lateral channel's zero
     drifts linearly in time on one clock through the record (trace, retrace, next line; a ``time_s`` column is
-    then written, each sample at the middle of its interval); 0: no drift and no time column, as before."""
+    then written, each sample at the middle of its interval); 0: no drift and no time column, as before.
+    ``contact_stiffness`` [N/m]: the tip-sample contact's lateral stiffness in series with the lever, which the
+    stick at each reversal then rises at, ``(1/k_x + 1/k_c)^-1`` (None: a rigid contact, as before).
+    ``overrides``: drawn values replaced (``k_x`` [N/m], ``length`` [m], ``n`` samples per line, ``sigma`` [N]); the
+    other draws stay those of the seed."""
     rng = np.random.default_rng([seed, 23])
     n_scans = int(rng.integers(1, 4))
     factors = tuple(load_factors) if load_factors else (1.0,)
@@ -108,6 +113,10 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     h_noise = rng.uniform(0.05e-9, 0.5e-9)
     lag = int(rng.integers(0, 3))
     zero = rng.uniform(-50e-9, 50e-9)
+    ov = dict(overrides or {})
+    k_x, length, n, sigma = (ov.pop("k_x", k_x), ov.pop("length", length), int(ov.pop("n", n)), ov.pop("sigma", sigma))
+    if ov:
+        raise ValueError(f"unknown overrides: {', '.join(ov)}")
     x = np.linspace(0.0, length, n)
     dx = x[1] - x[0]
     sub = (np.arange(8) + 0.5) / 8 - 0.5
@@ -126,7 +135,8 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
         mu = mu0 * (1.0 + (contrast - 1.0) * ind_sub)
         bal = {d: _balance(Ls, A, mu, d, theta).reshape(n, 8) for d in (1.0, -1.0)}
         for d in (1.0, -1.0):
-            F = _with_reversal(bal[d], bal[-d], d, k_x, dx)
+            k_stick = k_x if contact_stiffness is None else 1.0 / (1.0 / k_x + 1.0 / contact_stiffness)
+            F = _with_reversal(bal[d], bal[-d], d, k_stick, dx)
             sig = g * F + zero + sigma * rng.standard_normal(n)
             hrec = np.roll(h_pts, int(d) * lag)
             if lag:
@@ -155,5 +165,6 @@ def make_loop_case(folder: Path, seed: int, effect: str | None,
     if drift_rate:
         params = {**params, "drift": drift_rate * (2 * n - 1) * dt}  # over one scan, its first to its last sample
     truth = {"effect": effect, "params": params, "drift_rate": drift_rate, "g": g, "mu": mu0, "A": A, "L": L,
-             "contrast": contrast, "sigma": sigma, "loads": loads, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans}
+             "contrast": contrast, "sigma": sigma, "loads": loads, "lag": lag, "k_x": k_x, "speed": speed, "n": n, "scans": n_scans,
+             "k_contact": contact_stiffness}
     return folder / f"{name}.toml", truth

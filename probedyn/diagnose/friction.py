@@ -108,6 +108,9 @@ REGISTRY_MEMORY = 200_000
 #: bytes of scan models kept per process (:meth:`FrictionProblem._scan_model`), the least recently used dropped first:
 #: ~6500 models of the three-scan example's scans (639 samples each)
 SCAN_MEMORY_BYTES = 64 * 2**20
+#: the baseline's laws of the corrugation against the load, as the ``load_share`` of :func:`effective_load`: the
+#: registry's (``FrictionModel.at_load``: U0 proportional to the load) and a corrugation independent of the load
+LOAD_LAWS = {"amontons": 1.0, "load-independent": 0.0}
 
 
 # ------------------------------------------------------------------------------------------
@@ -257,12 +260,28 @@ def _scatter(scans) -> float:
 # ------------------------------------------------------------------------------------------
 
 
+def effective_load(st: "FrictionState", load: float) -> float:
+    """The load the corrugation is proportional to, ``U0 = u0 N_eff`` [N]: ``N_eff = N_ref + s (N + N_adh - N_ref)``
+    with ``s = st.load_share``. ``s = 1`` is the registry's law (:meth:`probedyn.schemes.friction.base.FrictionModel.at_load`,
+    Amontons at the single asperity: U0 proportional to the total load ``N + N_adh``); ``s = 0`` is a corrugation
+    independent of the load (the plain PT model, ``simulate ffm`` without a normal load: ``U0 = u0 N_ref`` on every
+    scan); between, the linear law with an adhesion intercept ``N_ref (1/s - 1)``. Never negative."""
+    N = load + st.n_adh
+    if st.load_share != 1.0:
+        N = st.n_ref + st.load_share * (N - st.n_ref)
+    return max(N, 0.0)
+
+
 @dataclass
 class FrictionState:
     u0: float  # corrugation per unit load [J/N]
     a: float  # lattice period [m]
     gamma: float = 0.0  # viscous coefficient of the registry PT model [N s/m]
     n_adh: float = 0.0  # adhesion load [N]
+    #: how the corrugation follows the load about the reference load ``n_ref`` (:func:`effective_load`): 1 the
+    #: registry's law (U0 proportional to the load), 0 a corrugation independent of the load
+    load_share: float = 1.0
+    n_ref: float = 0.0  # the reference load of ``load_share`` [N]
     offset: float = 0.0  # [N]
     drift: float = 0.0  # [N over the longest scan: the detector's drift rate times that scan's duration]
     bow: float = 0.0  # scanner nonlinearity
@@ -673,8 +692,7 @@ def simulate_scan_2d(data: FrictionData, st: FrictionState, scan: FrictionScan, 
 
     Xs = _support(scan, st) - _centre(scan)
     V = scan.speed
-    N = max(scan.load + st.n_adh, 0.0)
-    U0 = max(st.u0 * N, 1e-30)
+    U0 = max(st.u0 * effective_load(st, scan.load), 1e-30)
     cp = _ffm(data, U0, st.a, st.gamma).cantilever
     k, m, c = cp["k_x"], cp["m_x"], cp["c_x"]
     ky = st.ky_ratio * k
@@ -708,8 +726,7 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
     Xl = (X - Xc) * w - phis[train]  # the registry is the lattice's offset at the scan's centre
     V = scan.speed * w
-    N = max(scan.load + st.n_adh, 0.0)
-    U0 = st.u0 * N
+    U0 = st.u0 * effective_load(st, scan.load)
     ffm = _ffm(data, U0, st.a, st.gamma)
     d0 = scan.direction[0]
     starts, ends = _segment_edges(scan)
@@ -1323,28 +1340,23 @@ class FrictionProblem:
         # corrugation start from the stick-slip loop: the largest lateral force of a PT stick branch is
         # F_max = F0 sqrt(1 - 1/eta^2) with eta = 2 pi F0 / (k a), so F0 = sqrt(F_max^2 + (k a / 2 pi)^2)
         q = 2 * math.pi / self.a_est
-        u0s = []
+        self._U0_peaks = []  # the corrugation each scan's peak force reads
         for s_ in sc:
             fmax = 0.5 * float(np.percentile(s_.force, 99.5) - np.percentile(s_.force, 0.5))
             F0 = math.sqrt(fmax**2 + (data.k_x / q) ** 2)
-            u0s.append(F0 / q / s_.load)
-        u0_start = float(np.median(u0s))
+            self._U0_peaks.append(F0 / q)
         # the loop read as recorded (peak and slip drop): eta and U0 per scan, independent of a
         # calibration factor and an offset; its U0 per unit load is a further start of the baseline
         self.loop = loop_estimate(data, self.use, self.slices, self.a_slip, self.sigma)
-        u0_loop = float(np.median(self.loop.U0 / self.loads)) if self.loop is not None else u0_start
-        u0_starts = tuple(x for x in (0.85 * u0_start, 1.2 * u0_start, u0_loop)
-                          if 1e-2 * u0_start <= x <= 1e2 * u0_start)
-        # the period sets the slip pattern: a period off by da misplaces the n-th slip by n da, another
-        # basin once n da exceeds half a period over the scan; where the two independent estimates (the
-        # slip positions, the periodogram) differ by that much, the baseline also starts from the other
-        n_per = max(float(max(np.ptp(s_.position) for s_ in sc)) / self.a_est, 1.0)
-        a_starts = ((self.a_est,) if abs(self.a_est - self.a_slip) > 0.5 * self.a_est / n_per else ())
-        self.base_params = [
-            CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
-                       scale="log", starts=u0_starts),
-            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period", starts=a_starts),
-        ]
+        self.N_mean = N
+        #: the baseline's laws of the corrugation against the load (:func:`effective_load`), where the scans have
+        #: more than one load: the registry's (Amontons, U0 proportional to the load; the FFM's ``normal_load``) and a
+        #: corrugation independent of the load (the plain PT model, the FFM without a normal load). The record does
+        #: not say which its instrument follows (docs/diagnose.md 9.53): the engine fits both and keeps the better
+        #: (``engine._baseline_law``); an adhesion intercept between them is the adhesion-load cause
+        self.baseline_laws = tuple(LOAD_LAWS) if np.ptp(self.loads) > 0 else ()
+        self.baseline_law = "amontons"
+        self.base_params = self._base_params()
         self.temperature = data.temperature
         # the tip's thermal force noise (thermal_force_variance): at a declared temperature, with the stated noise
         # not replaced by the record's scatter (which would already hold it); added to a stated detector noise
@@ -1362,7 +1374,6 @@ class FrictionProblem:
         self._last_thermal = None
         self._scan_memo: OrderedDict = OrderedDict()  # key -> (F, var, thermal var): the scan models kept (_scan_model)
         self._scan_memo_bytes = 0
-        self.N_mean = N
         self.v_max = float(self.speeds.max())
         self.drift_clock, self.t_drift = drift_clock(sc)
         #: the drift parameter is the detector's drift over the longest scan: a rate drift / t_ref [N/s]
@@ -1402,12 +1413,60 @@ class FrictionProblem:
         #: takes on where the data show them (engine ``_declared_terms``), not causes; ``base_terms`` those it took
         self.declared_terms = []
         self.base_terms = ()
+        self._constrain_catalog()
+
+    def _constrain_catalog(self) -> None:
+        """The catalog's causes and the declared conditions' terms, constrained by this record (and the baseline's
+        load law, which the adhesion-load cause extends)."""
+        self.causes, self.declared_terms = [], []
         for cls in catalog("friction"):
             if cls.regimes and "stick-slip" not in cls.regimes:
                 continue
             c = cls().constrain(self)
             if c is not None:
                 (self.declared_terms if c.declared else self.causes).append(c)
+
+    @property
+    def load_share(self) -> float:
+        """The baseline law's ``load_share`` (:func:`effective_load`)."""
+        return LOAD_LAWS[self.baseline_law]
+
+    def set_baseline_law(self, law: str) -> None:
+        """Take the baseline's load law ``law`` (a key of :data:`LOAD_LAWS`): the baseline's corrugation starts and
+        the causes (the adhesion-load cause is parametrised about the baseline's law) follow it."""
+        if law not in LOAD_LAWS:
+            raise ValueError(f"unknown load law {law!r} (known: {', '.join(LOAD_LAWS)})")
+        self.baseline_law = law
+        self.base_params = self._base_params()
+        self._constrain_catalog()
+
+    def effective_loads(self, ref: dict | None = None) -> np.ndarray:
+        """Every scan's :func:`effective_load` under the baseline's law, with the adhesion load or load share
+        ``ref`` holds (a cause's parameters; none: the baseline's)."""
+        ref = ref or {}
+        st = FrictionState(u0=1.0, a=self.a_slip, n_adh=float(ref.get("n_adh", 0.0)),
+                           load_share=self.load_share + float(ref.get("load_share", 0.0)), n_ref=self.N_mean)
+        return np.array([effective_load(st, float(N)) for N in self.loads])
+
+    def _base_params(self) -> list:
+        """The baseline's parameters under its load law: the corrugation per unit (effective) load started from the
+        scans' peak forces and from the recorded loop, and the lattice period."""
+        Neff = np.maximum(self.effective_loads(), 1e-30)
+        u0_start = float(np.median(np.asarray(self._U0_peaks) / Neff))
+        u0_loop = float(np.median(self.loop.U0 / Neff)) if self.loop is not None else u0_start
+        u0_starts = tuple(x for x in (0.85 * u0_start, 1.2 * u0_start, u0_loop)
+                          if 1e-2 * u0_start <= x <= 1e2 * u0_start)
+        # the period sets the slip pattern: a period off by da misplaces the n-th slip by n da, another
+        # basin once n da exceeds half a period over the scan; where the two independent estimates (the
+        # slip positions, the periodogram) differ by that much, the baseline also starts from the other
+        sc = self.data.scans
+        n_per = max(float(max(np.ptp(s_.position) for s_ in sc)) / self.a_est, 1.0)
+        a_starts = ((self.a_est,) if abs(self.a_est - self.a_slip) > 0.5 * self.a_est / n_per else ())
+        return [
+            CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
+                       scale="log", starts=u0_starts),
+            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period", starts=a_starts),
+        ]
 
     def _thermal_share(self) -> float:
         """The tip's thermal force noise (:func:`thermal_force_variance`) over the stated variance, averaged over the
@@ -1507,6 +1566,8 @@ class FrictionProblem:
             ref = {**v0, "a": st.a}
             if st.n_adh and "n_adh" not in v0:
                 ref["n_adh"] = st.n_adh  # a load the model carries but does not fit here
+            if st.load_share != self.load_share and "load_share" not in v0:
+                ref["load_share"] = st.load_share - self.load_share  # (the same, on the load-independent baseline)
             cands = []
             for t in terms:
                 for r in t.ridge_starts(self, ref):
@@ -1580,7 +1641,7 @@ class FrictionProblem:
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
-        st = FrictionState(u0=values["u0"], a=values["a"])
+        st = FrictionState(u0=values["u0"], a=values["a"], load_share=self.load_share, n_ref=self.N_mean)
         if self.data.k_y:
             st.ky_ratio = self.data.k_y / self.data.k_x  # declared: the lever's own
         for c in self.base_terms:
@@ -1627,10 +1688,11 @@ class FrictionProblem:
             # on every scan the slips stay athermal (_thermal_path), the model is the athermal one
             ws = [math.cos(st.theta)] + ([math.sin(st.theta)] if st.theta > 1e-6 else [])
             k = self.data.k_x
-            bound = max(th[1] * (0.75 * st.a + 2 * math.pi * st.u0 * max(s.load + st.n_adh, 0.0) / (k * st.a))
+            bound = max(th[1] * (0.75 * st.a + 2 * math.pi * st.u0 * effective_load(st, s.load) / (k * st.a))
                         / max(s.speed * w, 1e-300) for s in self.data.scans for w in ws)
             th = (float(th[0]), float(th[1])) if bound >= THERMAL_MIN_HAZARD else None
-        return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.offset), float(st.drift),
+        return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.load_share), float(st.n_ref),
+                float(st.offset), float(st.drift),
                 float(st.bow), float(st.theta), float(st.gain), th, float(st.ky_ratio) if _coupled(st) else 1.0)
 
     def _mask_key(self):
@@ -1711,7 +1773,7 @@ class FrictionProblem:
         F = st.gain * sum(wt * p for wt, p in zip(w, parts))
         var = st.gain**2 * sum(wt**2 * v for wt, v in zip(w, vs))
         if self.thermal_noise_T:  # the tip's thermal motion in its well, per train (independent axes)
-            U0 = st.u0 * max(s.load + st.n_adh, 0.0)
+            U0 = st.u0 * effective_load(st, s.load)
             # the lever's damping only: a viscous tip-substrate friction brings its noise too (fluctuation-
             # dissipation), but a cause that widens the variance lowers chi^2 without the likelihood's
             # log-determinant, which the causes' comparison leaves out (own seed 2002 at 300 K: with c + gamma the
@@ -1825,7 +1887,7 @@ class FrictionProblem:
         only where the one under the support leaves the scan beyond its noise. The same for a misaligned scan, on
         either lever (own study s48, 2019: a double-load scan at eta 12 and k_y = 2.6 k_x has chi^2 4.4e6 at the
         truth from under the support, 2.4e4 from the next well; on 577 samples)."""
-        U0 = st.u0 * max(self.data.scans[i].load + st.n_adh, 0.0)
+        U0 = st.u0 * effective_load(st, self.data.scans[i].load)
         if not (2 * math.pi / st.a) ** 2 * U0 / self.data.k_x > MULTISLIP_ETA:
             return phis
         F0, v0 = self._scan_model(i, st, phis)
@@ -2054,4 +2116,7 @@ class FrictionProblem:
         return {"baseline": "FFM line-scan model (schemes/ffm.py, eqs 2.13-2.15) with the registry friction model 'pt', "
                             "trace and retrace along the measured support path (line_scan_path)",
                 "lever": {"k_x": cp["k_x"], "m_x": cp["m_x"], "c_x": cp["c_x"]},
-                "sampling": self.data.sampling, "registry": "profiled per scan (fundamental alignment, then re-integration)"}
+                "sampling": self.data.sampling, "registry": "profiled per scan (fundamental alignment, then re-integration)",
+                "corrugation_load_law": {"amontons": "U0 = u0 N (the registry's at_load)",
+                                         "load-independent": "U0 = u0 N_ref on every scan (the plain PT model)"}[
+                    self.baseline_law] + (f", N_ref = {self.N_mean:.4g} N" if self.baseline_law != "amontons" else "")}

@@ -17,6 +17,14 @@ lateral channel's zero (an uncalibrated offset, always present in a lateral-forc
 ``F = d F_k + offset``. Fitted: ``u0`` and ``offset``. Cross-validation groups: the trace and the retrace
 of each scan.
 
+A record at one speed (every loop the own and the blind generators write) gives the FFM nothing to set but that
+level, and the level is then the baseline's parameter, ``F_ref`` = ``F_k(u0; v, N_ref)``, with the corrugations
+that reach it reported (``u_crossings``). The PT's mean friction is no smooth function of ``u0`` where the slips
+skip wells on an underdamped lever: at eta 10-14 and Q_x 8 it jumps by 10-20 % within 0.2 % of ``u0`` (and
+differs between averaging windows of 16 and 96 periods), so a fit in ``u0`` ended 1 % off the recorded level and a
+null was left unexplained (blind friction set 2, g06: chi^2 2209 on 766; docs/diagnose.md 9.53). Several speeds
+keep ``u0``: the FFM then also sets how the friction changes with the speed.
+
 The reversal (:func:`reversal_deficit`): where the support turns, the tip sticks while the lever's force
 runs from the friction of one direction to that of the other, at the lever's stiffness ``k_x``. That takes
 ``2 F_k / k_x`` of support travel (the PT tip's own travel inside its well, under half a lattice period, is
@@ -74,6 +82,8 @@ class LoopState:
     slope_c: float = 0.0  # coupling of the surface slope (surface-slope cause; 0: none)
     contrast: float = 0.0  # relative friction change from the lowest to the highest relief (friction-contrast)
     n_adh: float = 0.0  # the adhesion load of Derjaguin's law [N] (adhesion-load cause)
+    level: float | None = None  # the FFM's mean friction at the reference load [N] (one speed: the parameter)
+    stick_compliance: float = 0.0  # k_x / k_contact: the stick at a reversal rises at k_x / (1 + this)
     drift: float = 0.0  # the lateral channel's drift over the longest scan [N] (force-offset-drift cause)
     transforms: list = field(default_factory=list)  # f(problem, F) -> F, applied last
     #: the load scales the friction (Amontons), not the FFM's corrugation (adhesion-load reads this)
@@ -297,9 +307,19 @@ class FrictionLoopProblem:
         self.u_crossings = self._level_crossings(u_lo, min(u_hi, 100.0 * max(u_half, u_eta1)), abs(half))
         u_st += self.u_crossings
         span = max(float(np.ptp(self.force)), 10.0 * self.sigma)
+        #: one speed (every scan's): the FFM sets nothing but the friction level, which is then the baseline's
+        #: parameter (:meth:`levels`); the corrugations that give it are ``u_crossings``
+        self.level_param = bool(np.ptp(self.speeds) == 0 and half > 0)
+        if self.level_param:
+            top = max(abs(half) + 10.0 * self.sigma, 2.0 * abs(half))
+            level = CauseParam("F_ref", "N", 1e-3 * abs(half), 10.0 * top, abs(half),
+                               "the FFM's mean friction at the reference load and the scans' speed (its corrugation "
+                               "among u_crossings)", scale="log")
+        else:
+            level = CauseParam("u0", "J/N", u_lo, u_hi, u_st[0] if u_st else 2.0 * u_lo,
+                               "corrugation U0 per unit load (sets the FFM's mean friction)", scale="log", starts=u_st[1:])
         self.base_params = [
-            CauseParam("u0", "J/N", u_lo, u_hi, u_st[0] if u_st else 2.0 * u_lo,
-                       "corrugation U0 per unit load (sets the FFM's mean friction)", scale="log", starts=u_st[1:]),
+            level,
             CauseParam("offset", "N", zero - span, zero + span, float(zero), "the lateral channel's zero"),
         ]
         self.train_mask = None
@@ -316,12 +336,16 @@ class FrictionLoopProblem:
         self.cv_warm_all = True
         self.causes = []
         self.not_offered = {}
+        #: terms every such record implies (the contact's lateral stiffness at the reversals): the baseline takes them
+        #: on where the data show them (engine ``_declared_terms``); ``base_terms`` those it took
+        self.declared_terms = []
+        self.base_terms = ()
         for cls in catalog("friction"):
             if "loop" not in cls.regimes:
                 continue
             c = cls().constrain(self)
             if c is not None:
-                self.causes.append(c)
+                (self.declared_terms if c.declared else self.causes).append(c)
             elif getattr(cls, "requires", None):
                 self.not_offered[cls.key] = f"needs {cls.requires}"
 
@@ -361,12 +385,13 @@ class FrictionLoopProblem:
                 segs.append((o, near))
         self.rev_segments = segs
 
-    def reversal(self, F: np.ndarray) -> np.ndarray:
+    def reversal(self, F: np.ndarray, compliance: float = 0.0) -> np.ndarray:
         """The model force ``F`` (signed, without the channel's zero) with each segment's reversal stick
         (:func:`reversal_deficit`): the ramp rises from the force of the segment before at the reversal to this
-        segment's force at its first sample, at the lever's stiffness."""
+        segment's force at its first sample, at the lever's stiffness in series with the contact's,
+        ``k_x / (1 + compliance)`` (:mod:`.causes.contact_stiffness`)."""
         out = np.array(F, float)
-        k = self.data.k_x
+        k = self.data.k_x / (1.0 + compliance)
         for o, near in self.rev_segments:
             if near is None:
                 continue
@@ -428,6 +453,8 @@ class FrictionLoopProblem:
                              if hasattr(c, "data_starts") else [])
         # the reference's corrugation may sit at a drop of the PT's sawtooth (:meth:`_level_crossings`); each
         # start again from the stretches that reach the recorded level
+        if self.level_param:  # the level is a parameter: no sawtooth to start across
+            return out
         null = {**ref_values, **{p.name: p.null for c in new for p in c.params}}
         return out + [{**st, "u0": u} for st in (out or [null]) for u in self.u_crossings
                       if abs(u / ref_values["u0"] - 1.0) > 1e-3]
@@ -441,21 +468,30 @@ class FrictionLoopProblem:
 
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> LoopState:
-        st = LoopState(u0=values["u0"], offset=values["offset"])
-        for c in causes:
+        st = LoopState(u0=float(values.get("u0", math.nan)), offset=values["offset"],
+                       level=values.get("F_ref") if self.level_param else None)
+        for c in (*self.base_terms, *causes):
             c.effect(values, st)
         return st
 
-    def friction(self, u0: float, n_adh: float = 0.0) -> np.ndarray:
+    def friction(self, u0: float, n_adh: float = 0.0, level: float | None = None) -> np.ndarray:
         """The friction ``F_k`` at every sample: the FFM's steady friction at its scan's speed and the
-        reference load (memoised), times ``(N + n_adh) / (N_ref + n_adh)`` for the scan's load ``N``."""
+        reference load (memoised; ``level``: that friction itself, one speed), times ``(N + n_adh) / (N_ref + n_adh)``
+        for the scan's load ``N``."""
         out = np.empty(self.n)
         for i, s in enumerate(self.data.scans):
-            out[self.slices[i]] = self.friction_at(u0, s.speed, s.load, n_adh)
+            out[self.slices[i]] = self.friction_at(u0, s.speed, s.load, n_adh, level)
         return out
 
-    def friction_at(self, u0: float, v: float, N: float, n_adh: float = 0.0) -> float:
-        """Mean friction at speed ``v`` and load ``N`` (Amontons-Derjaguin from the FFM at ``N_ref``)."""
+    def friction_of(self, values: dict) -> np.ndarray:
+        """:meth:`friction` at the baseline parameters ``values``."""
+        return self.friction(float(values.get("u0", math.nan)), 0.0, values.get("F_ref") if self.level_param else None)
+
+    def friction_at(self, u0: float, v: float, N: float, n_adh: float = 0.0, level: float | None = None) -> float:
+        """Mean friction at speed ``v`` and load ``N`` (Amontons-Derjaguin from the FFM at ``N_ref``; ``level``: the
+        FFM's friction at ``N_ref``, given, for a record at one speed)."""
+        if level is not None:
+            return float(level) * (N + n_adh) / (self.N_ref + n_adh)
         key = (float(u0), float(v))
         if key not in self._fk:
             if len(self._fk) > 20000:
@@ -465,14 +501,14 @@ class FrictionLoopProblem:
 
     def predict(self, values, causes=()) -> np.ndarray:
         st = self.state(values, causes)
-        Fk = self.friction(st.u0, st.n_adh)
+        Fk = self.friction(st.u0, st.n_adh, st.level)
         if st.contrast != 0.0 and self.relief is not None:
             Fk = Fk * (1.0 + st.contrast * self.relief)
         if st.slope_c != 0.0 and self.slopes is not None:
             F = slope_force(Fk, self.load_of, self.direction, self.slopes, st.slope_c, st.n_adh)
         else:
             F = self.direction * Fk
-        F = self.reversal(F) + st.offset
+        F = self.reversal(F, st.stick_compliance) + st.offset
         if st.drift != 0.0:
             F = F + st.drift * self.drift_x
         for tf in st.transforms:
@@ -522,7 +558,7 @@ class FrictionLoopProblem:
         for label, fl in (("at twice the highest load", 2.0), ("at half the highest load", 0.5)):
             N = s.load * fl
             try:
-                Fk = self.friction_at(st.u0, s.speed, N, st.n_adh)
+                Fk = self.friction_at(st.u0, s.speed, N, st.n_adh, st.level)
             except ProbedynError:
                 continue
             dt = 1e-3
@@ -555,5 +591,9 @@ class FrictionLoopProblem:
                             "each scan's speed and the reference load N_ref gives the mean friction, carried to each "
                             "scan's load N by Amontons' law, F_k = F_k(N_ref) N / N_ref; sample = d F_k + offset",
                 "reference_load_N": self.N_ref,
+                "level_parameter": ("F_ref, the FFM's mean friction at the reference load and the record's one speed; "
+                                    "the corrugations that give the recorded half loop: u_crossings") if self.level_param
+                else None,
+                "u_crossings_J_per_N": list(self.u_crossings),
                 "lever": {"k_x": cp["k_x"], "m_x": cp["m_x"], "c_x": cp["c_x"]}, "lattice_m": self.data.lattice,
                 "sampling": self.data.sampling}

@@ -56,11 +56,19 @@ def _fmt_param(name: str, p: dict[str, Any]) -> str:
     return txt
 
 
+#: the baseline's laws of the corrugation against the load (``probedyn.diagnose.friction.LOAD_LAWS``), in words
+LOAD_LAW_WORDS = {"amontons": "proportional to the load (the registry's law)",
+                  "load-independent": "independent of the load (the plain PT model)"}
+
+
 def _term_values(t: dict[str, Any]) -> str:
     """What a declared term taken on was fitted to, in words (its derived values)."""
     d = t.get("derived") or {}
-    return (f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
-            if "attempt_frequency_Hz" in d else "")
+    if "attempt_frequency_Hz" in d:
+        return f" (attempt frequency {d['attempt_frequency_Hz']:.3g} Hz at the declared {d['temperature_K']:g} K)"
+    if d.get("k_contact_N_per_m"):
+        return f" (contact {d['k_contact_N_per_m']:.3g} N/m: the stick rises at {d['k_stick_N_per_m']:.3g} N/m)"
+    return ""
 
 
 def summary(res: dict[str, Any]) -> str:
@@ -68,17 +76,25 @@ def summary(res: dict[str, Any]) -> str:
     b = res["baseline"]
     lines = [f"baseline: chi2 = {b['chi2']:.1f} for {b['dof']} dof (p {_p(b['p_value'])}), residual RMS "
              f"{b['residual_rms']:.2f} sigma"]
+    law = b.get("load_law")
+    if law:
+        other = {k: v for k, v in law["chi2"].items() if k != law["law"]}
+        lines.append(f"baseline corrugation {LOAD_LAW_WORDS.get(law['law'], law['law'])}: the better of the laws the "
+                     f"simulation runs (chi2 {law['chi2'][law['law']]:.1f}, against "
+                     + ", ".join(f"{v:.1f} {LOAD_LAW_WORDS.get(k, k)}" for k, v in other.items())
+                     + ", before the terms and the noise model below); the record does not say which its instrument follows")
     for t in b.get("declared_terms") or ():
+        why = f"{t['implied_by']} implies" if t.get("implied_by") else "the declared conditions imply"
         if t["taken"]:
             what = _term_values(t)
-            lines.append(f"baseline includes {t['title'].lower()}{what}: the declared conditions imply it, and it "
+            lines.append(f"baseline includes {t['title'].lower()}{what}: {why} it, and it "
                          f"lowers -2 ln L by {t['lr_gain']:.1f} (threshold {t['lr_threshold']:.2f})")
         elif t["lr_gain"] > t["lr_threshold"]:
-            lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, and it lowers "
+            lines.append(f"baseline without {t['title'].lower()}: {why} it, and it lowers "
                          f"-2 ln L by {t['lr_gain']:.1f}, but the baseline with it still leaves an excess chi2 - dof of "
                          f"{t['remainder']:.1f}: a gain within that misfit is not separable from it")
         else:
-            lines.append(f"baseline without {t['title'].lower()}: the declared conditions imply it, but it lowers "
+            lines.append(f"baseline without {t['title'].lower()}: {why} it, but it lowers "
                          f"-2 ln L by {t['lr_gain']:.1f} only (threshold {t['lr_threshold']:.2f})")
     for t in b.get("declared_terms_after_claims") or ():
         if t["taken"]:

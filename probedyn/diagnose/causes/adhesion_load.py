@@ -11,6 +11,15 @@ friction at the reference load to each scan's load by Amontons' law) the same pa
 ``F_k(N) = F_k(N_ref) (N + N_adh) / (N_ref + N_adh)``, the half loop's intercept on the load axis at
 ``-N_adh``; offered there only for scans at two or more loads (one load cannot separate the intercept from
 the slope).
+
+The stick-slip baseline has two laws of the corrugation against the load (:data:`probedyn.diagnose.friction.LOAD_LAWS`,
+engine ``_baseline_law``): proportional to it (the registry's) and independent of it (the plain PT model). The cause
+extends the law the baseline took: on the proportional one by N_adh as above (null 0); on the load-independent one by
+the share ``s`` of the load the corrugation follows, ``U0(N) = u0 (N_ref + s (N - N_ref))`` (null 0; ``s = 1`` the
+proportional law), the same linear law with the adhesion load ``N_adh = N_ref (1/s - 1)``, reported derived. A
+corrugation that ignores the load is N_adh -> infinity, a limit no finite adhesion load reaches: on the proportional
+baseline alone such a record read as an adhesion load many times its loads (blind friction set 2, docs/diagnose.md
+9.53).
 """
 
 from __future__ import annotations
@@ -38,9 +47,19 @@ class AdhesionLoad(Cause):
         if getattr(problem, "regime", "") == "loop" and not np.ptp(problem.loads) > 0:
             return None
         lo, hi = float(problem.loads.min()), float(problem.loads.max())
-        c = AdhesionLoad((CauseParam("n_adh", "N", -0.9 * lo, 20.0 * hi, 0.0, "adhesion load",
-                                     starts=(0.5 * hi, 3.0 * hi)),))
-        c.N_ref = float(problem.N_mean)
+        n_ref = float(problem.N_mean)
+        if getattr(problem, "load_share", 1.0) == 0.0:
+            # on a baseline whose corrugation does not follow the load, the cause is the share of the load it follows:
+            # U0 = u0 (N_ref + s (N - N_ref)), null s = 0 (the baseline), s = 1 the registry's law, and between the
+            # adhesion intercept N_ref (1/s - 1) (up to the least adhesion load of the proportional baseline's range,
+            # -0.9 N_min; a corrugation that falls as the load rises, s < 0, is no adhesion intercept)
+            c = AdhesionLoad((CauseParam("load_share", "1", 0.0, n_ref / (n_ref - 0.9 * lo), 0.0,
+                                         "share of the load the corrugation follows (d ln U0 / d ln N at N_ref)",
+                                         starts=(0.5, 1.0)),))
+        else:
+            c = AdhesionLoad((CauseParam("n_adh", "N", -0.9 * lo, 20.0 * hi, 0.0, "adhesion load",
+                                         starts=(0.5 * hi, 3.0 * hi)),))
+        c.N_ref = n_ref
         return c
 
     def data_starts(self, problem, ref: dict, ref_causes: tuple = ()) -> list[dict]:
@@ -65,9 +84,18 @@ class AdhesionLoad(Cause):
         if not B > 0:
             return []
         n_ref = getattr(self, "N_ref", None) or float(np.mean(N))
+        if "load_share" in self.names:  # U0 = A + B N = u0 (N_ref + s (N - N_ref))
+            return [{"load_share": float(B * n_ref / (A + B * n_ref)), "u0": float((A + B * n_ref) / n_ref)}]
         return [{"n_adh": float(A / B), "u0": float((A + B * n_ref) / n_ref)}]
 
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(p.name for p in self.params)
+
     def effect(self, v, s):
+        if "load_share" in v and "load_share" in self.names:
+            s.load_share += v["load_share"]
+            return
         n_ref = getattr(self, "N_ref", None)
         if n_ref and getattr(s, "corrugation_follows_load", True):
             s.u0 *= n_ref / (n_ref + v["n_adh"])
@@ -79,8 +107,19 @@ class AdhesionLoad(Cause):
         under the baseline's law (proportional to the load): an adhesion load far above the loads says the
         level hardly follows the load at all (a fixed corrugation is the limit N_adh -> infinity, docs 9.52)."""
         n_ref = getattr(self, "N_ref", None) or 1.0
-        out = {"u0_per_unit_total_load_J_per_N": v["u0"] * n_ref / (n_ref + v["n_adh"]), "reference_load_N": n_ref}
         loads = getattr(problem, "loads", None)
+        if "load_share" in self.names:  # on the load-independent baseline: the share s, n_adh = N_ref (1/s - 1)
+            sh = float(v["load_share"])
+            out = {"u0_per_unit_total_load_J_per_N": v["u0"] * sh, "reference_load_N": n_ref,
+                   "n_adh": n_ref * (1.0 / sh - 1.0) if sh > 0 else None}
+            if loads is not None and len(loads):
+                lo, hi = float(np.min(loads)), float(np.max(loads))
+                out["level_ratio_highest_to_lowest_load"] = (n_ref + sh * (hi - n_ref)) / (n_ref + sh * (lo - n_ref))
+                out["baseline_level_ratio_highest_to_lowest_load"] = 1.0
+            return out
+        out = {"reference_load_N": n_ref}
+        if "u0" in v:  # (a loop at one speed fits the friction level, not the corrugation)
+            out["u0_per_unit_total_load_J_per_N"] = v["u0"] * n_ref / (n_ref + v["n_adh"])
         if loads is not None and len(loads) and float(np.min(loads)) > 0:
             lo, hi = float(np.min(loads)), float(np.max(loads))
             out["level_ratio_highest_to_lowest_load"] = (hi + v["n_adh"]) / (lo + v["n_adh"])

@@ -26,8 +26,9 @@ class ForceCalibration(Cause):
         (the baseline's has absorbed the factor)."""
         L = problem.loop
         st = {"g": float(np.median(L.g))}
-        if "n_adh" not in ref:
-            st["u0"] = float(np.median(L.U0 / problem.loads))
+        if "n_adh" not in ref and "load_share" not in ref:
+            Neff = problem.effective_loads() if hasattr(problem, "effective_loads") else problem.loads
+            st["u0"] = float(np.median(L.U0 / np.maximum(Neff, 1e-30)))
         return [st]
 
     def effect(self, v, s):

@@ -52,7 +52,7 @@ class FrictionContrast(Cause):
     def data_starts(self, problem, ref_values, ref_causes=()):
         """The contrast the reference fit's residual shows: its least-squares regression on
         ``d F_k zeta`` (the first-order change of the half loop)."""
-        x = problem.direction * problem.friction(ref_values["u0"]) * problem.relief
+        x = problem.direction * problem.friction_of(ref_values) * problem.relief
         return problem.residual_start("contrast", x, ref_values, ref_causes)
 
     def effect(self, v, s):

@@ -94,9 +94,9 @@ class ThermalActivation(Cause):
             return []
         T = getattr(self, "T", 295.0)
         a = float(ref.get("a", problem.a_slip))
-        n_adh = float(ref.get("n_adh", 0.0))
-        i0 = int(np.argmin(problem.speeds / np.maximum(problem.loads + n_adh, 1e-30)))
-        U0 = float(ref["u0"]) * (float(problem.loads[i0]) + n_adh)
+        Neff = _effective_loads(problem, ref)
+        i0 = int(np.argmin(problem.speeds / np.maximum(Neff, 1e-30)))
+        U0 = float(ref["u0"]) * float(Neff[i0])
         tab = _barrier_table(U0, a, problem.data.k_x, 200)
         if tab is None:
             return []
@@ -118,6 +118,8 @@ class ThermalActivation(Cause):
         wrong stretch of it first (a blind generator's 300 K record, session 30: the best two at 10^9.5-10^10 Hz,
         u0 16 % high, where the fit from them stalled; the truth near 10^5.5 Hz, chi^2 879 against 2566). Best first
         by the peaks' misfit."""
+        if "load_share" in ref:  # the adhesion cause on the load-independent baseline: its share s, N_adh = N_ref (1/s - 1)
+            return self._share_ridge(problem, ref)
         n0 = float(ref.get("n_adh", 0.0))
         if "n_adh" not in ref or not n0 > 0:
             return [{"log10_f0": lf, "u0": u0} for _, lf, u0 in sorted(self._peak_ridge(problem, ref))
@@ -131,6 +133,22 @@ class ThermalActivation(Cause):
         scored = sorted((sc, lf, u0, n) for n in n0 * ADHESION_GRID
                         for sc, lf, u0 in self._peak_ridge(problem, {**ref, "n_adh": float(n)}))
         return [{"log10_f0": lf, "u0": u0, "n_adh": n} for _, lf, u0, n in scored[:RIDGE_JOINT_KEEP]]
+
+    def _share_ridge(self, problem, ref: dict) -> list[dict]:
+        """:meth:`ridge_starts`' joint walk over the adhesion load where the adhesion cause is the share ``s`` of the
+        load the corrugation follows (on the load-independent baseline, :mod:`.adhesion_load`): the same grid of
+        adhesion loads about the start's, ``N_adh = N_ref (1/s - 1)``, as shares ``s = N_ref / (N_ref + N_adh)``
+        (own seed 2002 at a declared 300 K, session 68: without the walk, 27 nN for 13.5). A share at or above 1 (no
+        positive adhesion load) walks the shares themselves."""
+        s0 = float(ref["load_share"])
+        if not s0 > 0:
+            return [{"log10_f0": lf, "u0": u0} for _, lf, u0 in sorted(self._peak_ridge(problem, ref))
+                    if float(lf).is_integer()]
+        n_ref = float(getattr(problem, "N_mean", np.mean(problem.loads)))
+        shares = (n_ref / (n_ref + n_ref * (1.0 / s0 - 1.0) * ADHESION_GRID) if s0 < 1.0 else s0 * ADHESION_GRID)
+        scored = sorted((sc, lf, u0, sh) for sh in shares
+                        for sc, lf, u0 in self._peak_ridge(problem, {**ref, "load_share": float(sh)}))
+        return [{"log10_f0": lf, "u0": u0, "load_share": sh} for _, lf, u0, sh in scored[:RIDGE_JOINT_KEEP]]
 
     def _peak_ridge(self, problem, ref: dict) -> list[tuple[float, float, float]]:
         """From the recorded loop: the peak force of every scan (half the trace-retrace difference
@@ -148,16 +166,16 @@ class ThermalActivation(Cause):
         T = getattr(self, "T", 295.0)
         a = float(ref.get("a", problem.a_slip))
         q = 2 * math.pi / a
-        n_adh = float(ref.get("n_adh", 0.0))
+        Neff = np.maximum(_effective_loads(problem, ref), 1e-30)
         i0 = int(np.argmin(problem.speeds / problem.loads))
-        u_ath = float(L.U0[i0] / (problem.loads[i0] + n_adh))
+        u_ath = float(L.U0[i0] / Neff[i0])
         ugrid = u_ath * np.geomspace(1.0, 4.0, 41)  # activation only lowers the peak
         # per scan and corrugation: the stick branch (support X, force) and its barrier to the next well
         tabs = []
-        for N in problem.loads:
+        for N in Neff:
             row = []
             for u in ugrid:
-                U0 = u * (N + n_adh)
+                U0 = u * N
                 tab = _barrier_table(U0, a, d.k_x, 200)
                 if tab is None:
                     row.append(None)
@@ -192,3 +210,11 @@ class ThermalActivation(Cause):
 
     def derived(self, v, problem):
         return {"attempt_frequency_Hz": 10.0 ** v["log10_f0"], "temperature_K": getattr(self, "T", 295.0)}
+
+
+def _effective_loads(problem, ref: dict) -> np.ndarray:
+    """The load each scan's corrugation is proportional to under the problem's law, with the adhesion load or load
+    share ``ref`` holds (:meth:`probedyn.diagnose.friction.FrictionProblem.effective_loads`)."""
+    if hasattr(problem, "effective_loads"):
+        return problem.effective_loads(ref)
+    return problem.loads + float(ref.get("n_adh", 0.0))
