@@ -176,3 +176,29 @@ def test_a_torsion_line_labelled_on_a_bending_baseline_gets_the_graded_width():
     tol = DEFAULT_ACCURACY["cantilever"][0] + REF["relative_uncertainty"]
     assert abs(g.freqs[i] / ref - 1.0) < tol < abs(b.freqs[j] / ref - 1.0)
     assert abs(g.freqs[i] - ref) <= g.disc_err[i] + REF["relative_uncertainty"] * ref
+
+
+def test_a_thin_lever_is_refined_along_its_axis_first():
+    """A lever meshed thick and stretched back has hexahedra as long as the *thick* lever (``s t``), three
+    layers each: the higher bending modes' error is that axial size's. On the reference lever with flapwise
+    1-4, lateral 1 and torsion 1 at a stated 1e-4 (the width graded for twist, 13.9 k DOFs, flapwise 4
+    1.25 % stiff), the refinement first shortens the axial elements (within the default 20 k budget, the
+    stretch raised to pay for them): every flapwise error must fall at least as the axial size does at the
+    lowest convergence order the estimate admits (``(h_0 / h)^0.8``), and every used frequency must stay
+    within its estimated discretisation error (plus the reference's uncertainty) of the converged FEM.
+    Before, the next mesh (stretch halved) did not fit the budget and nothing was refined."""
+    p = get_probe("cantilever")[0]
+    v = p.resolve(dict(REF["geometry_m"]))
+    noise = {(fa, o): 1e-4 * REF["frequencies_hz"][fa][o - 1] for fa, o in MODES}
+    b0 = FEMBaseline(p, v, NEED)
+    b = FEMBaseline(p, v, NEED, noise=noise)
+    assert b.model.dofs <= b.dof_budget and "axial size" in b.disc_note, b.disc_note
+    gain = (b0._axial_size() / b._axial_size()) ** ORDER_RANGE[0]
+    assert gain > 1.3, (b0._axial_size(), b._axial_size())
+    u = REF["relative_uncertainty"]
+    for fa, o in MODES:
+        ref = REF["frequencies_hz"][fa][o - 1]
+        e0, e = b0.freqs[b0.index(fa, o)] - ref, b.freqs[b.index(fa, o)] - ref
+        assert abs(e) <= b.disc_err[b.index(fa, o)] + u * ref, (fa, o, e / ref, b.disc_err[b.index(fa, o)] / ref)
+        if fa == "flapwise":
+            assert abs(e) <= abs(e0) / gain, (fa, o, e / ref, e0 / ref, gain)

@@ -79,9 +79,16 @@ QUANTITIES = ("thickness", "width", "length", "modulus", "density", "mass", "cla
               "temperature", "tip_radius", "adhesion", "lattice", "scanner", "detector", "drag",
               "topography")
 
+_MEASUREMENT_KEYS = ("kind", "data", "description", "source", "licence", "quantity", "averages", "families",
+                     "sampling", "segments")
+#: what a spectrum's (or time series') values record: the tip's displacement (an interferometer, or any PSD
+#: calibrated in displacement at the free end), or an optical lever's deflection signal, the lever's slope at the
+#: laser spot times the static calibration (InvOLS) of an end load
+DETECTORS = ("displacement", "optical-lever")
+
 TABLES: dict[str, dict[str, tuple[str, ...]]] = {
-    "measurement": {"*": ("kind", "data", "description", "source", "licence", "quantity", "averages", "families",
-                          "sampling", "segments")},
+    "measurement": {"*": _MEASUREMENT_KEYS, "spectrum": (*_MEASUREMENT_KEYS, "detector", "spot"),
+                    "timeseries": (*_MEASUREMENT_KEYS, "detector", "spot")},
     "medium": {"*": ("name", "density", "viscosity", "temperature")},
     "noise": {"modal": ("frequency_rel", "Q_rel"), "spectrum": ("frequency_rel", "Q_rel"),
               "timeseries": ("frequency_rel", "Q_rel"), "friction": ("force", "force_part", "correlation"),
@@ -232,6 +239,8 @@ class SpectrumData(Measurement):
     freq_rel: float = 1e-6
     known_mass: tuple[float, float] | None = None
     static: tuple[float, float] | None = None  # as ModalData.static
+    detector: str = "displacement"  # one of DETECTORS
+    spot: float = 1.0  # an optical lever's laser spot, x / L from the clamp
 
 
 @dataclass
@@ -604,9 +613,28 @@ def _read_spectrum(side: Path, csv: Path, meta: dict, common: dict, kind: str) -
             raise DataFormatError(f"{side}: [measurement] families entry '{s}' is not a family" + _did_you_mean(s, FAMILIES))
         fam.append(ff)
     rel, _ = _noise(meta, side, "frequency_rel", 1e-6, 1e-12, 0.5)
+    detector, spot = _detector(mm, side)
     return SpectrumData(**common, probe=probe, probe_values=values, freq=f, value=v, quantity=quantity,
                         averages=averages, families=tuple(fam), known=known, known_mass=known_mass, freq_rel=rel,
-                        static=_static(meta, side))
+                        static=_static(meta, side), detector=detector, spot=spot)
+
+
+def _detector(mm: dict, side: Path) -> tuple[str, float]:
+    """``[measurement] detector`` (:data:`DETECTORS`, default displacement) and an optical lever's ``spot`` (x / L
+    of the laser spot, in (0, 1], default 1: the free end)."""
+    det = mm.get("detector", "displacement")
+    if det not in DETECTORS:
+        raise DataFormatError(f"{side}: [measurement] detector must be one of {', '.join(DETECTORS)}"
+                              + _did_you_mean(str(det), DETECTORS))
+    if "spot" not in mm:
+        return det, 1.0
+    if det != "optical-lever":
+        raise DataFormatError(f"{side}: [measurement] spot is the optical lever's laser spot: declare "
+                              f"detector = \"optical-lever\" with it")
+    sp = mm["spot"]
+    if isinstance(sp, bool) or not isinstance(sp, (int, float)) or not 0.05 <= float(sp) <= 1.0:
+        raise DataFormatError(f"{side}: [measurement] spot must be the laser spot's x / L from the clamp, in [0.05, 1]")
+    return det, float(sp)
 
 
 def _static(meta: dict, side: Path) -> tuple[float, float] | None:

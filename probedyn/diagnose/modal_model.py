@@ -15,7 +15,8 @@ sizes, s times the thickness, which the number of layers alone does not change),
 with the clamp-edge singularity, docs/fem.md, and the h^4 of smooth eigenvalues of quadratic
 elements), times Roache's safety factor of the grid convergence index (1.25 with the order
 observed; 3 and the lowest order when the differences are not monotone). When the data state
-their noise, the mesh is refined (the stretch halved, then all sizes halved) until every used
+their noise, the mesh is refined (on a stretched lever first along its axis, down to one layer of the
+thick mesh; then the stretch halved, then all sizes halved) until every used
 frequency's estimated error is at most a third of its noise or the next mesh would exceed the DOF
 budget (:data:`REFINE_DOF_BUDGET`); the remaining estimate enters the error budget as a model
 uncertainty added to the measurement noise in quadrature. When torsion is measured, a lever stretched more
@@ -309,6 +310,12 @@ def thickness_stretch(values: dict[str, Any], budget: int = DOF_BUDGET) -> float
 #: torsion 1 off by 0.2 % (1.1 kHz, converging at order ~1 in s) uniform, by 0.008 % graded
 #: (docs/diagnose.md section 9.25)
 SIDE_GRADING_STRETCH = 2.0
+#: a stretched lever's mesh is refined along its axis first while its axial elements are longer than this
+#: many layers of the thick mesh (:meth:`FEMBaseline._finer`)
+AXIAL_LAYER_RATIO = 1.5
+#: ... on a lever stretched at least this much (axial elements twice as long as the lever is thick); below, halving
+#: the stretch reaches the plain mesh (axial size = thickness, docs/fem.md's cheapest to 0.06 %) in one step
+AXIAL_FIRST_STRETCH = 2.0
 
 
 def build_within_budget(probe, values: dict[str, Any], s: float = 1.0, twist: bool = False) -> ElasticModel:
@@ -553,12 +560,27 @@ class FEMBaseline:
                           f"{GCI_SAFETY[1]}); {self.model.dofs} DOFs, stretch "
                           f"{self.stretch:.3g}" + (f"; refined: {'; '.join(self.refinements)}" if self.refinements else ""))
 
+    def _axial_size(self) -> float:
+        """The longest element along the beam axis of this baseline's mesh (hexahedra: the size away from
+        the clamp grading); 0 for other meshes."""
+        if not str(self.model.bundle.element or "").startswith("hex"):
+            return 0.0
+        x = np.unique(np.round(self.model.mesh.p[self.axis][self.model.mesh.t[:8]], 12))
+        return float(np.max(np.diff(x)))
+
     def _finer(self) -> tuple[dict[str, Any], float] | None:
-        """The next finer mesh: the thickness stretch halved (the axial and width sizes of a lever
-        meshed thick are s times its thickness), and from s = 1 on every size halved (a stretch
-        below 1.5 is first set to 1 together with that halving: alone it would refine by less
-        than 1.5)."""
+        """The next finer mesh. On a lever stretched at least :data:`AXIAL_FIRST_STRETCH`, first along the
+        axis: its hexahedra are as long as the *thick* lever (``s t``), ``ett`` times its layers, and the
+        error of the higher bending modes is that axial size's (a 275 x 45 x 3.5 um lever at s = 3.9 against
+        the converged FEM: flapwise 3 and 5 off by 3.2e-3 and 9.4e-3 with elements ``s t`` long, 2.0e-4
+        and 4.2e-4 with elements one layer long; docs/diagnose.md section 9.54), so the axial size is halved,
+        down to one layer of the thick mesh (:data:`AXIAL_LAYER_RATIO`). Then the thickness stretch is
+        halved (the width sizes are s times the thickness), and from s = 1 on every size halved (a stretch
+        below 1.5 is first set to 1 together with that halving: alone it would refine by less than 1.5)."""
         if self.stretch >= 1.5:
+            hx, layer = self._axial_size(), self._layer()
+            if self.stretch >= AXIAL_FIRST_STRETCH and layer > 0 and hx > AXIAL_LAYER_RATIO * layer:
+                return dict(self.mesh_values, element_size=max(layer, hx / 2.0)), self.stretch
             return self.mesh_values, max(1.0, self.stretch / 2.0)
         ett = int(self.mesh_values.get("elements_through_thickness", 0) or 0)
         if ett < 1 or ett * 2 > 40:
@@ -568,6 +590,12 @@ class FEMBaseline:
         if fine.get("element_size"):
             fine["element_size"] = fine["element_size"] / 2.0
         return fine, 1.0
+
+    def _layer(self) -> float:
+        """The through-thickness element size of the thick mesh a stretched lever is built on (``s t / ett``);
+        0 without layers."""
+        ett = int(self.mesh_values.get("elements_through_thickness", 0) or 0)
+        return self.stretch * self.t / ett if ett > 0 else 0.0
 
     def excess(self, noise: dict[tuple[str, int], float]) -> float:
         """The largest ratio of a used frequency's estimated discretisation error to
@@ -592,24 +620,47 @@ class FEMBaseline:
         if nxt is None:
             return False
         vals, s = nxt
+        axial = s == self.stretch and vals.get("element_size") != self.mesh_values.get("element_size")
         try:
             m = build_within_budget(self.probe, self.probe.resolve(vals), s, self.twist)
         except ProbedynError:
             return False
-        if m.dofs > self.dof_budget and s < self.stretch:
-            # the stretch that fills the budget (DOFs ~ 1 / s^2)
-            s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
-            if s > 0.85 * self.stretch:
+        if axial:
+            # finer along the axis; over the budget, the stretch that fills it with the axial size kept at one
+            # thick layer (the width and thickness sizes grow with s, the DOFs ~ 1 / s^2), taken only when it is
+            # still finer along the axis than this mesh by AXIAL_LAYER_RATIO
+            for _ in range(4):  # the DOFs fall more slowly than 1 / s^2 on a width graded for twist: iterate
+                if vals is None or m.dofs <= self.dof_budget:
+                    break
+                k = math.sqrt(m.dofs / self.dof_budget) * 1.05
+                s, vals = s * k, dict(vals, element_size=float(vals["element_size"]) * k)
+                if vals["element_size"] * AXIAL_LAYER_RATIO > self._axial_size():
+                    vals = None
+                    break
+                try:
+                    m = build_within_budget(self.probe, self.probe.resolve(vals), s, self.twist)
+                except ProbedynError:
+                    vals = None
+            if vals is None or m.dofs > self.dof_budget:
+                self.disc_note += (f"; not refined further: the mesh finer along the axis exceeds the budget "
+                                   f"({self.dof_budget} DOFs), the estimate enters sigma")
+                return False
+        else:
+            if m.dofs > self.dof_budget and s < self.stretch:
+                # the stretch that fills the budget (DOFs ~ 1 / s^2)
+                s = self.stretch * math.sqrt(self.model.dofs / self.dof_budget)
+                if s > 0.85 * self.stretch:
+                    self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
+                                       f"{self.dof_budget}), the estimate enters sigma")
+                    return False
+                m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s), self.twist)
+            if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
                 self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
                                    f"{self.dof_budget}), the estimate enters sigma")
                 return False
-            m = build_within_budget(self.probe, self.probe.resolve(vals), max(1.0, s), self.twist)
-        if m.dofs > self.dof_budget or m.dofs < 1.2 * self.model.dofs:  # too large / not finer
-            self.disc_note += (f"; not refined further: the next mesh has {m.dofs} DOFs (budget "
-                               f"{self.dof_budget}), the estimate enters sigma")
-            return False
-        self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}, "
-                                f"error/noise {ratio:.2g})")
+        self.refinements.append(f"{self.model.dofs} -> {m.dofs} DOFs (stretch {self.stretch:.3g} -> {max(1.0, s):.3g}"
+                                + (f", axial size {self._axial_size():.3g} -> {float(vals['element_size']):.3g} m" if axial
+                                   else "") + f", error/noise {ratio:.2g})")
         self.mesh_values, self.stretch = dict(self.probe.resolve(vals)), max(1.0, s)
         self._build(m, needed, max_modes)
         self.disc_err = np.zeros(len(self.families))

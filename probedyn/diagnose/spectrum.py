@@ -24,7 +24,8 @@
    mode's frequency and family, and in a declared medium the Sader quality factor of its
    flapwise modes, ``Q <= Q_fluid`` (``1/Q = 1/Q_int + 1/Q_fluid``); with a declared temperature it
    also predicts the thermal peak area ``k_B T / k_eff`` (equipartition, effective stiffness of the
-   mode at the tip). A common frequency scale ``s`` in [1/2, 2] (the geometry may be off by that
+   mode at the tip; recorded by a declared optical lever, ``k_B T g_n^2 / omega_n^2`` with ``g_n`` the slope at
+   the laser spot as the instrument calibrates it, :func:`optical_lever_gains`). A common frequency scale ``s`` in [1/2, 2] (the geometry may be off by that
    much) maps predicted onto measured frequencies (the scale that matches most peaks within 3 %);
    a peak is accepted as mode (family, order) when it lies within 3 % of a scaled prediction (the peaks placed
    one to one on the modes, :func:`_match`), its Q
@@ -712,8 +713,42 @@ def _line_shape(freq: np.ndarray, medium, base: FEMBaseline, preds: list[dict]):
     return FluidLine(freq, base.w, medium[0], medium[1], a)
 
 
-def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]:
+#: the step of the optical lever's slope difference, a fraction of the length (a one-sided second-order difference
+#: of the quadratic elements' field: its error ~ (step x wavenumber)^2, 1e-5 at flapwise 6)
+SLOPE_STEP = 1e-3
+#: a mode whose recorded amplitude is below this fraction of its largest displacement component at the tip is not
+#: seen by the detector (no thermal area test: the displacement detector's infinite k_eff along z)
+UNSEEN = 1e-3
+
+
+def optical_lever_gains(base: FEMBaseline, spot: float = 1.0) -> np.ndarray:
+    """Per FEM mode of ``base``, what an optical lever records per unit of the (mass-normalised) modal coordinate:
+    the lever's slope ``dw/dx`` at the laser spot (``x_s = spot L`` on the lever's centre line, where a spot sees no
+    twist) times the calibration of its signal as a deflection, the static end load's ``w(L) / w'(x_s) =
+    2 L^3 / (3 (2 L x_s - x_s^2))`` (an InvOLS measured by pressing the tip on a hard surface; Euler-Bernoulli).
+    Flapwise mode n's thermal area is then ``k_B T gain_n^2 / omega_n^2``, not the displacement detector's ``k_B T /
+    k_eff``: the ratio ``gain_n / w_n(L)`` is 0.918 for flapwise 1 at the free end (Butt & Jaschke 1995: the
+    optical lever's 0.817 k_B T / <z*^2> against 0.971 k_B T / <z^2>) and grows about as n, so the areas of a
+    lever's higher modes differ from a displacement detector's by ~n^2 (flapwise 5: ~25 x)."""
+    m, ax, ta = base.model, base.length_axis, base.thickness_axis
+    x0 = float(m.mesh.p[ax].min())
+    L = base.L
+    xs = x0 + min(spot, 1.0 - 1e-9) * L
+    d = SLOPE_STEP * L
+    u = []
+    for k in range(3):  # backward: the spot may be at the free end
+        q = np.array(base.clamp_centroid, dtype=float)
+        q[ax] = xs - k * d
+        u.append(np.asarray(m.attachment(q)[ta] @ base.shapes).ravel())
+    slope = (3 * u[0] - 4 * u[1] + u[2]) / (2 * d)
+    xl = xs - x0
+    return slope * 2 * L**3 / (3 * (2 * L * xl - xl**2))
+
+
+def _predictions(base: FEMBaseline, medium, temperature, detector: str = "displacement",
+                 spot: float = 1.0) -> list[dict[str, Any]]:
     out = []
+    gains = optical_lever_gains(base, spot) if temperature and detector == "optical-lever" else None
     cnt: dict[str, int] = {}
     rho_f, eta_f = medium if medium is not None else (0.0, 1.8e-5)
     loaded = rho_f > 0 and base.has_top
@@ -737,7 +772,11 @@ def _predictions(base: FEMBaseline, medium, temperature) -> list[dict[str, Any]]
             f, Q = _stokes_mode(float(a @ (K @ a)), float(a @ (M @ a)), float(a @ (Sw @ a)), md.omega, rho_f, eta_f,
                                 1.0, math.inf)
             item.update(f_Hz=f, Q_fluid=Q)
-        if temperature:
+        if temperature and gains is not None:  # an optical lever: the slope at the spot, as calibrated
+            g = float(gains[len(out)])
+            seen = abs(g) > UNSEEN * float(np.max(np.abs(md.tip_displacement))) and md.omega > 0
+            item["thermal_area_m2"] = K_B * temperature * g * g / md.omega**2 if seen else 0.0
+        elif temperature:
             k = item["k_eff_z"]
             item["thermal_area_m2"] = K_B * temperature / k if np.isfinite(k) and k > 0 else 0.0
         out.append(item)
@@ -919,7 +958,7 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
         raise DataFormatError(f"{meas.path}: no peak stands out of the spectrum's background by 5 standard deviations")
     if base is None:
         base = FEMBaseline(meas.probe, meas.probe_values, {"flapwise": 2})
-    preds = _predictions(base, meas.medium, meas.temperature)
+    preds = _predictions(base, meas.medium, meas.temperature, meas.detector, meas.spot)
     shape = _line_shape(freq, meas.medium, base, preds)
     fits = fit_lines(freq, psd, peaks, s_log, meas.averages, shape)
     hint = list(meas.families)
@@ -1107,7 +1146,8 @@ def spectrum_problem(meas: SpectrumData, base: FEMBaseline | None = None) -> Mod
                                   "labelling_models": [x[1] or "baseline" for x in scores] or None,
                                   "ambiguous_labellings": ambiguous or None,
                                   "note": "the hypothesis that placed the peaks on modes (labels only, not a diagnosis)"},
-                  "thermal_area_factor": c_cal}
+                  "thermal_area_factor": c_cal,
+                  "detector": meas.detector if meas.detector != "optical-lever" else f"optical-lever (spot {meas.spot:g} L)"}
     prob.extra_report = lambda: {"peaks": prob.peaks}
     return prob
 

@@ -149,6 +149,9 @@ def summary(res: dict[str, Any]) -> str:
         lines.append("peaks: " + ", ".join(f"{p['family']} {p['order']} at {p['f0_Hz']:.6g} Hz" for p in acc)
                      + (f" ({shape} lines" + (", fitted together" if res["peaks"].get("joint_fits") else "") + ")"
                         if shape != "SHO" or res["peaks"].get("joint_fits") else ""))
+        if res["peaks"].get("thermal_area_factor") is not None:
+            lines.append(f"  thermal areas ({res['peaks'].get('detector', 'displacement')} detector): "
+                         f"{res['peaks']['thermal_area_factor']:.3g} x equipartition (the detector's calibration)")
         for p in rej:
             lines.append(f"  rejected peak at {p['f0_Hz']:.6g} Hz: {'; '.join(p['reasons'])}")
         for p in acc:
