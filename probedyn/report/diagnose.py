@@ -196,6 +196,9 @@ def summary(res: dict[str, Any]) -> str:
     for c in res["confounded"]:
         lines.append(f"CONFOUNDED within {c['margin_nats']:.2f} nats: " + ", ".join(
             f"{n} ({e:.1f})" for n, e in zip(c["causes"], c["evidence"])))
+        if c.get("not_claimed"):
+            lines.append(f"  not claimed, but as well supported: {', '.join(c['not_claimed'])} (each failed its own "
+                         f"likelihood-ratio test)")
         for m in c["separating_measurements"]:
             pv = ", ".join(f"{k} {_val(v, m['unit'])}" for k, v in m["predictions"].items())
             lines.append(f"  to separate them, measure {m['measure']}: {pv} (noise {_val(m['sigma'], m['unit'])})")
