@@ -503,8 +503,7 @@ class FEMBaseline:
         if es:
             c["element_size"] = float(es) * k
         elif str(self.model.bundle.element or "").startswith("hex"):
-            x = np.unique(np.round(self.model.mesh.p[self.axis][self.model.mesh.t[:8]], 12))
-            c["element_size"] = float(np.max(np.diff(x))) * k
+            c["element_size"] = self._axial_size() * k
         return c
 
     def _modes_by_family(self, model: ElasticModel, n: int) -> dict[str, list[float]]:

@@ -728,8 +728,8 @@ def optical_lever_gains(base: FEMBaseline, spot: float = 1.0) -> np.ndarray:
     2 L^3 / (3 (2 L x_s - x_s^2))`` (an InvOLS measured by pressing the tip on a hard surface; Euler-Bernoulli).
     Flapwise mode n's thermal area is then ``k_B T gain_n^2 / omega_n^2``, not the displacement detector's ``k_B T /
     k_eff``: the ratio ``gain_n / w_n(L)`` is 0.918 for flapwise 1 at the free end (Butt & Jaschke 1995: the
-    optical lever's 0.817 k_B T / <z*^2> against 0.971 k_B T / <z^2>) and grows about as n, so the areas of a
-    lever's higher modes differ from a displacement detector's by ~n^2 (flapwise 5: ~25 x)."""
+    optical lever's 0.817 k_B T / <z*^2> against 0.971 k_B T / <z^2>) and grows about as 2 n (flapwise 5: 9.4), so
+    the areas of a lever's higher modes differ from a displacement detector's by up to two decades."""
     m, ax, ta = base.model, base.length_axis, base.thickness_axis
     x0 = float(m.mesh.p[ax].min())
     L = base.L
