@@ -289,6 +289,9 @@ class FrictionState:
     ky_ratio: float = 1.0  # the lever's stiffness across the scan over k_x (1: the lattice axes decouple)
     gain: float = 1.0  # lateral-force calibration factor
     thermal: tuple[float, float] | None = None  # (T [K], attempt frequency [Hz])
+    #: the declared temperature [K] (0: none declared): the stick branches are the tip's thermal mean over its well
+    #: (:func:`thermal_mean_shift`), a declared condition of every model, activated or not
+    temperature: float = 0.0
     transforms: list = field(default_factory=list)  # f(problem, scan, F) -> F, applied last
 
 
@@ -444,6 +447,108 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     xa = float(xx[down[0]]) if len(down) else xb + a
     return Xq - Xmed, k * (xa - xb), (X - Xmed, H)
+
+
+#: the thermal mean's table (:func:`thermal_mean_shift`): the stick branch's support positions where the Boltzmann mean
+#: is taken (interpolated to the barrier table's, whose memory it shares), and the points of its two grids (the
+#: period behind the forward saddle, where the backward saddle is found; the well's thermal width each side of the
+#: minimum, where the mean is taken). Against grids four times finer: within 1.5 % of the shift's largest value
+#: (tests/test_diagnose_thermal_mean.py)
+THERMAL_MEAN_POINTS = (100, 301, 201)
+#: thermal widths of the well each side of its minimum that the mean is taken over (clipped to the saddles): the
+#: Boltzmann weight there is exp(-WIDTHS^2 / 2) of the minimum's (1e-31), beyond any share of the mean
+THERMAL_MEAN_WIDTHS = 12.0
+#: corrugation over k_B T above which the shift is its leading term in T (the next is smaller by about k_B T / U0:
+#: measured 0.3 % of the shift at U0 = 520 k_B T, and 0.03 % at 5200)
+THERMAL_MEAN_LEADING = 2000.0
+#: forward barrier [k_B T] below which the tip is no longer bound in its well: nearer the instability the mean over
+#: the well is its wide backward side (the restricted Boltzmann mean turns to the other sign within about k_B T of
+#: it), and an activated tip has slipped long before (:func:`thermal_slip_advance`); there the shift is held at its
+#: value where the barrier is this high
+THERMAL_MEAN_BOUND = 3.0
+
+
+def thermal_mean_shift(U0: float, a: float, k: float, T: float):
+    """The stick branch at a temperature: the lateral force's thermal mean less its quasi-static value, along the
+    branch of the well at 0 (the support positions of :func:`_barrier_table`, motion in +x).
+
+    Between slips the tip is in thermal equilibrium within its well: its relaxation time ``c / k_tot`` (about a
+    microsecond) is far below a sample's time, so a sample records the Boltzmann mean of ``k (X - x)`` over the
+    well, from its backward saddle to its forward one, ``exp(-E(x) / k_B T)`` with ``E = -U0 cos(q x) + k (X - x)^2
+    / 2``. The well is asymmetric wherever the lever pulls: its forward side is the shallow one, so the mean lies
+    ahead of the minimum and the recorded force below the quasi-static branch, by more the nearer the slip. Its
+    leading term in T is ``k k_B T E3 / (2 E2^2)`` with ``E2 = k + q^2 U0 cos(q x_m)`` and
+    ``E3 = -q^3 U0 sin(q x_m)``: the softening of the corrugation a fluctuating tip sees (the Debye-Waller factor
+    ``exp(-q^2 k_B T / (2 E2))`` for small fluctuations). Where the forward barrier is below
+    :data:`THERMAL_MEAN_BOUND` k_B T the shift is held (the tip is no longer bound). The quasi-static branch with
+    the Kramers slip point alone fitted blind friction set 2's room-temperature records with a corrugation 7-19 %
+    low and an attempt frequency 0.25-1.1 decades low: the low corrugation took the rounded branch, the low
+    frequency kept the slips in place (docs/diagnose.md 9.55). Returns ``(X, dF, X_c)`` (``dF`` [N], read-only),
+    None where the branch has no instability (eta <= 1) or T <= 0. Memoised."""
+    if not (T > 0):
+        return None
+    return _thermal_mean_memo(float(U0), float(a), float(k), float(T))
+
+
+@functools.lru_cache(maxsize=BARRIER_MEMORY)
+def _thermal_mean_memo(U0: float, a: float, k: float, T: float):
+    """:func:`thermal_mean_shift` computed: on a cold tip its leading term; else at :data:`THERMAL_MEAN_POINTS`
+    support positions the well's backward saddle located on a grid over the period behind the forward saddle, then
+    the mean on a grid across the well's thermal width ``sqrt(k_B T / E'')`` about the minimum
+    (:data:`THERMAL_MEAN_WIDTHS` each side), clipped to the saddles; interpolated to the barrier table's positions."""
+    tab = _barrier_table(U0, a, k)
+    if tab is None:
+        return None
+    Xall, dEall, Xc, xsall, xmall = tab
+    q = 2 * math.pi / a
+    kT = K_B * T
+    if U0 > THERMAL_MEAN_LEADING * kT:
+        E2 = np.maximum(k + q * q * U0 * np.cos(q * xmall), 1e-300)
+        dF = k * kT * (-(q**3) * U0 * np.sin(q * xmall)) / (2.0 * E2 * E2)
+    else:
+        rows, m1, m2 = THERMAL_MEAN_POINTS
+        idx = np.unique(np.linspace(0, len(Xall) - 1, rows).astype(int))
+        X, xs, xm = Xall[idx], xsall[idx], xmall[idx]
+
+        def energy(x):
+            return -U0 * np.cos(q * x) + 0.5 * k * (X[:, None] - x) ** 2
+
+        x = xs[:, None] - a + a * np.linspace(0.0, 1.0, m1)[None, :]
+        E = energy(x)
+        back = np.argmax(np.where(x <= xm[:, None], E, -np.inf), axis=1)
+        xb = x[np.arange(len(X)), back]
+        width = np.sqrt(kT / np.maximum(k + q * q * U0 * np.cos(q * xm), 1e-300))
+        lo = np.maximum(xb, xm - THERMAL_MEAN_WIDTHS * width)
+        hi = np.minimum(xs, xm + THERMAL_MEAN_WIDTHS * width)
+        x = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, m2)[None, :]
+        Emin = -U0 * np.cos(q * xm) + 0.5 * k * (X - xm) ** 2
+        w = np.exp(-np.clip(energy(x) - Emin[:, None], 0.0, 700.0 * kT) / kT)
+        dF = np.interp(Xall, X, k * (xm - np.sum(w * x, axis=1) / np.sum(w, axis=1)))
+    loose = np.nonzero(dEall < THERMAL_MEAN_BOUND * kT)[0]
+    if len(loose) and loose[0] > 0:
+        dF[loose[0]:] = dF[loose[0] - 1]
+    elif len(loose):
+        dF[:] = 0.0
+    dF.setflags(write=False)
+    return Xall, dF, Xc
+
+
+def _thermal_mean_correction(F: np.ndarray, Xl: np.ndarray, direction: np.ndarray, st: "FrictionState", U0: float,
+                             k: float) -> np.ndarray:
+    """The thermal mean's shift (:func:`thermal_mean_shift`) at a scan's samples: each sample on the stick branch of
+    the well its model force ``F`` places the tip in (``x = X - F / k``), mirrored for motion in -x; zero past the
+    branch's instability and where no temperature is declared (``st.temperature`` 0: the record's temperature is
+    not known, and an activation cause's assumed 295 K is no baseline's)."""
+    if not st.temperature > 0 or U0 <= 0:
+        return np.zeros(len(F))
+    tab = thermal_mean_shift(U0, st.a, k, st.temperature)
+    if tab is None:
+        return np.zeros(len(F))
+    Xt, dF, Xc = tab
+    d = np.asarray(direction, float)
+    n = np.round((Xl - F / k) / st.a)
+    Xr = d * (Xl - n * st.a)
+    return d * np.where(Xr <= Xc, np.interp(Xr, Xt, dF, left=0.0, right=0.0), 0.0)
 
 
 def thermal_force_variance(F: np.ndarray, U0: float, a: float, k: float, c: float, T: float, dt: float) -> np.ndarray:
@@ -687,7 +792,7 @@ def simulate_scan_2d(data: FrictionData, st: FrictionState, scan: FrictionScan, 
     lattice's registry along its two axes at the scan's centre, as the trains'. The damping across the scan is
     the one along it, ``c_y = c_x``, as in the source's Table 2.1 (c_x = c_y = 7e-9 N s/m with k_y = k_x / 2):
     the dissipation is the contact's and the medium's, not the lever's bending. Athermal: a 2D tip's activated
-    slips are not modelled."""
+    slips are not modelled, nor its thermal mean over the well (:func:`thermal_mean_shift`)."""
     from probedyn.schemes.ffm_lattice2d import lattice2d_path
 
     Xs = _support(scan, st) - _centre(scan)
@@ -741,6 +846,8 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     else:
         res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
     F = _sample_path(res, Xl, starts, ends, len(turns) - 2, data.sampling)
+    # between slips the tip samples its well thermally: the recorded force is the Boltzmann mean (thermal_mean_shift)
+    F = F + _thermal_mean_correction(F, Xl, scan.direction, st, U0, ffm.cantilever["k_x"])
     if skip_out is not None and slips:  # landing wells at random where the slips are activated (_skip_regions)
         skip_out.extend(_skip_regions(res, len(turns) - 2, Xl, starts, ends, data.sampling, st.a,
                                       ffm.cantilever["k_x"], U0))
@@ -1502,6 +1609,16 @@ class FrictionProblem:
             return clipped_starts(self.base_params, ref_values, new, lambda c: c.reference_starts(self, dict(ref_values))
                                   if hasattr(c, "reference_starts") else [])
         data = {c: c.data_starts(self, dict(ref_values)) if hasattr(c, "data_starts") else [] for c in new}
+        for c in new:
+            # a data start that also reads the reference's own parameters from the loop (a corrugation) is offered again
+            # with the reference's values kept and only the cause's own read: the loop is read quasi-statically, and
+            # where the reference carries a declared temperature's activation its corrugation and attempt frequency
+            # are the record's, not the loop's (blind friction set 2's g08 at 295 K: the adhesion load read 3.29 nN
+            # for its 3.0, the loop's corrugation 20 % below the activated baseline's; from the loop's, chi^2 1.2e5
+            # and the nested fit stayed at its null, 3331; from the baseline's, 2169 at the start and 1328 fitted)
+            own = {p.name for p in c.params}
+            data[c] = data[c] + [kept for st in data[c] if set(st) - own
+                                 and (kept := {k: x for k, x in st.items() if k in own})]
         out = clipped_starts(self.base_params, ref_values, new, lambda c: data[c])
         if mask is None:  # a cause's ridge of starts (parameters that trade), ranked by the whole model's chi^2
             causes = tuple(ref_causes) + tuple(new)
@@ -1642,6 +1759,8 @@ class FrictionProblem:
     # -- model --------------------------------------------------------------------------------
     def state(self, values, causes=()) -> FrictionState:
         st = FrictionState(u0=values["u0"], a=values["a"], load_share=self.load_share, n_ref=self.N_mean)
+        if self.temperature is not None and self.temperature > 0:
+            st.temperature = float(self.temperature)  # declared (read_friction): the thermal mean of the branches
         if self.data.k_y:
             st.ky_ratio = self.data.k_y / self.data.k_x  # declared: the lever's own
         for c in self.base_terms:
@@ -1693,7 +1812,8 @@ class FrictionProblem:
             th = (float(th[0]), float(th[1])) if bound >= THERMAL_MIN_HAZARD else None
         return (float(st.u0), float(st.a), float(st.gamma), float(st.n_adh), float(st.load_share), float(st.n_ref),
                 float(st.offset), float(st.drift),
-                float(st.bow), float(st.theta), float(st.gain), th, float(st.ky_ratio) if _coupled(st) else 1.0)
+                float(st.bow), float(st.theta), float(st.gain), th, float(st.ky_ratio) if _coupled(st) else 1.0,
+                float(st.temperature))
 
     def _mask_key(self):
         return None if self.train_mask is None else hash(np.asarray(self.train_mask, bool).tobytes())
@@ -1711,8 +1831,10 @@ class FrictionProblem:
         the diagnosis' numbers do not depend on what is kept."""
         if st.transforms:  # a transform is a function: no key for it
             return self._scan_model_once(i, st, phis)
+        # ... and the detector's clock the drift is read on (drift_clock: a problem read again on another clock must
+        # not find the models of the first)
         key = (i, tuple(float(p) for p in phis), self._mask_key(), float(self.sigma), float(self.thermal_noise_T),
-               *(getattr(st, f.name) for f in fields(st) if f.name != "transforms"))
+               self.drift_clock, *(getattr(st, f.name) for f in fields(st) if f.name != "transforms"))
         memo = self._scan_memo
         hit = memo.get(key)
         if hit is not None:

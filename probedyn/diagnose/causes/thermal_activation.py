@@ -6,7 +6,10 @@ near the instability reaches one, the earlier the slower the scan: friction then
 logarithmically with the speed (Gnecco et al., PRL 84, 1172 (2000); Sang et al., PRL 87, 174301
 (2001)). Effect on the model: the median activated slip point of every well (from the quasi-static
 barrier of the PT potential with the lever spring, see :func:`probedyn.diagnose.friction.thermal_slip_advance`),
-at which the FFM integration places the tip over the saddle and lets its dynamics complete the slip.
+at which the FFM integration places the tip over the saddle and lets its dynamics complete the slip. Between
+slips, at a declared temperature, every model's force is the Boltzmann mean over the tip's well, below the
+quasi-static branch towards the slip (:func:`probedyn.diagnose.friction.thermal_mean_shift`, a declared condition of
+the baseline, with or without this term; docs/diagnose.md 9.55).
 
 The temperature is the declared one ([medium] temperature; 295 K if none is declared, noted);
 the fitted parameter is the attempt frequency (log10 of f0/Hz; 0 = 1 Hz, no activation at
