@@ -416,8 +416,35 @@ def thermal_hazard(tab, V: float, T: float, f0: float) -> np.ndarray:
 
 
 #: quantiles of the activated slip point carried per slip (the mean and variance of every sample
-#: near a slip are averages over them)
+#: near a slip are averages over them): the middle of the distribution in SLIP_QUANTILES equal probability
+#: intervals, each tail beyond the first of them in intervals halving SLIP_TAIL_HALVINGS times down to
+#: 1/32 2^-14 = 1.9e-6 (:func:`slip_nodes`)
 SLIP_QUANTILES = 32
+#: halvings of each tail's probability intervals beyond the middle's first (:func:`slip_nodes`). Equal intervals
+#: alone left a slip beyond the 1/64 quantile no variance: blind g09 (298 K, U0 10 k_B T, 100 slips) had samples
+#: at r = 15 and 8.7 where a slip came two samples early or late, chi^2 1052 on 663 samples at its detector's
+#: 5 pN, and 622 with 2048 equal quantiles (docs/diagnose.md 9.56)
+SLIP_TAIL_HALVINGS = 14
+
+
+def slip_nodes(mid: int = SLIP_QUANTILES, halvings: int = SLIP_TAIL_HALVINGS) -> tuple[np.ndarray, np.ndarray]:
+    """The slip point's quantile nodes: probabilities ``p`` and weights ``w`` (summing to 1) of a midpoint rule
+    in probability. The middle ``(1/mid, 1 - 1/mid)`` in ``mid - 2`` equal intervals; each tail from ``1/mid``
+    in intervals halving ``halvings`` times, the last one from 0. A sample's mean and variance over the slip
+    point are ``sum w F(p)`` and ``sum w (F(p) - mean)^2``: a sample that only a slip beyond the quantile ``p``
+    moves to the other branch carries ``p (1 - p) D^2`` to the factor 2 of its interval (equal intervals gave it
+    0 beyond ``1/(2 mid)``)."""
+    pt = 1.0 / mid
+    edges = [0.0] + [pt * 2.0**-j for j in range(halvings, 0, -1)] + list(np.linspace(pt, 1.0 - pt, mid - 1))
+    edges = np.array(edges + [1.0 - pt * 2.0**-j for j in range(1, halvings + 1)] + [1.0])
+    p, w = 0.5 * (edges[1:] + edges[:-1]), np.diff(edges)
+    p.setflags(write=False)
+    w.setflags(write=False)
+    return p, w
+
+
+#: the slip point's quantile nodes (probabilities, weights) every activated path carries
+SLIP_NODES = slip_nodes()
 
 
 def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float, f0: float,
@@ -426,19 +453,21 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     slip-position scatter): the survival ``exp(-H(X))`` of the stick state with the hazard of
     :func:`thermal_slip_advance` gives the slip point's CDF ``1 - exp(-H)`` (the athermal
     instability ends the branch: the rest of the probability slips there). Returns the
-    ``SLIP_QUANTILES`` mid-quantiles of the slip point relative to the median, in the direction of
+    quantiles at :data:`SLIP_NODES` of the slip point relative to the median, in the direction of
     motion, the force drop k (x_after - x_before) at the median (the tip lands in the next
-    well) and the cumulative hazard along the branch, ``(X - X_median, H)`` (a slip carried across a
-    reversal, :func:`_scatter_moments`). ``H``: the hazard along the table if already computed."""
+    well) and, along the branch, the cumulative hazard and the quasi-static force, ``(X - X_median, H, F)`` (a slip
+    carried across a reversal, a slip in the tails, :func:`_scatter_moments`). ``H``: the hazard along the table if already computed."""
     X, dE, Xc, xs, xm = tab
     H = thermal_hazard(tab, V, T, f0) if H is None else H
     C = np.append(1.0 - np.exp(-H), 1.0)
     Xe = np.append(X, Xc)
     keep = np.concatenate([[True], np.diff(C) > 0])
     C, Xe = C[keep], Xe[keep]
-    qs = (np.arange(SLIP_QUANTILES) + 0.5) / SLIP_QUANTILES
-    Xq = np.interp(qs, C, Xe)
+    Xq = np.interp(SLIP_NODES[0], C, Xe)
     Xmed = float(np.interp(0.5, C, Xe))
+    # the tip lands in this well at the previous slip, a period before the median: no slip comes earlier (the
+    # hazard before it, which the table's branch accumulates from the well's birth, is put at the landing)
+    Xq = np.maximum(Xq, Xmed - a)
     q = 2 * math.pi / a
     F0 = q * U0
     xb = float(np.interp(Xmed, X, xm))
@@ -446,7 +475,7 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     g = k * (Xmed - xx) - F0 * np.sin(q * xx)
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     xa = float(xx[down[0]]) if len(down) else xb + a
-    return Xq - Xmed, k * (xa - xb), (X - Xmed, H)
+    return Xq - Xmed, k * (xa - xb), (X - Xmed, H, k * (X - xm))
 
 
 #: the thermal mean's table (:func:`thermal_mean_shift`): the stick branch's support positions where the Boltzmann mean
@@ -581,7 +610,7 @@ def thermal_force_variance(F: np.ndarray, U0: float, a: float, k: float, c: floa
     return k * k * var_x
 
 
-def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None):
+def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None, nodes=None):
     """Mean shift and variance of every sample from the stochastic slip points, on the model's own path.
 
     A slip at ``Y = X* + d delta`` instead of the path's ``X*`` translates the slip and its transient
@@ -595,7 +624,13 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     a sample at -11.4 sigma). Each slip moves the samples from ``reach`` (its largest shift) before it to
     ``reach`` plus half a lattice period after it, and no others (the next slip's own scatter is its own).
     ``paths``: the model path's (support, force) per segment (:func:`_segments`); samples are point values
-    or interval means as the data's (``point``).
+    or interval means as the data's (``point``). ``dq``: the slip point's offsets at the quantile nodes
+    ``nodes = (p, w)`` (probabilities and weights, :func:`slip_nodes`; default: equal-probability midpoints).
+
+    The tails (the nodes below the quantile ``1 / SLIP_QUANTILES`` or above its complement, where ``carry`` has the
+    branch's quasi-static force): the slip there may be most of a period from the median, where a translated path
+    would carry the neighbouring slips; the samples between the median and the node's slip point exchange the two
+    quasi-static branches instead (:func:`_branch_exchange`), and the translation is kept to the middle's reach.
 
     A slip near a reversal (``carry``: the force drop at the slip and the cumulative hazard ``H`` along the stick
     branch against the offset from the median slip point): a slip point beyond the segment's turn is a tip still
@@ -611,7 +646,20 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     if not slips:
         return mean, var
     dq = np.asarray(dq, float)
+    if nodes is None:
+        nodes = ((np.arange(len(dq)) + 0.5) / len(dq), np.full(len(dq), 1.0 / len(dq)))
+    wq = np.asarray(nodes[1], float)[:, None]
     reach = float(np.max(np.abs(dq)))
+    # the tails' realizations exchange the two quasi-static branches (the slip point's offsets ``u`` from the
+    # median, the quasi-static force along the branch in the direction of motion: ``carry[1][0]``, ``carry[1][2]``)
+    tail = np.zeros(len(dq), bool)
+    if carry is not None and len(carry[1]) > 2:
+        pq = np.asarray(nodes[0], float)
+        tail = (pq < 1.0 / SLIP_QUANTILES) | (pq > 1.0 - 1.0 / SLIP_QUANTILES)
+        u_b, f_b = carry[1][0], carry[1][2]
+    inner = ~tail
+    reach_mid = float(np.max(np.abs(dq[inner]))) if np.any(inner) else 0.0
+    after = max(reach_mid + 0.5 * a, reach)
     # sample intervals along the support (interval means) or points
     lo = np.empty(n)
     hi = np.empty(n)
@@ -624,47 +672,95 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         mid = 0.5 * (x[1:] + x[:-1])
         lo[idx] = np.concatenate([[x[0] - (mid[0] - x[0])], mid])
         hi[idx] = np.concatenate([mid, [x[-1] + (x[-1] - mid[-1])]])
-    prepared: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, float]] = {}
+    lo_, hi_ = np.minimum(lo, hi), np.maximum(lo, hi)
+    seg_idx = {sg: np.nonzero(seg_of == sg)[0] for sg in np.unique(seg_of)}
+    by_seg: dict[int, list[tuple[float, float]]] = {}
     for sg, Xs, d in slips:
-        if sg not in prepared:
-            b, f = paths[sg][0], paths[sg][1]
-            o = np.argsort(b, kind="stable")
-            b, f = b[o], f[o]
-            db = np.diff(b)
-            ok = db > 1e-9 * max(float(np.ptp(b)), 1e-300)
-            # the stick branches' slope: the median over the path's steps (the tip sticks most of the way)
-            kb = float(np.median(np.diff(f)[ok] / db[ok])) if np.any(ok) else 0.0
-            cum = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * db)])
-            prepared[sg] = (b, f, cum, kb)
-        b, f, cum, kb = prepared[sg]
-        if carry is not None and np.any(seg_of == sg + 1):  # the data go on after the turn ending this segment
-            _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, dq, b, slips, carry, point, a)
-        # samples from reach before the slip to reach + a / 2 after it, in the direction of motion d
-        u_lo, u_hi = d * (np.minimum(lo, hi) - Xs), d * (np.maximum(lo, hi) - Xs)
-        if d < 0:
-            u_lo, u_hi = u_hi, u_lo
-        idx = np.nonzero((seg_of == sg) & (u_hi >= -reach) & (u_lo <= reach + 0.5 * a))[0]
-        if not len(idx):
+        by_seg.setdefault(sg, []).append((Xs, d))
+    for sg, these in by_seg.items():
+        b, f = paths[sg][0], paths[sg][1]
+        o = np.argsort(b, kind="stable")
+        b, f = b[o], f[o]
+        db = np.diff(b)
+        ok = db > 1e-9 * max(float(np.ptp(b)), 1e-300)
+        # the stick branches' slope: the median over the path's steps (the tip sticks most of the way)
+        kb = float(np.median(np.diff(f)[ok] / db[ok])) if np.any(ok) else 0.0
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * db)])
+        if carry is not None and sg + 1 in seg_idx:  # the data go on after the turn ending this segment
+            for Xs, d in these:
+                _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, dq, b, slips, carry, point, a, nodes)
+        seg = seg_idx.get(sg)
+        if seg is None:
             continue
-        shift = np.concatenate([[0.0], d * dq])[:, None]  # (1 + M, 1): the path itself first
-        if point:
-            Fs = np.interp(Xl[idx][None, :] - shift, b, f)
-        else:
-            a_, b_ = lo[idx][None, :] - shift, hi[idx][None, :] - shift
-            w = b_ - a_
-            Fs = np.where(np.abs(w) > 0, (np.interp(b_, b, cum) - np.interp(a_, b, cum)) / np.where(w == 0, 1.0, w),
-                          np.interp(Xl[idx][None, :] - shift, b, f))
-        Fs = Fs + kb * shift
-        mean[idx] += Fs[1:].mean(axis=0) - Fs[0]
-        var[idx] += Fs[1:].var(axis=0)
+        # the samples each slip's scatter reaches: from its earliest quantile before it to the latest after it (the
+        # translated path's: from the middle's reach before to that plus a / 2 after), in its direction of motion;
+        # every (slip, sample) pair of the segment at once
+        Xs = np.array([x for x, _ in these])[:, None]
+        dd = np.array([d for _, d in these])[:, None]
+        u_lo = np.where(dd > 0, lo_[seg][None, :] - Xs, Xs - hi_[seg][None, :])
+        u_hi = np.where(dd > 0, hi_[seg][None, :] - Xs, Xs - lo_[seg][None, :])
+        js, cs = np.nonzero((u_hi >= -reach) & (u_lo <= after))
+        if not len(js):
+            continue
+        idx, u_lo, u_hi, d = seg[cs], u_lo[js, cs], u_hi[js, cs], dd[js, 0]
+        # the translated path stands for the samples from reach before to reach + a / 2 after the slip (the
+        # middle's reach); beyond, a translation would carry the neighbouring slips: there, the path itself
+        near = (u_hi >= -reach_mid) & (u_lo <= reach_mid + 0.5 * a)
+        Fs = np.empty((1 + len(dq), len(idx)))
+        shift = np.concatenate([[0.0], dq[inner]])[:, None] * d[None, :]  # the path itself first
+        Ft = _translated(Xl[idx], lo[idx], hi[idx], shift, b, f, cum, kb, point)
+        Ft[1:, ~near] = Ft[0, ~near]
+        Fs[0] = Ft[0]
+        Fs[1:][inner] = Ft[1:]
+        if np.any(tail):  # the tails: the samples between the median slip point and the node's on the other branch
+            Fs[1:][tail] = Fs[0] + d * _branch_exchange(u_lo, u_hi, dq[tail], u_b, f_b, a, point)
+        m = np.sum(wq * Fs[1:], axis=0)
+        np.add.at(mean, idx, m - Fs[0])
+        np.add.at(var, idx, np.sum(wq * (Fs[1:] - m) ** 2, axis=0))
     return mean, var
 
 
+def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool) -> np.ndarray:
+    """The path ``(b, f)`` (``cum``: its running integral) translated along the support by each ``shift`` (a column)
+    and raised by ``kb shift``, at point samples ``x`` or interval means over ``(lo, hi)`` (:func:`_scatter_moments`)."""
+    if point:
+        Fs = np.interp(x[None, :] - shift, b, f)
+    else:
+        a_, b_ = lo[None, :] - shift, hi[None, :] - shift
+        w = b_ - a_
+        Fs = np.where(np.abs(w) > 0, (np.interp(b_, b, cum) - np.interp(a_, b, cum)) / np.where(w == 0, 1.0, w),
+                      np.interp(x[None, :] - shift, b, f))
+    return Fs + kb * shift
+
+
+def _branch_exchange(u_lo, u_hi, uq, u_b, f_b, a: float, point: bool) -> np.ndarray:
+    """A slip far from the median (a tail quantile of the slip point, :func:`_scatter_moments`): the force change
+    of samples ``(u_lo, u_hi)`` (interval means, or points where equal; offsets from the median slip point in the
+    direction of motion) for slips at ``uq``, in the direction of motion. A sample between the median and a slip
+    later than it (``u_q > 0``) is still on the stick branch before the slip, ``f(u)``, where the path has slipped
+    to the next well's, ``f(u - a)``: it is higher by the drop ``f(u) - f(u - a)`` there; a slip earlier than the
+    median puts the samples between them that much lower. ``f``: the quasi-static branch ``(u_b, f_b)`` of the
+    barrier table. The translated path (:func:`_scatter_moments`) stands for the realization near the median; over
+    a tail's shift, up to most of a period at U0 = 5 k_B T, it would carry the neighbouring slips and extrapolate
+    the branch by its median slope (blind g09: a mean beyond both branches). Returns ``(len(uq), len(u_lo))``."""
+    u0, u1 = np.minimum(uq, 0.0)[:, None], np.maximum(uq, 0.0)[:, None]
+    if point:
+        frac = ((u_lo[None, :] > u0) & (u_lo[None, :] < u1)).astype(float)
+        um = np.broadcast_to(u_lo[None, :], frac.shape)
+    else:
+        o0, o1 = np.maximum(u_lo[None, :], u0), np.minimum(u_hi[None, :], u1)
+        width = np.maximum(u_hi - u_lo, 1e-300)[None, :]
+        frac = np.clip((o1 - o0) / width, 0.0, 1.0)
+        um = 0.5 * (o0 + o1)
+    drop = np.interp(um, u_b, f_b) - np.interp(um - a, u_b, f_b)
+    return np.sign(uq)[:, None] * frac * drop
+
+
 def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, dq, b, slips, carry, point: bool,
-                       a: float) -> None:
+                       a: float, nodes) -> None:
     """The part of a slip's scatter carried across the reversal that ends its segment (:func:`_scatter_moments`):
     adds to ``mean`` and ``var`` of the returning segment's samples in place."""
-    drop, (u_tab, H_tab) = carry
+    drop, (u_tab, H_tab) = carry[0], carry[1][:2]
     M = len(dq)
     Xt = float(b[-1]) if d > 0 else float(b[0])  # the turn: the segment's far end in the direction of motion
     u_t = d * (Xt - Xs)  # the turn's offset from the median slip point, in the direction of motion
@@ -672,7 +768,7 @@ def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, 
     if not len(beyond) or u_t < float(u_tab[0]):
         return
     H_t = float(np.interp(u_t, u_tab, H_tab))
-    Hq = -np.log1p(-(np.arange(M) + 0.5) / M)  # the hazard each quantile's slip point needs
+    Hq = -np.log1p(-np.asarray(nodes[0], float))  # the hazard each quantile's slip point needs
     # the returning path's own first slip: beyond it the realizations are one again
     back = [x for (g, x, dd) in slips if g == sg + 1]
     X_end = back[0] if back else Xt - d * a
@@ -695,8 +791,10 @@ def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, 
         share = np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / w, 0.0, 1.0)
     dF = np.zeros((M, len(idx)))
     dF[beyond] = d * drop * share
-    mean[idx] += dF.mean(axis=0)
-    var[idx] += dF.var(axis=0)
+    wq = np.asarray(nodes[1], float)[:, None]
+    m = np.sum(wq * dF, axis=0)
+    mean[idx] += m
+    var[idx] += np.sum(wq * (dF - m) ** 2, axis=0)
 
 
 def _centre(scan: FrictionScan) -> float:
@@ -858,7 +956,7 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
             seg_of[s0:e0] = j
         paths = _segments(res, len(turns) - 2)
         mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
-                                     carry=(scat[1], scat[2]))
+                                     carry=(scat[1], scat[2]), nodes=SLIP_NODES)
         F = F + mean
     if var_out is not None:
         var_out.append(var)
@@ -1056,7 +1154,7 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
         # activated slips close to the instability: the athermal path (its slips resolved by the
         # integrator, the saddle-node delay included) with every slip's scatter about the instability
         res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
-        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1], (scat[2][0] - adv, scat[2][1]))
+        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1], (scat[2][0] - adv, *scat[2][1:]))
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
     xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
