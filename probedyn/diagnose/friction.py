@@ -421,7 +421,7 @@ def thermal_hazard(tab, V: float, T: float, f0: float) -> np.ndarray:
 #: 1/32 2^-14 = 1.9e-6 (:func:`slip_nodes`)
 SLIP_QUANTILES = 32
 #: halvings of each tail's probability intervals beyond the middle's first (:func:`slip_nodes`). Equal intervals
-#: alone left a slip beyond the 1/64 quantile no variance: blind g09 (298 K, U0 10 k_B T, 100 slips) had samples
+#: alone left a slip beyond the 1/64 quantile no variance: blind g09 (298 K, U0 10.5 k_B T peak to peak, 100 slips) had samples
 #: at r = 15 and 8.7 where a slip came two samples early or late, chi^2 1052 on 663 samples at its detector's
 #: 5 pN, and 622 with 2048 equal quantiles (docs/diagnose.md 9.56)
 SLIP_TAIL_HALVINGS = 14
@@ -432,8 +432,8 @@ def slip_nodes(mid: int = SLIP_QUANTILES, halvings: int = SLIP_TAIL_HALVINGS) ->
     in probability. The middle ``(1/mid, 1 - 1/mid)`` in ``mid - 2`` equal intervals; each tail from ``1/mid``
     in intervals halving ``halvings`` times, the last one from 0. A sample's mean and variance over the slip
     point are ``sum w F(p)`` and ``sum w (F(p) - mean)^2``: a sample that only a slip beyond the quantile ``p``
-    moves to the other branch carries ``p (1 - p) D^2`` to the factor 2 of its interval (equal intervals gave it
-    0 beyond ``1/(2 mid)``)."""
+    moves to the other branch carries ``p (1 - p) D^2`` within the rule's factor, 0.67-1.33 in the tails, where
+    each interval is twice the next (equal intervals gave it 0 beyond ``1/(2 mid)``)."""
     pt = 1.0 / mid
     edges = [0.0] + [pt * 2.0**-j for j in range(halvings, 0, -1)] + list(np.linspace(pt, 1.0 - pt, mid - 1))
     edges = np.array(edges + [1.0 - pt * 2.0**-j for j in range(1, halvings + 1)] + [1.0])
