@@ -208,10 +208,19 @@ class Fit:
     start: str = ""
     nuisance: Any = None
     cv_fold: np.ndarray | None = None  # per fold: -2 ln(held-out predictive density) + const
+    #: the log-determinant of the variance the model carries of its own, relative to the noise's (``-2 ln L`` beyond
+    #: chi^2 where it depends on the parameters: a friction record's activated slip scatter, Fitter.var_rows)
+    logdet: float = 0.0
 
     @property
     def k(self) -> int:
         return len(self.plist)
+
+    @property
+    def score(self) -> float:
+        """``-2 ln L`` up to a constant: chi^2 and the model's own variance's log-determinant (:attr:`logdet`). Fits
+        are compared, and their optima found, by it; the chi-square tests read :attr:`chi2`."""
+        return self.chi2 + self.logdet
 
     @property
     def dof(self) -> int:
@@ -227,6 +236,11 @@ class Fit:
         if self.nuisance is not None:
             st["__nuisance__"] = self.nuisance
         return st
+
+
+def _score(fit) -> float:
+    """A fit's ``-2 ln L`` up to a constant (:attr:`Fit.score`; chi^2 where the object carries no log-determinant)."""
+    return float(fit.chi2) + float(getattr(fit, "logdet", 0.0))
 
 
 def _inactive_rows(problem, values, causes) -> int:
@@ -368,6 +382,19 @@ class Fitter:
         r = np.where(np.isfinite(r), r, 1e6)
         return r if self.white is None else self.white(r, mask)
 
+    def var_rows(self, mask=None) -> np.ndarray | None:
+        """Where the model carries a variance of its own that its parameters set (``problem.variance_in_objective``:
+        a friction record's activated slip scatter), the rows ``sqrt(ln(1 + var / sigma^2))`` of the model the last
+        :meth:`residuals` evaluated (``problem.variance_rows``), on ``mask``; None elsewhere. Their squares' sum is the
+        part of ``-2 ln L`` that chi^2 leaves out: a least-squares fit of chi^2 alone lowers it by widening the
+        variance (blind friction set 2's g16: an overdamped tip's slip scatter, its viscous coefficient 1.3-2.3
+        times the generator's on chi^2, within 0.7-1.3 on chi^2 with the log-determinant; docs/diagnose.md 9.57)."""
+        prob = self.problem
+        if not getattr(prob, "variance_in_objective", False):
+            return None
+        e = np.asarray(prob.variance_rows(), float)
+        return e if mask is None else e[mask]
+
     def fit(self, causes, starts: list[dict[str, float]], mask=None, fixed: dict[str, float] | None = None,
             max_nfev: int | None = None) -> Fit:
         """Best of the least-squares fits from ``starts`` (each a full value dict)."""
@@ -403,16 +430,16 @@ class Fitter:
             scored = self.map_fits([(causes, [st], mask, fixed, screen, 1) for st in starts])
             for si, f in enumerate(scored):
                 f.start = str(si)
-            ranked = sorted(scored, key=lambda f: f.chi2)
+            ranked = sorted(scored, key=lambda f: f.score)
             margin = getattr(prob, "screen_margin", 0.0)
             kept = [f for f in ranked[: max(1, getattr(prob, "screen_keep", 1))]
-                    if f.chi2 <= (1.0 + margin) * ranked[0].chi2]
+                    if f.score <= (1.0 + margin) * ranked[0].score]
             best_g: Fit | None = None
             runs = self.map_fits([(causes, [f_s.as_start()], mask, fixed, None, rounds) for f_s in kept])
             for f_s, g in zip(kept, runs):
                 g.start = f_s.start
-                g = g if g.chi2 <= f_s.chi2 else f_s
-                if best_g is None or g.chi2 < best_g.chi2:
+                g = g if g.score <= f_s.score else f_s
+                if best_g is None or g.score < best_g.score:
                     best_g = g
             return best_g
         has_nu = hasattr(prob, "nuisance")
@@ -432,20 +459,27 @@ class Fitter:
                 prob.fixed_nuisance = nu0 if nu0 is not None else prob.nuisance(vals0, causes)
             if not free:
                 r = self.residuals(vals0, causes, mask)
+                e = self.var_rows(mask)
                 m = np.ones(len(r), bool) if mask is None else mask
                 f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)),
-                        int(m.sum()) - _inactive_rows(prob, vals0, causes), np.zeros((int(m.sum()), 0)), 1, m)
+                        int(m.sum()) - _inactive_rows(prob, vals0, causes), np.zeros((int(m.sum()), 0)), 1, m,
+                        logdet=float(np.sum(e**2)) if e is not None else 0.0)
                 f.nuisance = prob.fixed_nuisance if has_nu else None
                 if has_nu:
                     prob.fixed_nuisance = None
                 return f
             u0 = np.clip(np.array([_to_u(p, vals0[p.name]) for p in free]), lo, hi)
 
+            rows = {"n": None}  # the residuals' rows of the objective (the variance's follow them: var_rows)
+
             def fun(u, _free=free, _fixed=fixed, _m=mask):
                 v = {p.name: _from_u(p, x) for p, x in zip(_free, u)}
                 v.update(_fixed)
                 r = self.residuals(v, causes, _m)
-                return r if _m is None else r[_m]
+                r = r if _m is None else r[_m]
+                rows["n"] = len(r)
+                e = self.var_rows(_m)
+                return r if e is None else np.concatenate([r, e])
 
             res = None
             for _round in range(rounds if has_nu else 1):
@@ -475,8 +509,8 @@ class Fitter:
             if best is None or c2 < best.chi2 - 1e-12 * max(1.0, abs(c2)):
                 v = {p.name: _from_u(p, x) for p, x in zip(free, res.x)}
                 v.update(fixed)
-                n = len(res.fun) - _inactive_rows(prob, v, causes)
-                best = Fit(causes, free, res.x.copy(), v, None, c2, n, res.jac.copy(), res.nfev, mask,
+                n = rows["n"] - _inactive_rows(prob, v, causes)
+                best = Fit(causes, free, res.x.copy(), v, None, c2, n, res.jac[: rows["n"]].copy(), res.nfev, mask,
                            start=str(si))
                 best.nuisance = prob.fixed_nuisance if has_nu else None
         if best is None:
@@ -485,12 +519,14 @@ class Fitter:
             prob.fixed_nuisance = best.nuisance
         try:
             best.r = self.residuals(best.values, causes, mask)
+            e = self.var_rows(mask)
         finally:
             if has_nu:
                 prob.fixed_nuisance = None
         m = np.ones(len(best.r), bool) if mask is None else mask
         best.mask = m
         best.chi2 = float(np.sum(best.r[m] ** 2))
+        best.logdet = float(np.sum(e**2)) if e is not None else 0.0
         return best
 
     def jacobian(self, fit: Fit, step: float = 1e-4) -> np.ndarray:
@@ -546,7 +582,7 @@ class Fitter:
             if not starts:
                 break
             g = self.fit(f.causes, starts)
-            if not g.chi2 < f.chi2 - 1e-9 * max(1.0, f.chi2):
+            if not g.score < f.score - 1e-9 * max(1.0, f.score):
                 break
             g.start = "registration"
             f = g
@@ -578,7 +614,7 @@ class Fitter:
         three-scan example at 0.01 K, a hidden viscous friction: chi^2 2.26e6 on 1735, the activation's profile fell by
         200-500 per 0.1 decade for 16 steps, 24 fits, 35 s, and the term was not taken). At ``phi <= 1`` the rule
         is the causes' own."""
-        phi = f.chi2 / max(f.dof, 1)
+        phi = f.chi2 / max(f.dof, 1)  # the misfit's excess over the noise (the chi-square's own)
         tol = SWEEP_GAIN * max(phi - 1.0, 0.0) if any(getattr(c, "declared", False) for c in new) else 0.0
         for p in [p for c in new for p in c.params if p.sweep > 0 and p.sweep_claimed == claimed]:
             du = p.sweep if p.scale == "log" else p.sweep / _span(p)
@@ -587,16 +623,16 @@ class Fitter:
                 # the lowest of both would (a point that is a new lowest of both is one of its own), and the walk in
                 # turn is replayed over the points (_sweep_replay): the same sweep, in the time of the longer walk
                 keys, fk = tuple(c.key for c in f.causes), replace(f, causes=())  # causes by key
-                jobs = [(keys, fk, p.name, step, tol, f.chi2) for step in (du, -du)]
+                jobs = [(keys, fk, p.name, step, tol, f.score) for step in (du, -du)]
                 walks = _merged(self, self._fresh_pool().map(_pool_sweep, jobs))
-                best_c, best_st = _sweep_replay(walks[1], *_sweep_replay(walks[0], f.chi2, None, tol), tol)
+                best_c, best_st = _sweep_replay(walks[1], *_sweep_replay(walks[0], f.score, None, tol), tol)
             else:
-                best_c, best_st = _sweep_replay(self._sweep_points(f, p.name, du, tol, f.chi2), f.chi2, None, tol)
+                best_c, best_st = _sweep_replay(self._sweep_points(f, p.name, du, tol, f.score), f.score, None, tol)
                 best_c, best_st = _sweep_replay(self._sweep_points(f, p.name, -du, tol, best_c), best_c, best_st, tol)
             if best_st is None:
                 continue
             h = self.fit(f.causes, [best_st])
-            if h.chi2 < f.chi2 - SWEEP_GAIN:
+            if h.score < f.score - SWEEP_GAIN:
                 h.start = f"{f.start}+sweep"
                 f = h
         return f
@@ -617,10 +653,10 @@ class Fitter:
                 break
             held = {p.name: _from_u(p, u)}
             g = self.fit(f.causes, [g.as_start(**held)], fixed=held)
-            out.append((g.chi2, g.as_start()))
-            if g.chi2 < best_c - 1e-9 * max(1.0, best_c):
-                misses = 0 if g.chi2 < best_c - tol else misses + 1
-                best_c = g.chi2
+            out.append((g.score, g.as_start()))
+            if g.score < best_c - 1e-9 * max(1.0, best_c):
+                misses = 0 if g.score < best_c - tol else misses + 1
+                best_c = g.score
             else:
                 misses += 1
         return out
@@ -655,11 +691,12 @@ class Fitter:
             f = self.registered(f, new)
         if mask is None and only_starts is None:
             f = self.swept(f, new)
-        if f.chi2 > ref.chi2 * (1 + 1e-9) + 1e-9:  # never worse than the model it contains
+        if f.score > ref.score * (1 + 1e-9) + 1e-9:  # never worse than the model it contains
             if hasattr(self.problem, "nuisance"):
                 self.problem.fixed_nuisance = ref.nuisance
             try:
                 r = self.residuals(start0, causes, mask)
+                e = self.var_rows(mask)
             finally:
                 if hasattr(self.problem, "nuisance"):
                     self.problem.fixed_nuisance = None
@@ -667,7 +704,7 @@ class Fitter:
             J = np.zeros((int(m.sum()), len(f.plist)))
             f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
                     float(np.sum(r[m] ** 2)), int(m.sum()) - _inactive_rows(self.problem, start0, causes), J, f.nfev,
-                    m, start="null")
+                    m, start="null", logdet=float(np.sum(e**2)) if e is not None else 0.0)
             f.nuisance = ref.nuisance
         return f
 
@@ -696,7 +733,7 @@ def _run_job(F: Fitter, job: tuple) -> "Fit":
     # only chose the basin)
     w = dict(warm) if getattr(F.problem, "cv_warm_all", False) else {**ref.values, **{q: warm[q] for q in newp}}
     f1 = F.fit(tuple(ref.causes) + new, [w], mask)
-    return f1 if f1.chi2 < f0.chi2 else f0
+    return f1 if f1.score < f0.score else f0
 
 
 def _pool_worker_init(parent: int) -> None:
@@ -1229,7 +1266,7 @@ def _whiten(F: "Fitter", noise: dict[str, Any], base: "Fit") -> "Fit":
     # already fits within the noise") judges them on the noise the fits use
     prob.whitener = F.white
     b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
-    return b1 if b1.chi2 <= b2.chi2 else b2
+    return b1 if b1.score <= b2.score else b2
 
 
 def lr_threshold(k: int, n_causes: int, alpha: float = ALPHA) -> float:
@@ -1268,14 +1305,15 @@ def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -
     # baseline is re-fitted from there and the candidates are fitted again from it (at most 3 rounds)
     thr1 = lr_threshold(1, n_causes, alpha)
     for _round in range(3):
-        bf = min(fits, key=lambda f: f.chi2) if fits and base.k else None
-        if bf is None or not bf.chi2 < base.chi2 - thr1:
+        bf = min(fits, key=lambda f: f.score) if fits and base.k else None
+        if bf is None or not bf.score < base.score - thr1:
             break
         bv = {p.name: bf.values[p.name] for p in base.plist}
-        if not float(np.sum(F.residuals(bv, ()) ** 2)) < base.chi2 - thr1:
+        r_bv, e_bv = F.residuals(bv, ()), F.var_rows()
+        if not float(np.sum(r_bv**2) + (np.sum(e_bv**2) if e_bv is not None else 0.0)) < base.score - thr1:
             break
         b2 = F.fit((), [bv])
-        if not b2.chi2 < base.chi2 - thr1:
+        if not b2.score < base.score - thr1:
             break
         base = b2
         fits = F.map_nested([(base, (c,), None) for c in causes])
@@ -1359,7 +1397,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
         if not deferred:
             break
         deferred = False
-        best = min(fits, key=lambda f: f.chi2) if fits else base
+        best = min(fits, key=lambda f: f.score) if fits else base
         again = noise_correlation(problem, best.r)
         noise = dict(again, baseline_estimate={k: noise[k] for k in ("rho", "rho_scatter", "rho_lag1")},
                      judged_on=("the best nested candidate's residuals ("
@@ -1380,7 +1418,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                 F.white = SequenceScale(scales, problem.sequences, len(base.r))
                 problem.whitener = F.white
             b1, b2 = F.baseline(), F.fit((), [dict(base.values)])
-            base = b1 if b1.chi2 <= b2.chi2 else b2
+            base = b1 if b1.score <= b2.score else b2
             F.open_pool()
             continue
         F.close_pool()  # the workers were forked with the white residuals
@@ -1391,7 +1429,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
     cv = CrossValidation(F, folds, n) if use_cv else None
     for c, fit in zip(causes, fits):
         k = len(c.params)
-        dchi2 = max(base.chi2 - fit.chi2, 0.0)
+        dchi2 = max(base.score - fit.score, 0.0)  # -2 ln L's gain (chi^2's, with a variance the model carries)
         thr = lr_threshold(k, n_causes, alpha)
         cands.append({"cause": c, "fit": fit, "k": k, "dchi2": dchi2, "lr_threshold": thr,
                       "lr_pass": bool(dchi2 > thr), "evidence": None, "evidence_cv": None,
@@ -1485,7 +1523,7 @@ def _diagnose(problem, F: Fitter, *, alpha: float, max_causes: int, only: list[s
                     continue  # an alternative to a chosen cause (another contact law) replaces it, never extends it
                 fit = F.nested(current, (c,))
                 k = len(c.params)
-                dchi2 = max(current.chi2 - fit.chi2, 0.0)
+                dchi2 = max(current.score - fit.score, 0.0)
                 thr = lr_threshold(k, n_causes, alpha)
                 if dchi2 <= thr:
                     continue
@@ -1628,7 +1666,7 @@ def _baseline_law(F: Fitter, base: Fit) -> tuple[Fit, dict[str, Any] | None]:
         problem.set_baseline_law(law)
         g = F.baseline()
         chi2[law] = float(g.chi2)
-        if g.chi2 < best.chi2:
+        if g.score < best.score:
             best, best_law = g, law
     problem.set_baseline_law(best_law)
     return best, {"law": best_law, "chi2": chi2}
@@ -1656,7 +1694,7 @@ def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[
             if row["taken"]:
                 problem.base_params = list(problem.base_params) + list(t.params)
                 problem.base_terms = tuple(problem.base_terms) + (t,)
-                base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask,
+                base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask, logdet=g.logdet,
                            start=f"{base.start}+{t.key}", nuisance=g.nuisance)
                 F.close_pool()  # the workers were forked with the baseline without the term
                 F.open_pool()
@@ -1759,7 +1797,7 @@ def _limit_refits(F: Fitter, causes: list, fits: list) -> list:
     for i, c in enumerate(causes):
         for key in getattr(c, "limits", ()):
             j = idx.get(key)
-            if j is None or fits[j].chi2 <= fits[i].chi2:
+            if j is None or fits[j].score <= fits[i].score:
                 continue
             start = {k_: v for k_, v in fits[i].values.items()
                      if any(p.name == k_ for p in fits[j].plist)}
@@ -1767,7 +1805,7 @@ def _limit_refits(F: Fitter, causes: list, fits: list) -> list:
                 g = F.fit(fits[j].causes, [dict(fits[j].values, **start)])
             except DataFormatError:
                 continue
-            if g.chi2 < fits[j].chi2:
+            if g.score < fits[j].score:
                 g.start = "limit of " + c.key
                 fits[j] = g
     return _container_refits(F, causes, fits)
@@ -1784,8 +1822,8 @@ def _container_refits(F: Fitter, causes: list, fits: list) -> list:
     idx = {c.key: i for i, c in enumerate(causes)}
     for i, c in enumerate(causes):
         lims = [idx[k_] for k_ in getattr(c, "limits", ()) if k_ in idx]
-        j = min(lims, key=lambda j_: fits[j_].chi2, default=None)
-        if j is None or fits[j].chi2 >= fits[i].chi2:
+        j = min(lims, key=lambda j_: fits[j_].score, default=None)
+        if j is None or fits[j].score >= fits[i].score:
             continue
         shared = {k_: v for k_, v in fits[j].values.items() if any(p.name == k_ for p in fits[i].plist)}
         own = [p for p in c.params if p.name not in shared]
@@ -1794,7 +1832,7 @@ def _container_refits(F: Fitter, causes: list, fits: list) -> list:
             g = F.fit(fits[i].causes, starts or [dict(fits[i].values, **shared)])
         except DataFormatError:
             continue
-        if g.chi2 < fits[i].chi2:
+        if g.score < fits[i].score:
             g.start = "from its limit " + causes[j].key
             fits[i] = g
     return fits
@@ -1961,7 +1999,7 @@ def _sweep_claim(F: Fitter, d: dict, ref: Fit, cv: CrossValidation | None, use_c
     if g is d["fit"]:
         return
     d["fit"] = g
-    d["dchi2"] = max(ref.chi2 - g.chi2, 0.0)
+    d["dchi2"] = max(ref.score - g.score, 0.0)
     if d.get("evidence") is None:
         return
     if use_cv and cv is not None:
@@ -1978,7 +2016,7 @@ def _unresolved(best: dict, d: dict, cv: CrossValidation | None, margin: float) 
     if best.get("evidence_cv") is None or d.get("evidence_cv") is None:
         return False
     ho = best["evidence_cv"] - d["evidence_cv"]
-    ins = 0.5 * (d["fit"].chi2 - best["fit"].chi2) + d["k"] - best["k"]
+    ins = 0.5 * (_score(d["fit"]) - _score(best["fit"])) + d["k"] - best["k"]
     return ho <= HELDOUT_SE_FACTOR * _heldout_diff_se(best, d, cv) and ins < margin
 
 
@@ -2146,7 +2184,7 @@ def _final(problem, F: Fitter, current: Fit, base: Fit, cv, folds, use_cv) -> di
             r_full2 = full(fit2.values, fit2.causes)
             if np.sum(r_full2**2) < np.sum(r_full**2):
                 fit = Fit(fit2.causes, fit2.plist, fit2.u, fit2.values, fit2.r - 0.0, fit2.chi2, fit2.n, fit2.J,
-                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start, cv_fold=fit.cv_fold)
+                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start, cv_fold=fit.cv_fold, logdet=fit2.logdet)
                 r_full = r_full2
             else:
                 break

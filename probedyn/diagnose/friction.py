@@ -48,6 +48,8 @@ import numpy as np
 from scipy.constants import k as K_B  # Boltzmann constant [J/K]
 
 from probedyn.core.errors import DataFormatError, ProbedynError
+from probedyn.schemes.ffm_passage import (FALL_MAX_SUBSTEPS, bottleneck_scales, deterministic_escape, escape_hazard,
+                                          fall_substeps, overdamped_falls)
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData, FrictionScan, _noise, _num, col_error, read_csv
 from probedyn.schemes.ffm import FFM, line_scan_path
@@ -448,7 +450,7 @@ SLIP_NODES = slip_nodes()
 
 
 def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float, f0: float,
-                         H: np.ndarray | None = None):
+                         H: np.ndarray | None = None, ext: tuple[np.ndarray, np.ndarray] | None = None):
     """The distribution of a thermally activated slip point around its median (the stochastic
     slip-position scatter): the survival ``exp(-H(X))`` of the stick state with the hazard of
     :func:`thermal_slip_advance` gives the slip point's CDF ``1 - exp(-H)`` (the athermal
@@ -456,11 +458,18 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     quantiles at :data:`SLIP_NODES` of the slip point relative to the median, in the direction of
     motion, the force drop k (x_after - x_before) at the median (the tip lands in the next
     well) and, along the branch, the cumulative hazard and the quasi-static force, ``(X - X_median, H, F)`` (a slip
-    carried across a reversal, a slip in the tails, :func:`_scatter_moments`). ``H``: the hazard along the table if already computed."""
+    carried across a reversal, a slip in the tails, :func:`_scatter_moments`). ``H``: the hazard along the table if already computed.
+    ``ext``: support positions and the cumulative hazard on them that replace the table's and the instability's end
+    (an overdamped tip's noisy passage past the instability, :func:`_passage_hazard`); beyond ``X_c`` the branch's
+    force is the lever's ``k (X - x_c)``, the tip held at the inflection."""
     X, dE, Xc, xs, xm = tab
-    H = thermal_hazard(tab, V, T, f0) if H is None else H
-    C = np.append(1.0 - np.exp(-H), 1.0)
-    Xe = np.append(X, Xc)
+    if ext is not None:
+        Xe, H = ext
+        C = 1.0 - np.exp(-H)
+    else:
+        H = thermal_hazard(tab, V, T, f0) if H is None else H
+        C = np.append(1.0 - np.exp(-H), 1.0)
+        Xe = np.append(X, Xc)
     keep = np.concatenate([[True], np.diff(C) > 0])
     C, Xe = C[keep], Xe[keep]
     Xq = np.interp(SLIP_NODES[0], C, Xe)
@@ -475,6 +484,10 @@ def thermal_slip_scatter(tab, U0: float, a: float, k: float, V: float, T: float,
     g = k * (Xmed - xx) - F0 * np.sin(q * xx)
     down = np.nonzero((g[:-1] > 0) & (g[1:] <= 0))[0]
     xa = float(xx[down[0]]) if len(down) else xb + a
+    if ext is not None:
+        Xg = ext[0]
+        Fg = np.where(Xg < X[-1], np.interp(Xg, X, k * (X - xm)), k * (Xg - xm[-1]))
+        return Xq - Xmed, k * (xa - xb), (Xg - Xmed, ext[1], Fg)
     return Xq - Xmed, k * (xa - xb), (X - Xmed, H, k * (X - xm))
 
 
@@ -660,18 +673,7 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     inner = ~tail
     reach_mid = float(np.max(np.abs(dq[inner]))) if np.any(inner) else 0.0
     after = max(reach_mid + 0.5 * a, reach)
-    # sample intervals along the support (interval means) or points
-    lo = np.empty(n)
-    hi = np.empty(n)
-    for sg in np.unique(seg_of):
-        idx = np.nonzero(seg_of == sg)[0]
-        x = Xl[idx]
-        if point or len(x) < 2:
-            lo[idx] = hi[idx] = x
-            continue
-        mid = 0.5 * (x[1:] + x[:-1])
-        lo[idx] = np.concatenate([[x[0] - (mid[0] - x[0])], mid])
-        hi[idx] = np.concatenate([mid, [x[-1] + (x[-1] - mid[-1])]])
+    lo, hi = _sample_bounds(Xl, seg_of, point)
     lo_, hi_ = np.minimum(lo, hi), np.maximum(lo, hi)
     seg_idx = {sg: np.nonzero(seg_of == sg)[0] for sg in np.unique(seg_of)}
     by_seg: dict[int, list[tuple[float, float]]] = {}
@@ -704,8 +706,10 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
             continue
         idx, u_lo, u_hi, d = seg[cs], u_lo[js, cs], u_hi[js, cs], dd[js, 0]
         # the translated path stands for the samples from reach before to reach + a / 2 after the slip (the
-        # middle's reach); beyond, a translation would carry the neighbouring slips: there, the path itself
-        near = (u_hi >= -reach_mid) & (u_lo <= reach_mid + 0.5 * a)
+        # middle's reach), and not past a period less the reach (a sample there, read a reach earlier on the path,
+        # would take the next slip's drop: a wide middle, an overdamped tip's noisy passage); beyond, a translation
+        # would carry the neighbouring slips: there, the path itself
+        near = (u_hi >= -reach_mid) & (u_lo <= min(reach_mid + 0.5 * a, a - reach_mid))
         Fs = np.empty((1 + len(dq), len(idx)))
         shift = np.concatenate([[0.0], dq[inner]])[:, None] * d[None, :]  # the path itself first
         Ft = _translated(Xl[idx], lo[idx], hi[idx], shift, b, f, cum, kb, point)
@@ -718,6 +722,36 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         np.add.at(mean, idx, m - Fs[0])
         np.add.at(var, idx, np.sum(wq * (Fs[1:] - m) ** 2, axis=0))
     return mean, var
+
+
+def _sample_bounds(Xl, seg_of, point: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Each sample's interval along the support (interval means: midway to its neighbours in its segment, the ends
+    mirrored) or its point (``lo = hi``)."""
+    n = len(Xl)
+    lo = np.empty(n)
+    hi = np.empty(n)
+    for sg in np.unique(seg_of):
+        idx = np.nonzero(seg_of == sg)[0]
+        x = Xl[idx]
+        if point or len(x) < 2:
+            lo[idx] = hi[idx] = x
+            continue
+        mid = 0.5 * (x[1:] + x[:-1])
+        lo[idx] = np.concatenate([[x[0] - (mid[0] - x[0])], mid])
+        hi[idx] = np.concatenate([mid, [x[-1] + (x[-1] - mid[-1])]])
+    return lo, hi
+
+
+def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float) -> None:
+    """Every slip's part carried across the reversal that ends its segment (:func:`_carry_across_turn`), where the
+    slips' own scatter is not :func:`_scatter_moments`' (an overdamped tip's noisy passage, :func:`_passage_moments`)."""
+    lo, hi = _sample_bounds(Xl, seg_of, point)
+    segs = set(int(g) for g in np.unique(seg_of))
+    for sg, Xs, d in slips:
+        if sg + 1 in segs and sg < len(paths):
+            b = np.sort(paths[sg][0], kind="stable")
+            _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, np.asarray(scat[0], float), b, slips,
+                               (scat[1], scat[2]), point, a, SLIP_NODES)
 
 
 def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool) -> np.ndarray:
@@ -955,8 +989,13 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
         for j, (s0, e0) in enumerate(zip(starts, ends)):
             seg_of[s0:e0] = j
         paths = _segments(res, len(turns) - 2)
-        mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
-                                     carry=(scat[1], scat[2]), nodes=SLIP_NODES)
+        if len(scat) > 3:  # an overdamped tip's noisy passage: each node's own trace (_passage_realizations)
+            mean, var = np.zeros(len(Xl)), np.zeros(len(Xl))
+            _passage_moments(Xl, seg_of, slips, data.sampling == "point", scat[3], SLIP_NODES[1], mean, var)
+            _carry_turns(mean, var, Xl, seg_of, slips, scat, data.sampling == "point", paths, st.a)
+        else:
+            mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
+                                         carry=(scat[1], scat[2]), nodes=SLIP_NODES)
         F = F + mean
     if var_out is not None:
         var_out.append(var)
@@ -1015,11 +1054,13 @@ def _path_edges(res) -> np.ndarray:
 THERMAL_PLACE_ADVANCE = 0.05
 
 
-def _athermal_slips(res, n_seg: int, a: float, k: float, Xc: float) -> list[tuple[int, float, float]]:
+def _athermal_slips(res, n_seg: int, a: float, k: float, Xc: float, delays: list | None = None
+                    ) -> list[tuple[int, float, float]]:
     """The slips of an athermal path as (data segment, support position of the instability, direction):
     every change of the tip's well in the direction of motion starts a slip at the instability of the well
     it leaves, ``n a + d X_c`` (a slip over several wells counts once: the changes within a tenth of a
-    period of support travel of the first)."""
+    period of support travel of the first). ``delays`` (a list) receives each slip's support travel from the
+    instability to the change of well (the saddle-node's delay, :func:`_passage_hazard`)."""
     out = []
     for j, (b, f, _) in enumerate(_segments(res, n_seg)):
         if len(b) < 2:
@@ -1032,7 +1073,164 @@ def _athermal_slips(res, n_seg: int, a: float, k: float, Xc: float) -> list[tupl
                 continue
             last = float(b[c])
             out.append((j, float(well[c]) * a + d * Xc, d))
+            if delays is not None:
+                delays.append(d * (0.5 * (b[c] + b[c + 1]) - float(well[c]) * a) - Xc)
     return out
+
+
+#: support travel before the instability [lattice periods] from which an overdamped tip's noisy passage
+#: (:func:`_passage_hazard`) adds its rate: there the normal form's cubic barrier is within 8 % of the Prandtl-Tomlinson
+#: barrier at eta = 2 and within 2 % at eta >= 6 (measured on the barrier table)
+PASSAGE_REACH = 0.2
+#: the noisy passage's shift of the median slip and its 10-90 % spread [lattice periods] below which it is left out
+#: (a fast scan on a critically damped lever at 1 K: 4e-3 of a period; g16's fast scan 0.1)
+PASSAGE_MIN = 5e-3
+#: the cumulative hazard at which an extended slip-point grid ends (a survival of e^-40)
+PASSAGE_END_HAZARD = 40.0
+
+
+def _passage_hazard(tab, U0: float, a: float, k: float, V: float, T: float, f0: float, gamma: float, m: float,
+                    delay: float | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """The activated slip point's cumulative hazard of an overdamped tip, through its noisy passage past the
+    instability (:mod:`probedyn.schemes.ffm_passage`): along the support, the larger of Kramers' rate on the quasi-static barrier
+    (attempt frequency ``f0``, :func:`thermal_hazard`) and the normal form's, the latter from
+    :data:`PASSAGE_REACH` before the instability ``X_c`` to where every tip has gone. The normal form's passage is
+    placed so that its noiseless one falls at ``X_c + delay`` (the athermal path's own change of well,
+    :func:`_athermal_slips`; default: the normal form's own, ``2.17 V t*``). ``gamma``: the tip's whole damping
+    (lever and substrate), ``m`` its mass. Returns ``(X, H)`` on a grid from the table's start, or None where the
+    tip is not overdamped at the passage, its noise is outside the normal form's table
+    (:func:`probedyn.schemes.ffm_passage.bottleneck_scales`, :data:`probedyn.schemes.ffm_passage.THETA_RANGE`) or the passage's noise moves the slip by
+    less than :data:`PASSAGE_MIN` of a period: the slip is then the hazard's and the integrator's alone."""
+    sc = bottleneck_scales(U0, a, k, V, gamma, m, T)
+    nf = escape_hazard(sc["theta"]) if sc is not None else None
+    if nf is None:
+        return None
+    s, Hs = nf
+    X, dE, Xc = tab[0], tab[1], tab[2]
+    L = V * sc["t_star"]
+    s_det = deterministic_escape()
+    q10, q50, q90 = np.interp([0.1, 0.5, 0.9], 1.0 - np.exp(-Hs), s)
+    if L * max(abs(q50 - s_det), q90 - q10) < PASSAGE_MIN * a:
+        return None  # the noise moves the passage by less than the integrator's own tolerance on the slip
+    if fall_substeps(V, k, U0, a, gamma, PASSAGE_STEP * a) > FALL_MAX_SUBSTEPS:
+        return None  # the tip relaxes far faster than the passage: not the overdamped bottleneck
+    Xs = Xc + (L * s_det if delay is None else delay) + L * (s - s_det)
+    Xg = np.union1d(X, Xs[(Xs > X[0]) & (Xs >= Xc - PASSAGE_REACH * a)])
+    r_kr = np.interp(Xg, X, f0 * np.exp(-dE / (K_B * T)) / V, right=0.0)
+    r_nf = np.where(Xg >= Xc - PASSAGE_REACH * a, np.interp(Xg, Xs, np.gradient(Hs, Xs), left=0.0), 0.0)
+    r = np.maximum(r_kr, np.maximum(r_nf, 0.0))
+    Hg = np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]) * np.diff(Xg))])
+    end = int(np.searchsorted(Hg, PASSAGE_END_HAZARD)) + 1
+    return Xg[:end], Hg[:end]
+
+
+#: the realizations' grid step along the support [lattice periods] (:func:`_passage_realizations`)
+PASSAGE_STEP = 1.0 / 400.0
+#: tip positions within this fraction of a period count as the same (a realization back on the path's branch)
+PASSAGE_MERGE = 1e-3
+#: the nodes' traces kept (:func:`_thermal_path`: per model and speed, least recently made dropped first)
+PASSAGE_MEMORY = 64
+_PASSAGE_MEMO: OrderedDict = OrderedDict()
+#: falls integrated per direction (:func:`_passage_realizations`): at nodes spread evenly over the slip points'
+#: quantile nodes, each node taking the nearest one's fall moved by their distance (0.01-0.03 of a period in the
+#: middle, where the fall's pace changes by a few per cent)
+PASSAGE_FALLS = 12
+
+
+def _passage_realizations(res, n_seg: int, slips, dq, a: float, k: float, U0: float, V: float, gamma: float,
+                          X_cross: float) -> dict:
+    """Each slip-point node's own force trace about an overdamped tip's slip, less the path's (:func:`_passage_hazard`):
+    the slip's scatter where the noisy passage spreads it over a fifth of a period and more (blind g16, 1.5 um/s:
+    10-90 % over 0.3 a). A realization that changes well at ``dq`` from the path's change of well (support travel,
+    in the direction of motion) is on the path's branch before it (past the path's force peak, the tip held there:
+    the lever's force rising at ``k``), falls from the lattice maximum at ``dq`` (:func:`probedyn.schemes.ffm_passage.overdamped_falls`:
+    the fall's pace set by the tilt where it starts, which a translated path would carry from the median) and is on
+    the path's branch again when its tip is within :data:`PASSAGE_MERGE` of a period of the path's. ``X_cross``: the
+    path's change of well from its well's centre (motion in +x). Returns per direction ``d`` (+1, -1) the offsets
+    ``u`` from the change of well and the traces' differences ``(node, u)`` in the data's sign; a direction without a
+    slip inside a segment is left out."""
+    out = {}
+    dq = np.asarray(dq, float)
+    h = PASSAGE_STEP * a
+    q = 2 * math.pi / a
+    segs = _segments(res, n_seg)
+    for d in (1.0, -1.0):
+        # a representative slip of this direction: the one with the most path on each side within its segment
+        best, span = None, -1.0
+        for j, M, dd in slips:
+            if dd != d:
+                continue
+            b = segs[j][0]
+            room = min(d * (M - b[0]), d * (b[-1] - M))  # the segment in time order: b[0] its start
+            if room > span:
+                best, span = (j, M), room
+        if best is None or span < 0.5 * a:
+            continue
+        j, M = best
+        b, f = segs[j][0], segs[j][1]
+        u_p = d * (b - M)
+        o = np.argsort(u_p, kind="stable")
+        u_p, F_p = u_p[o], d * f[o]  # the path along the motion, its force in the direction of motion
+        keep = np.concatenate([[True], np.diff(u_p) > 0])
+        u_p, F_p = u_p[keep], F_p[keep]
+        before = (u_p > -0.5 * a) & (u_p <= 0.0)
+        if not np.any(before):
+            continue
+        i_pk = np.nonzero(before)[0][int(np.argmax(F_p[before]))]
+        u_pk, F_pk = float(u_p[i_pk]), float(F_p[i_pk])
+        lo = min(float(dq.min()), u_pk) - h
+        hi = min(max(float(dq.max()), 0.0) + 0.75 * a, float(u_p[-1]))
+        u = np.arange(lo, hi + 0.5 * h, h)
+        Fp = np.interp(u, u_p, F_p)
+        xp = (X_cross + u) - Fp / k  # the path's tip from its well's centre
+        held = np.where(u < u_pk, Fp, F_pk + k * (u - u_pk))
+        n_out = int(round((hi - float(dq.min())) / h)) + 2
+        order = np.argsort(dq, kind="stable")
+        picks = order[np.unique(np.round(np.linspace(0, len(dq) - 1, PASSAGE_FALLS)).astype(int))]
+        xs = overdamped_falls(X_cross + dq[picks], 0.5 * a, V, k, U0, a, gamma, h, n_out)
+        D = np.zeros((len(dq), len(u)))
+        for i, dqi in enumerate(dq):
+            j_f = int(np.argmin(np.abs(dq[picks] - dqi)))  # the nearest fall, moved along by the distance
+            uf = dqi + h * np.arange(n_out)
+            xf = np.interp(u, uf, xs[j_f], left=np.nan, right=np.nan)
+            Fq = np.where(u < dqi, held, k * ((X_cross + u) - xf))
+            back = np.nonzero((u > max(dqi, 0.0)) & (np.abs(xf - xp) < PASSAGE_MERGE * a))[0]
+            if len(back):
+                Fq[back[0]:] = Fp[back[0]:]
+            Fq = np.where(np.isfinite(Fq), Fq, Fp)
+            D[i] = Fq - Fp
+        out[d] = (u, d * D)
+    return out
+
+
+def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, var) -> None:
+    """Mean shift and variance of every sample near an overdamped tip's slips from the nodes' own traces
+    (:func:`_passage_realizations`), interval means or points as the data's; added to ``mean`` and ``var`` in
+    place."""
+    w = np.asarray(weights, float)[:, None]
+    lo, hi = _sample_bounds(Xl, seg_of, point)
+    # each node's running integral along the support (interval means: its differences over the sample's interval)
+    cums = {d: np.concatenate([np.zeros((len(D), 1)), np.cumsum(0.5 * (D[:, 1:] + D[:, :-1]) * np.diff(u), axis=1)],
+                              axis=1) for d, (u, D) in real.items()}
+    for sg, M, d in slips:
+        if d not in real:
+            continue
+        u, D = real[d]
+        idx = np.nonzero(seg_of == sg)[0]
+        u0, u1 = d * (lo[idx] - M), d * (hi[idx] - M)
+        ul, uh = np.minimum(u0, u1), np.maximum(u0, u1)
+        near = (uh >= u[0]) & (ul <= u[-1])
+        if not np.any(near):
+            continue
+        idx, ul, uh = idx[near], ul[near], uh[near]
+        if point:
+            Dm = np.array([np.interp(ul, u, Dq, left=0.0, right=0.0) for Dq in D])
+        else:
+            width = np.maximum(uh - ul, 1e-300)
+            Dm = np.array([(np.interp(uh, u, c) - np.interp(ul, u, c)) / width for c in cums[d]])
+        m = np.sum(w * Dm, axis=0)
+        np.add.at(mean, idx, m)
+        np.add.at(var, idx, np.sum(w * (Dm - m) ** 2, axis=0))
 
 
 #: the least chi^2 a skipped well must gain to be taken (:meth:`FrictionProblem._skips`): a whole stick segment on the
@@ -1143,18 +1341,45 @@ def _thermal_path(ffm: FFM, turns, V, st: FrictionState, hmax, x0: float | None 
     U0, a, k = fv["U0"], fv["a"], ffm.cantilever["k_x"]
     tab = _barrier_table(U0, a, k)
     H = thermal_hazard(tab, V, T, f0) if tab is not None and T > 0 and f0 > 0 else None
-    if H is None or H[-1] < THERMAL_MIN_HAZARD:
+    # an overdamped tip's slip point through its noisy passage past the instability (the normal form's hazard)
+    gam, m = ffm.cantilever["c_x"] + fv["gamma"], ffm.cantilever["m_x"]
+    ext = _passage_hazard(tab, U0, a, k, V, T, f0, gam, m) if H is not None else None
+    if ext is None and (H is None or H[-1] < THERMAL_MIN_HAZARD):
         return _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0)), None, None
-    adv = _median_advance(tab, H)
     Xtab, _, Xc, xs_tab, _ = tab
-    scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0, H)
+    scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0, H, ext=ext)
+    # the median slip point's advance on the instability (the grid less its offsets from the median)
+    adv = max(Xc - float(ext[0][0] - scat[2][0][0]), 0.0) if ext is not None else _median_advance(tab, H)
     d_end = 1.0 if turns[-1] > turns[-2] else -1.0
     turns = list(turns[:-1]) + [turns[-1] + d_end * POSTROLL * a]  # the record's end run on (POSTROLL)
     if adv < THERMAL_PLACE_ADVANCE * a:
         # activated slips close to the instability: the athermal path (its slips resolved by the
         # integrator, the saddle-node delay included) with every slip's scatter about the instability
         res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
-        return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1], (scat[2][0] - adv, *scat[2][1:]))
+        if ext is None:
+            return res, _athermal_slips(res, len(turns) - 2, a, k, Xc), (scat[0] - adv, scat[1],
+                                                                         (scat[2][0] - adv, *scat[2][1:]))
+        # an overdamped tip: the scatter about the path's own change of well, its delay past the instability
+        # measured on the path and the noisy passage placed by it (a translated path carries its slip from there)
+        delays: list = []
+        slips = _athermal_slips(res, len(turns) - 2, a, k, Xc, delays)
+        if not delays:
+            return res, slips, (scat[0] - adv, scat[1], (scat[2][0] - adv, *scat[2][1:]))
+        D = float(np.median(delays))
+        ext = _passage_hazard(tab, U0, a, k, V, T, f0, gam, m, delay=D)
+        scat = thermal_slip_scatter(tab, U0, a, k, V, T, f0, H, ext=ext)
+        off = Xc + D - float(ext[0][0] - scat[2][0][0])  # the change of well's offset from the median
+        slips = [(j, Xs + d * D, d) for j, Xs, d in slips]
+        # the nodes' traces depend on the model and the speed, not on where the lattice sits (the registry's profile
+        # integrates the same model a dozen times): kept per model (_PASSAGE_MEMORY)
+        key = (U0, a, k, V, gam, m, T, f0, round(D / a, 6), len(turns))
+        real = _PASSAGE_MEMO.get(key)
+        if real is None:
+            real = _passage_realizations(res, len(turns) - 2, slips, scat[0] - off, a, k, U0, V, gam, Xc + D)
+            _PASSAGE_MEMO[key] = real
+            while len(_PASSAGE_MEMO) > PASSAGE_MEMORY:
+                _PASSAGE_MEMO.popitem(last=False)
+        return res, slips, (scat[0] - off, scat[1], (scat[2][0] - off, *scat[2][1:]), real)
     slips = []  # (data segment, support position, direction) of every activated slip
     X_slip = Xc - adv  # relative to the well centre, for motion in +x
     xs_slip = float(np.interp(X_slip, Xtab, xs_tab))  # saddle position at the slip point
@@ -1574,6 +1799,11 @@ class FrictionProblem:
         self.sample_dt = [0.0 if data.sampling == "point" or len(s_.time) < 2 else float(np.median(np.abs(np.diff(s_.time))))
                           for s_ in sc]
         self.thermal_var = np.zeros(self.n)  # its variance per sample (set by predict; part of every model)
+        #: at a declared temperature the model's variance (the activated slip scatter, the tip's thermal noise) depends
+        #: on its parameters: the fits minimise -2 ln L, chi^2 with that variance's log-determinant (engine
+        #: ``Fitter.var_rows``); without one (an activation cause's assumed temperature) chi^2 as before
+        self.variance_in_objective = bool(data.temperature and data.temperature > 0)
+        self._last_ok = False
         if self.thermal_noise_T and self._thermal_share() < THERMAL_NOISE_MIN_SHARE:
             self.thermal_noise_T = 0.0
         self._last_thermal = None
@@ -2251,11 +2481,22 @@ class FrictionProblem:
             return 0.0
         return float(np.sum(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2)))
 
+    def variance_rows(self) -> np.ndarray:
+        """``sqrt(ln(1 + var / sigma^2))`` per fitted sample of the model :meth:`residuals` last evaluated (its slip
+        scatter and thermal force noise, :meth:`variance_logdet`'s terms; zeros after a model that could not be
+        evaluated): the rows a fit adds to its objective so that it minimises ``-2 ln L``, not chi^2 alone
+        (``variance_in_objective``, engine ``Fitter.var_rows``)."""
+        if not self._last_ok:
+            return np.zeros(int(self.use.sum()))
+        return np.sqrt(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2))
+
     def residuals(self, values, causes=()) -> np.ndarray:
+        self._last_ok = False
         try:
             m = self.predict(values, causes)
         except ProbedynError:
             return np.full(int(self.use.sum()), 1e6)
+        self._last_ok = True
         # the stochastic slip-position scatter (thermal activation) and, at a declared temperature, the tip's
         # thermal force noise (thermal_force_variance) add their variances sample by sample
         return ((self.force - m) / np.sqrt(self.sigma**2 + self.thermal_var + self.model_var))[self.use]
