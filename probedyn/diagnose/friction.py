@@ -1152,7 +1152,6 @@ def _passage_realizations(res, n_seg: int, slips, dq, a: float, k: float, U0: fl
     out = {}
     dq = np.asarray(dq, float)
     h = PASSAGE_STEP * a
-    q = 2 * math.pi / a
     segs = _segments(res, n_seg)
     for d in (1.0, -1.0):
         # a representative slip of this direction: the one with the most path on each side within its segment
