@@ -395,6 +395,12 @@ class Fitter:
         e = np.asarray(prob.variance_rows(), float)
         return e if mask is None else e[mask]
 
+    def logdet(self, mask=None) -> float:
+        """The sum of :meth:`var_rows`' squares (0 where there are none): :attr:`Fit.logdet` of the model the last
+        :meth:`residuals` evaluated."""
+        e = self.var_rows(mask)
+        return float(np.sum(e**2)) if e is not None else 0.0
+
     def fit(self, causes, starts: list[dict[str, float]], mask=None, fixed: dict[str, float] | None = None,
             max_nfev: int | None = None) -> Fit:
         """Best of the least-squares fits from ``starts`` (each a full value dict)."""
@@ -459,11 +465,11 @@ class Fitter:
                 prob.fixed_nuisance = nu0 if nu0 is not None else prob.nuisance(vals0, causes)
             if not free:
                 r = self.residuals(vals0, causes, mask)
-                e = self.var_rows(mask)
+                ld = self.logdet(mask)
                 m = np.ones(len(r), bool) if mask is None else mask
                 f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)),
                         int(m.sum()) - _inactive_rows(prob, vals0, causes), np.zeros((int(m.sum()), 0)), 1, m,
-                        logdet=float(np.sum(e**2)) if e is not None else 0.0)
+                        logdet=ld)
                 f.nuisance = prob.fixed_nuisance if has_nu else None
                 if has_nu:
                     prob.fixed_nuisance = None
@@ -519,14 +525,14 @@ class Fitter:
             prob.fixed_nuisance = best.nuisance
         try:
             best.r = self.residuals(best.values, causes, mask)
-            e = self.var_rows(mask)
+            ld = self.logdet(mask)
         finally:
             if has_nu:
                 prob.fixed_nuisance = None
         m = np.ones(len(best.r), bool) if mask is None else mask
         best.mask = m
         best.chi2 = float(np.sum(best.r[m] ** 2))
-        best.logdet = float(np.sum(e**2)) if e is not None else 0.0
+        best.logdet = ld
         return best
 
     def jacobian(self, fit: Fit, step: float = 1e-4) -> np.ndarray:
@@ -696,7 +702,7 @@ class Fitter:
                 self.problem.fixed_nuisance = ref.nuisance
             try:
                 r = self.residuals(start0, causes, mask)
-                e = self.var_rows(mask)
+                ld = self.logdet(mask)
             finally:
                 if hasattr(self.problem, "nuisance"):
                     self.problem.fixed_nuisance = None
@@ -704,7 +710,7 @@ class Fitter:
             J = np.zeros((int(m.sum()), len(f.plist)))
             f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
                     float(np.sum(r[m] ** 2)), int(m.sum()) - _inactive_rows(self.problem, start0, causes), J, f.nfev,
-                    m, start="null", logdet=float(np.sum(e**2)) if e is not None else 0.0)
+                    m, start="null", logdet=ld)
             f.nuisance = ref.nuisance
         return f
 
@@ -1309,8 +1315,7 @@ def _candidates(F: "Fitter", causes, base: "Fit", alpha: float, n_causes: int) -
         if bf is None or not bf.score < base.score - thr1:
             break
         bv = {p.name: bf.values[p.name] for p in base.plist}
-        r_bv, e_bv = F.residuals(bv, ()), F.var_rows()
-        if not float(np.sum(r_bv**2) + (np.sum(e_bv**2) if e_bv is not None else 0.0)) < base.score - thr1:
+        if not float(np.sum(F.residuals(bv, ()) ** 2)) + F.logdet() < base.score - thr1:
             break
         b2 = F.fit((), [bv])
         if not b2.score < base.score - thr1:
