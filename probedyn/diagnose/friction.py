@@ -52,6 +52,7 @@ from probedyn.schemes.ffm_passage import (FALL_MAX_SUBSTEPS, bottleneck_scales, 
                                           fall_substeps, overdamped_falls)
 from probedyn.diagnose.causes import CauseParam, catalog
 from probedyn.diagnose.formats import FrictionData, FrictionScan, _noise, _num, col_error, read_csv
+from probedyn.diagnose.mixture import PitTest, SlipMixture, pit_test
 from probedyn.schemes.ffm import FFM, line_scan_path
 
 __all__ = ["FrictionProblem", "FrictionState", "read_friction", "simulate_scan"]
@@ -93,6 +94,9 @@ SCREEN_MARGIN = 0.05
 SCREEN_KEEP = 2
 #: factor by which the data's scatter must exceed the stated noise to replace it
 NOISE_EXCESS = 1.25
+#: a first difference this many of its robust standard deviations from its segment's median is a slip's, and the
+#: two second differences holding it are left out of the record's scatter (:func:`_scatter`)
+SCATTER_SLIP = 5.0
 #: the tip's thermal force noise is left out where its mean over the loop's stick branches is below this share of the
 #: stated variance: a change of the variance that small is far below the chi-square test's resolution (sqrt(2 / n),
 #: 2 % at 5000 samples) and only perturbs the rugged fits (blind null f21 at 2 K, 0.03 %: its activated baseline
@@ -252,8 +256,26 @@ def _regime(scans, lattice: float, sampling: str, side: Path) -> str:
 
 def _scatter(scans) -> float:
     """White-noise level from the point-to-point scatter: the robust (MAD) spread of the second
-    differences over sqrt(6) (the signal's own increments are removed twice; slips are outliers)."""
-    r = np.concatenate([np.diff(s.force, 2) for s in scans])
+    differences over sqrt(6) (the signal's own increments are removed twice), without the second differences that
+    hold a slip: a first difference more than :data:`SCATTER_SLIP` of its robust spread from the segment's median
+    (each monotone segment apart, where the scans say their direction).
+
+    The MAD alone takes slips for outliers only while they are rare: at 12 interval means a period a slip and its
+    thermal scatter enter a quarter of the second differences, and blind set 2's records read 1.28-1.54 times their
+    stated noise (g08, g09, g18, g19), which then replaced it (``NOISE_EXCESS``); without them 1.06-1.16
+    (docs/diagnose.md 9.58). On white noise no difference is left out (5 standard deviations)."""
+    parts = []
+    for s in scans:
+        d = getattr(s, "direction", None)
+        cuts = np.nonzero(np.diff(d) != 0)[0] + 1 if d is not None and len(d) > 1 else []
+        for f in np.split(np.asarray(s.force, float), cuts):
+            if len(f) < 3:
+                continue
+            d1, r = np.diff(f), np.diff(f, 2)
+            s0 = 1.4826 * np.median(np.abs(r - np.median(r))) / math.sqrt(6)
+            far = np.abs(d1 - np.median(d1)) > SCATTER_SLIP * math.sqrt(2) * s0
+            parts.append(r[~(far[:-1] | far[1:])])
+    r = np.concatenate(parts) if parts else np.zeros(1)
     return float(1.4826 * np.median(np.abs(r - np.median(r))) / math.sqrt(6))
 
 
@@ -623,7 +645,8 @@ def thermal_force_variance(F: np.ndarray, U0: float, a: float, k: float, c: floa
     return k * k * var_x
 
 
-def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None, nodes=None):
+def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None, nodes=None, atoms=None,
+                     ext=None):
     """Mean shift and variance of every sample from the stochastic slip points, on the model's own path.
 
     A slip at ``Y = X* + d delta`` instead of the path's ``X*`` translates the slip and its transient
@@ -652,7 +675,10 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     ``H_j = -ln(1 - q_j)`` (its quantile) slips on the way back where ``H = 2 H_turn - H_j``, or not at all before
     the returning path's own slip where that is negative. Until then the returning samples sit on the branch of the
     old well, the drop above the path's (own seed 6000 at 300 K: the first retrace sample after a turn 0.1 nm past
-    the median slip point, at 29 sigma against the path that had slipped before the turn)."""
+    the median slip point, at 29 sigma against the path that had slipped before the turn).
+
+    ``atoms`` (a list): receives the mixture itself, each (slip, sample) pair's offsets at the nodes
+    (:class:`.mixture.SlipMixture`, the slip's index in ``slips`` its group), for the record's normal scores."""
     n = len(Xl)
     mean = np.zeros(n)
     var = np.zeros(n)
@@ -673,12 +699,12 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     inner = ~tail
     reach_mid = float(np.max(np.abs(dq[inner]))) if np.any(inner) else 0.0
     after = max(reach_mid + 0.5 * a, reach)
-    lo, hi = _sample_bounds(Xl, seg_of, point)
+    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
     lo_, hi_ = np.minimum(lo, hi), np.maximum(lo, hi)
     seg_idx = {sg: np.nonzero(seg_of == sg)[0] for sg in np.unique(seg_of)}
-    by_seg: dict[int, list[tuple[float, float]]] = {}
-    for sg, Xs, d in slips:
-        by_seg.setdefault(sg, []).append((Xs, d))
+    by_seg: dict[int, list[tuple[int, float, float]]] = {}
+    for k, (sg, Xs, d) in enumerate(slips):
+        by_seg.setdefault(sg, []).append((k, Xs, d))
     for sg, these in by_seg.items():
         b, f = paths[sg][0], paths[sg][1]
         o = np.argsort(b, kind="stable")
@@ -689,16 +715,26 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         kb = float(np.median(np.diff(f)[ok] / db[ok])) if np.any(ok) else 0.0
         cum = np.concatenate([[0.0], np.cumsum(0.5 * (f[1:] + f[:-1]) * db)])
         if carry is not None and sg + 1 in seg_idx:  # the data go on after the turn ending this segment
-            for Xs, d in these:
-                _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, dq, b, slips, carry, point, a, nodes)
+            for k, Xs, d in these:
+                _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, dq, b, slips, carry, point, a, nodes,
+                                   atoms=atoms, group=k)
+        # the slip the path would have made next, had the support not turned: its early quantiles come before the
+        # turn (blind g09: a slip 0.3 a early at the last sample, 4 % of the realizations, absent from the model)
+        virtual = _next_slip(these, b, a, float(np.min(dq)))
+        if virtual is not None:
+            k_v = len(slips) + sg  # a group of its own (SlipMixture)
+            if carry is not None and sg + 1 in seg_idx:
+                _carry_virtual(mean, var, lo, hi, seg_of, sg, virtual[0], virtual[1], dq, b, slips, carry[0], point,
+                               a, nodes, atoms=atoms, group=k_v)
+            these = these + [(k_v, virtual[0], virtual[1])]
         seg = seg_idx.get(sg)
         if seg is None:
             continue
         # the samples each slip's scatter reaches: from its earliest quantile before it to the latest after it (the
         # translated path's: from the middle's reach before to that plus a / 2 after), in its direction of motion;
         # every (slip, sample) pair of the segment at once
-        Xs = np.array([x for x, _ in these])[:, None]
-        dd = np.array([d for _, d in these])[:, None]
+        Xs = np.array([x for _, x, _ in these])[:, None]
+        dd = np.array([d for _, _, d in these])[:, None]
         u_lo = np.where(dd > 0, lo_[seg][None, :] - Xs, Xs - hi_[seg][None, :])
         u_hi = np.where(dd > 0, hi_[seg][None, :] - Xs, Xs - lo_[seg][None, :])
         js, cs = np.nonzero((u_hi >= -reach) & (u_lo <= after))
@@ -712,7 +748,7 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         near = (u_hi >= -reach_mid) & (u_lo <= min(reach_mid + 0.5 * a, a - reach_mid))
         Fs = np.empty((1 + len(dq), len(idx)))
         shift = np.concatenate([[0.0], dq[inner]])[:, None] * d[None, :]  # the path itself first
-        Ft = _translated(Xl[idx], lo[idx], hi[idx], shift, b, f, cum, kb, point)
+        Ft = _translated(Xl[idx], lo[idx], hi[idx], shift, b, f, cum, kb, point, a)
         Ft[1:, ~near] = Ft[0, ~near]
         Fs[0] = Ft[0]
         Fs[1:][inner] = Ft[1:]
@@ -721,11 +757,72 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         m = np.sum(wq * Fs[1:], axis=0)
         np.add.at(mean, idx, m - Fs[0])
         np.add.at(var, idx, np.sum(wq * (Fs[1:] - m) ** 2, axis=0))
+        if atoms is not None:
+            atoms.append(SlipMixture(idx, np.array([k for k, _, _ in these])[js], Fs[1:] - m, wq[:, 0]))
     return mean, var
 
 
-def _sample_bounds(Xl, seg_of, point: bool) -> tuple[np.ndarray, np.ndarray]:
+def _next_slip(these, b, a: float, earliest: float) -> tuple[float, float] | None:
+    """The slip a segment's path would have made after its last one had the support gone on past the turn: one
+    slip spacing (the last two slips', else the lattice period) further, in the direction of motion. Returned as
+    ``(X, d)`` where its earliest quantile (``earliest``, the slip point's least offset from the median, < 0) comes
+    before the turn, else None (:func:`_scatter_moments`)."""
+    if not these:
+        return None
+    _, X_last, d = these[-1]
+    step = abs(X_last - these[-2][1]) if len(these) > 1 else a
+    if not 0.5 * a < step < 1.5 * a:
+        step = a
+    X_v = X_last + d * step
+    X_t = float(b[-1]) if d > 0 else float(b[0])
+    u_t = d * (X_t - X_v)  # the turn's offset from the next slip's median point (negative: before it)
+    if u_t >= 0 or u_t <= earliest:
+        return None
+    return X_v, d
+
+
+def _carry_virtual(mean, var, lo, hi, seg_of, sg: int, X_v: float, d: float, dq, b, slips, drop: float,
+                   point: bool, a: float, nodes, atoms=None, group: int = 0) -> None:
+    """The returning segment's samples for the realizations of the next slip (:func:`_next_slip`, the path's
+    median beyond the turn) that came before it: the tip turns one well ahead of the path's, so until its own slip
+    back it reads the slip's drop below the path (in the direction of the first segment's motion). That slip back
+    comes one period before the returning path's first slip (the same backward instability a well further on);
+    the slip back's own scatter is the returning path's, left to it. Adds to ``mean`` and ``var`` in place
+    (``atoms``: the nodes' offsets, as the slip ``group``'s)."""
+    Xt = float(b[-1]) if d > 0 else float(b[0])
+    u_t = d * (Xt - X_v)
+    early = np.nonzero(np.asarray(dq) < u_t)[0]
+    if not len(early):
+        return
+    back = [x for (g, x, dd) in slips if g == sg + 1]
+    if not back:
+        return
+    X_rb = back[0] + d * a  # the slip back of the tip a well ahead
+    if d * (X_rb - Xt) >= 0:
+        return
+    idx = np.nonzero((seg_of == sg + 1) & (d * np.maximum(lo, hi) > d * X_rb) & (d * np.minimum(lo, hi) < d * Xt))[0]
+    if not len(idx):
+        return
+    s_lo, s_hi = min(X_rb, Xt), max(X_rb, Xt)
+    if point:
+        x = 0.5 * (lo[idx] + hi[idx])
+        share = ((x >= s_lo) & (x <= s_hi)).astype(float)
+    else:
+        l_, h_ = np.minimum(lo[idx], hi[idx]), np.maximum(lo[idx], hi[idx])
+        share = np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / np.maximum(h_ - l_, 1e-300), 0.0, 1.0)
+    dF = np.zeros((len(dq), len(idx)))
+    dF[early] = -d * drop * share[None, :]
+    wq = np.asarray(nodes[1], float)[:, None]
+    m = np.sum(wq * dF, axis=0)
+    mean[idx] += m
+    var[idx] += np.sum(wq * (dF - m) ** 2, axis=0)
+    if atoms is not None:
+        atoms.append(SlipMixture(idx, np.full(len(idx), group), dF - m, wq[:, 0]))
+
+
+def _sample_bounds(Xl, seg_of, point: bool, ext=None) -> tuple[np.ndarray, np.ndarray]:
     """Each sample's interval along the support (interval means: midway to its neighbours in its segment, the ends
+    as :func:`_intervals` has them with the turns' overshoot ``ext``, :func:`_turn_overshoot`; without it, both ends
     mirrored) or its point (``lo = hi``)."""
     n = len(Xl)
     lo = np.empty(n)
@@ -736,35 +833,93 @@ def _sample_bounds(Xl, seg_of, point: bool) -> tuple[np.ndarray, np.ndarray]:
         if point or len(x) < 2:
             lo[idx] = hi[idx] = x
             continue
-        mid = 0.5 * (x[1:] + x[:-1])
-        lo[idx] = np.concatenate([[x[0] - (mid[0] - x[0])], mid])
-        hi[idx] = np.concatenate([mid, [x[-1] + (x[-1] - mid[-1])]])
+        if ext is None:
+            full_start = full_end = True
+        else:
+            full_start, full_end = sg == 0 or ext[sg - 1] != 0, ext[sg] != 0
+        lo[idx], hi[idx] = _intervals(x, full_start, full_end)
     return lo, hi
 
 
-def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float) -> None:
+def _turn_overshoot(Xl, starts, ends) -> np.ndarray:
+    """How far past each segment's last sample the support turned (signed, along ``Xl``): half a sample step where
+    the record gives the last sample of a segment and the first of the next the same position (an image's trace and
+    retrace pixels over one range: each sample the mean over its own step, the turn at the range's edge, half a step
+    beyond the pixels' centres; blind set 2), else 0 (the turning point sampled once, the return starting a step
+    back: the own generator). The last segment ends as the record's other turns do.
+
+    Read as turning at the last sample, a record that turned half a step later lost the slips the support met in
+    that half step (blind g09: the last sample of a segment 26-44 sigma from every realization of the slip mixture,
+    docs/diagnose.md 9.58)."""
+    n_seg = len(starts)
+    ext = np.zeros(n_seg)
+    for j in range(n_seg):
+        s0, e0 = int(starts[j]), int(ends[j])
+        if e0 - s0 < 2:
+            continue
+        step = float(np.median(np.abs(np.diff(Xl[s0:e0]))))
+        if j + 1 < n_seg and step > 0 and abs(Xl[int(starts[j + 1])] - Xl[e0 - 1]) < 0.25 * step:
+            ext[j] = 0.5 * step * np.sign(Xl[e0 - 1] - Xl[s0])
+    if n_seg > 1 and np.any(ext[:-1] != 0):
+        s0, e0 = int(starts[-1]), int(ends[-1])
+        if e0 - s0 >= 2:
+            ext[-1] = 0.5 * float(np.median(np.abs(np.diff(Xl[s0:e0])))) * np.sign(Xl[e0 - 1] - Xl[s0])
+    return ext
+
+
+def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float, atoms=None, ext=None) -> None:
     """Every slip's part carried across the reversal that ends its segment (:func:`_carry_across_turn`), where the
     slips' own scatter is not :func:`_scatter_moments`' (an overdamped tip's noisy passage, :func:`_passage_moments`)."""
-    lo, hi = _sample_bounds(Xl, seg_of, point)
+    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
     segs = set(int(g) for g in np.unique(seg_of))
-    for sg, Xs, d in slips:
+    for k, (sg, Xs, d) in enumerate(slips):
         if sg + 1 in segs and sg < len(paths):
             b = np.sort(paths[sg][0], kind="stable")
             _carry_across_turn(mean, var, lo, hi, seg_of, sg, Xs, d, np.asarray(scat[0], float), b, slips,
-                               (scat[1], scat[2]), point, a, SLIP_NODES)
+                               (scat[1], scat[2]), point, a, SLIP_NODES, atoms=atoms, group=k)
 
 
-def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool) -> np.ndarray:
+def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool, a: float = 0.0) -> np.ndarray:
     """The path ``(b, f)`` (``cum``: its running integral) translated along the support by each ``shift`` (a column)
-    and raised by ``kb shift``, at point samples ``x`` or interval means over ``(lo, hi)`` (:func:`_scatter_moments`)."""
+    and raised by ``kb shift``, at point samples ``x`` or interval means over ``(lo, hi)`` (:func:`_scatter_moments`).
+
+    A translated position beyond the segment's path (a sample near the turn, read for a slip earlier than the
+    path's: the path ends at the turn) is read a whole number of lattice periods ``a`` back inside it: the stick-slip
+    before a turn is periodic in the support, ``F(X + a) = F(X)`` (its running integral gains one period's integral
+    per period). Held at the path's last value instead (before session 73), an interval mean past the end read 0 pN
+    (blind g09: the last sample of three segments at 12-26 sigma from every node of the mixture)."""
     if point:
-        Fs = np.interp(x[None, :] - shift, b, f)
+        Fs = np.interp(_periodic(x[None, :] - shift, b, a)[0], b, f)
     else:
         a_, b_ = lo[None, :] - shift, hi[None, :] - shift
         w = b_ - a_
-        Fs = np.where(np.abs(w) > 0, (np.interp(b_, b, cum) - np.interp(a_, b, cum)) / np.where(w == 0, 1.0, w),
-                      np.interp(x[None, :] - shift, b, f))
+        Fs = np.where(np.abs(w) > 0, (_cum_at(b_, b, cum, a) - _cum_at(a_, b, cum, a)) / np.where(w == 0, 1.0, w),
+                      np.interp(_periodic(x[None, :] - shift, b, a)[0], b, f))
     return Fs + kb * shift
+
+
+def _periodic(q, b, a: float) -> tuple[np.ndarray, np.ndarray]:
+    """Positions ``q`` moved by whole periods ``a`` into the path's span ``[b[0], b[-1]]`` where beyond it, and the
+    number of periods each was moved back (positive past the end); unchanged where the span is shorter than a period
+    or ``a`` is 0 (:func:`_translated`)."""
+    q = np.asarray(q, float)
+    n = np.zeros(q.shape)
+    if a <= 0 or b[-1] - b[0] < a:
+        return q, n
+    n = np.where(q > b[-1], np.ceil((q - b[-1]) / a), np.where(q < b[0], -np.ceil((b[0] - q) / a), 0.0))
+    return q - n * a, n
+
+
+def _cum_at(q, b, cum, a: float) -> np.ndarray:
+    """The path's running integral ``cum`` at ``q``, continued periodically beyond its span (:func:`_periodic`): a
+    period past the end adds the last period's integral, one before the start takes away the first's."""
+    qq, n = _periodic(q, b, a)
+    out = np.interp(qq, b, cum)
+    if np.any(n):
+        last = float(cum[-1] - np.interp(b[-1] - a, b, cum))
+        first = float(np.interp(b[0] + a, b, cum) - cum[0])
+        out = out + np.where(n > 0, n * last, n * first)
+    return out
 
 
 def _branch_exchange(u_lo, u_hi, uq, u_b, f_b, a: float, point: bool) -> np.ndarray:
@@ -791,9 +946,10 @@ def _branch_exchange(u_lo, u_hi, uq, u_b, f_b, a: float, point: bool) -> np.ndar
 
 
 def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, dq, b, slips, carry, point: bool,
-                       a: float, nodes) -> None:
+                       a: float, nodes, atoms=None, group: int = 0) -> None:
     """The part of a slip's scatter carried across the reversal that ends its segment (:func:`_scatter_moments`):
-    adds to ``mean`` and ``var`` of the returning segment's samples in place."""
+    adds to ``mean`` and ``var`` of the returning segment's samples in place (``atoms``: the nodes' offsets too,
+    as the slip ``group``'s: the same realization as before the turn)."""
     drop, (u_tab, H_tab) = carry[0], carry[1][:2]
     M = len(dq)
     Xt = float(b[-1]) if d > 0 else float(b[0])  # the turn: the segment's far end in the direction of motion
@@ -829,6 +985,8 @@ def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, 
     m = np.sum(wq * dF, axis=0)
     mean[idx] += m
     var[idx] += np.sum(wq * (dF - m) ** 2, axis=0)
+    if atoms is not None:
+        atoms.append(SlipMixture(idx, np.full(len(idx), group), dF - m, wq[:, 0]))
 
 
 def _centre(scan: FrictionScan) -> float:
@@ -868,17 +1026,22 @@ def _polish(fun, x: float, cx: float, steps, repeat: int = 1) -> tuple[float, fl
     return x, cx
 
 
-def _intervals(xs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _intervals(xs: np.ndarray, full_start: bool = False, full_end: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The support interval of each interval-mean sample at positions ``xs`` (one monotone segment): from the midpoint
-    with the previous sample to the midpoint with the next, the segment's ends at its first and last sample."""
+    with the previous sample to the midpoint with the next; the segment's ends at its first and last sample, or a
+    whole step (mirrored) where the support runs on past it (``full_start``: a pre-roll or a turn half a step before
+    the first sample; ``full_end``: the turn half a step after the last, :func:`_turn_overshoot`)."""
     mid = 0.5 * (xs[1:] + xs[:-1])
-    return np.concatenate([[xs[0]], mid]), np.concatenate([mid, [xs[-1]]])
+    first = xs[0] - (mid[0] - xs[0]) if full_start else xs[0]
+    last = xs[-1] + (xs[-1] - mid[-1]) if full_end else xs[-1]
+    return np.concatenate([[first], mid]), np.concatenate([mid, [last]])
 
 
-def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str) -> np.ndarray:
+def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str, ext=None) -> np.ndarray:
     """The model's lateral force at a scan's samples from a path result along the support coordinate ``Xl``:
     the value at the sample's position (``sampling = "point"``) or its mean over the sample's interval, per
-    monotone segment (``starts``/``ends``: the data's segments; the pre-roll runs on into the first)."""
+    monotone segment (``starts``/``ends``: the data's segments; the pre-roll runs on into the first; ``ext``: the turns'
+    overshoot, :func:`_turn_overshoot`, None: the segments' ends at their end samples)."""
     F = np.empty(len(Xl))
     seg_model = _segments(res, n_seg)
     for j, (s0, e0) in enumerate(zip(starts, ends)):
@@ -890,7 +1053,8 @@ def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str) -
             F[s0:e0] = np.interp(xs, b, fz)
         else:
             cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
-            lo, hi = _intervals(xs)
+            lo, hi = (_intervals(xs) if ext is None else
+                      _intervals(xs, j == 0 or ext[j - 1] != 0, ext[j] != 0))
             width = hi - lo
             Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -938,7 +1102,8 @@ def simulate_scan_2d(data: FrictionData, st: FrictionState, scan: FrictionScan, 
     # the pre-roll carries each lattice axis through PREROLL periods of its own, as the decoupled trains' do
     # (the y axis's a / sin(theta) along the scan): the model is then continuous into theirs at k_y = k_x
     pre = PREROLL * st.a / max(min(math.sin(st.theta), math.cos(st.theta)), 1e-3)
-    turns = [Xs[0] - d0 * pre, Xs[0]] + [Xs[e - 1] for e in ends]
+    ext = _turn_overshoot(Xs, starts, ends)
+    turns = [Xs[0] - d0 * pre, Xs[0]] + [Xs[e - 1] + x for e, x in zip(ends, ext)]
     # phis[2] (if given): the tip starts the pre-roll that many lattice periods from the support along the lattice's
     # x axis, at rest (the trains' start well, :func:`simulate_scan`, train 0)
     well = round(phis[2]) * st.a if len(phis) > 2 else 0.0
@@ -947,17 +1112,19 @@ def simulate_scan_2d(data: FrictionData, st: FrictionState, scan: FrictionScan, 
     res = lattice2d_path(U0=U0, a=st.a, theta=st.theta, k_x=k, k_y=ky, m=m, c_x=c, c_y=c, turns=turns, speed=V,
                          phases=(phis[0], phis[1]), gamma=max(st.gamma, 0.0), y0=y0, hmax=hmax_frac * dX / max(V, 1e-30),
                          rtol=RTOL, atol_rel=RTOL, atol_v=100 * V)
-    return _sample_path(res, Xs, starts, ends, len(turns) - 2, data.sampling)
+    return _sample_path(res, Xs, starts, ends, len(turns) - 2, data.sampling, ext)
 
 
 def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phis, hmax_frac: float = 0.5,
-                  train: int = 0, var_out: list | None = None, skip_out: list | None = None) -> np.ndarray:
+                  train: int = 0, var_out: list | None = None, skip_out: list | None = None,
+                  atoms: list | None = None) -> np.ndarray:
     """Model lateral force of one lattice train (0: along x, 1: along y of a misaligned scan) at
     the scan's samples, for lattice registry ``phis[train]``; ``phis[2]`` (if given) is the well the tip
     starts the pre-roll in along the x train, in lattice periods from the support (0: under it; at rest). With thermally
     activated slips the force is the mean over the slip points' distribution and ``var_out`` (a list)
     receives its variance per sample (the stochastic slip-position scatter). ``skip_out`` (a list) receives the
-    path's slips that could have carried the tip one well further (:func:`_skip_regions`)."""
+    path's slips that could have carried the tip one well further (:func:`_skip_regions`). ``atoms`` (a list)
+    receives the slip points' mixture itself (:func:`_scatter_moments`)."""
     X = _support(scan, st)
     Xc = _centre(scan)
     w = math.cos(st.theta) if train == 0 else math.sin(st.theta)
@@ -967,7 +1134,8 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
     ffm = _ffm(data, U0, st.a, st.gamma)
     d0 = scan.direction[0]
     starts, ends = _segment_edges(scan)
-    turns = [Xl[0] - d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] for e in ends]
+    ext = _turn_overshoot(Xl, starts, ends)
+    turns = [Xl[0] - d0 * PREROLL * st.a, Xl[0]] + [Xl[e - 1] + x for e, x in zip(ends, ext)]
     x0 = turns[0] + (round(phis[2]) * st.a if len(phis) > 2 and train == 0 else 0.0)
     # resolve the stick branches between samples: the step at most half a sample interval
     dX = float(np.median(np.abs(np.diff(Xl)))) if len(Xl) > 1 else st.a
@@ -977,12 +1145,12 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
         res, slips, scat = _thermal_path(ffm, turns, V, st, hmax, x0)
     else:
         res = _ffm_path(ffm, turns, V, hmax, (x0, 0.0, 0.0))
-    F = _sample_path(res, Xl, starts, ends, len(turns) - 2, data.sampling)
+    F = _sample_path(res, Xl, starts, ends, len(turns) - 2, data.sampling, ext)
     # between slips the tip samples its well thermally: the recorded force is the Boltzmann mean (thermal_mean_shift)
     F = F + _thermal_mean_correction(F, Xl, scan.direction, st, U0, ffm.cantilever["k_x"])
     if skip_out is not None and slips:  # landing wells at random where the slips are activated (_skip_regions)
         skip_out.extend(_skip_regions(res, len(turns) - 2, Xl, starts, ends, data.sampling, st.a,
-                                      ffm.cantilever["k_x"], U0))
+                                      ffm.cantilever["k_x"], U0, ext))
     var = np.zeros(len(X))
     if slips:
         seg_of = np.zeros(len(X), int)
@@ -991,11 +1159,12 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
         paths = _segments(res, len(turns) - 2)
         if len(scat) > 3:  # an overdamped tip's noisy passage: each node's own trace (_passage_realizations)
             mean, var = np.zeros(len(Xl)), np.zeros(len(Xl))
-            _passage_moments(Xl, seg_of, slips, data.sampling == "point", scat[3], SLIP_NODES[1], mean, var)
-            _carry_turns(mean, var, Xl, seg_of, slips, scat, data.sampling == "point", paths, st.a)
+            _passage_moments(Xl, seg_of, slips, data.sampling == "point", scat[3], SLIP_NODES[1], mean, var, atoms,
+                             ext)
+            _carry_turns(mean, var, Xl, seg_of, slips, scat, data.sampling == "point", paths, st.a, atoms, ext)
         else:
             mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
-                                         carry=(scat[1], scat[2]), nodes=SLIP_NODES)
+                                         carry=(scat[1], scat[2]), nodes=SLIP_NODES, atoms=atoms, ext=ext)
         F = F + mean
     if var_out is not None:
         var_out.append(var)
@@ -1202,16 +1371,16 @@ def _passage_realizations(res, n_seg: int, slips, dq, a: float, k: float, U0: fl
     return out
 
 
-def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, var) -> None:
+def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, var, atoms=None, ext=None) -> None:
     """Mean shift and variance of every sample near an overdamped tip's slips from the nodes' own traces
     (:func:`_passage_realizations`), interval means or points as the data's; added to ``mean`` and ``var`` in
-    place."""
+    place (``atoms``: the nodes' offsets, :func:`_scatter_moments`)."""
     w = np.asarray(weights, float)[:, None]
-    lo, hi = _sample_bounds(Xl, seg_of, point)
+    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
     # each node's running integral along the support (interval means: its differences over the sample's interval)
     cums = {d: np.concatenate([np.zeros((len(D), 1)), np.cumsum(0.5 * (D[:, 1:] + D[:, :-1]) * np.diff(u), axis=1)],
                               axis=1) for d, (u, D) in real.items()}
-    for sg, M, d in slips:
+    for k, (sg, M, d) in enumerate(slips):
         if d not in real:
             continue
         u, D = real[d]
@@ -1230,6 +1399,8 @@ def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, 
         m = np.sum(w * Dm, axis=0)
         np.add.at(mean, idx, m)
         np.add.at(var, idx, np.sum(w * (Dm - m) ** 2, axis=0))
+        if atoms is not None:
+            atoms.append(SlipMixture(idx, np.full(len(idx), k), Dm - m, w[:, 0]))
 
 
 #: the least chi^2 a skipped well must gain to be taken (:meth:`FrictionProblem._skips`): a whole stick segment on the
@@ -1238,8 +1409,8 @@ def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, 
 SKIP_MIN_GAIN = 25.0
 
 
-def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, a: float, k: float, U0: float
-                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, a: float, k: float, U0: float,
+                  ext=None) -> list[tuple[np.ndarray, np.ndarray]]:
     """Where a slip could have carried the tip one well further than the model's path: for every slip of the path
     (a change of the tip's well, direction ``d``), the lateral force with the tip one well further on, from the slip
     until the path's tip moves into that well (its next slip: the two agree again) or that well can no longer hold
@@ -1267,8 +1438,9 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
     # the sample intervals along the support per data segment, and which path points belong to which segment
     seg_model = _segments(res, n_seg)
     bounds = np.cumsum([0] + [len(m[0]) - 1 for m in seg_model])  # path index of each segment's first point
-    lo_hi = [(Xl[s0:e0], Xl[s0:e0]) if sampling == "point" or e0 - s0 < 2 else _intervals(Xl[s0:e0])
-             for s0, e0 in zip(starts, ends)]
+    lo_hi = [(Xl[s0:e0], Xl[s0:e0]) if sampling == "point" or e0 - s0 < 2 else
+             (_intervals(Xl[s0:e0]) if ext is None else _intervals(Xl[s0:e0], j == 0 or ext[j - 1] != 0, ext[j] != 0))
+             for j, (s0, e0) in enumerate(zip(starts, ends))]
     # per path point after the first slip: the direction of the last slip, and the further well's root of
     # g(x') = k (b - x') - q U0 sin(q x'), which falls monotonically over the well's stable interval
     # |q (x' - c)| < arccos(-k / (q^2 U0)): a root there is the stable one (bisection, to 2^-30 of the interval)
@@ -1306,7 +1478,7 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
         return []
     # the two parities' changes sampled as the data are (a sample straddling two regions gets each one's share)
     sampled = [_sample_path(SimpleNamespace(base=b, lateral_force=d, t=res.t, _edges=_path_edges(res)), Xl, starts,
-                            ends, n_seg, sampling)
+                            ends, n_seg, sampling, ext)
                for d in dF]
     out = []
     for par, p0, p1 in spans:
@@ -1803,6 +1975,20 @@ class FrictionProblem:
         #: ``Fitter.var_rows``); without one (an activation cause's assumed temperature) chi^2 as before
         self.variance_in_objective = bool(data.temperature and data.temperature > 0)
         self._last_ok = False
+        if (self.noise_excess and data.noise_part == "detector" and data.temperature and data.temperature > 0
+                and data.sigma_force > 0):
+            # a stated *detector* noise at a declared temperature: the record's scatter holds the tip's thermal force
+            # noise besides it, which the model carries itself (thermal_force_variance). The excess is measured
+            # against both: the stated noise stands, and the thermal part is the model's, unless the scatter
+            # exceeds the two together (blind g09, 298 K: 5 pN stated, 7.6 pN scattered, the thermal part 5-9 pN;
+            # replaced by the scatter, the detector's noise was then re-read from residuals at 4.3 pN)
+            self.thermal_noise_T, self.sigma = float(data.temperature), float(data.sigma_force)
+            expected = self.sigma * math.sqrt(1.0 + self._thermal_share())
+            if self.sigma_scatter <= NOISE_EXCESS * expected:
+                self.noise_excess = self.sigma_from_scatter = False
+                self.noise_stated = True
+            else:
+                self.thermal_noise_T, self.sigma = 0.0, self.sigma_scatter
         if self.thermal_noise_T and self._thermal_share() < THERMAL_NOISE_MIN_SHARE:
             self.thermal_noise_T = 0.0
         self._last_thermal = None
@@ -2177,8 +2363,11 @@ class FrictionProblem:
         self._last_thermal = th
         return F.copy(), var.copy()
 
-    def _scan_model_once(self, i: int, st: FrictionState, phis) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`_scan_model` evaluated."""
+    def _scan_model_once(self, i: int, st: FrictionState, phis, atoms: list | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_scan_model` evaluated; ``atoms`` (a list) receives the slip points' mixture at the scan's samples
+        (:class:`.mixture.SlipMixture`, its offsets in the recorded force: each train's weight and the gain applied, its
+        groups told apart by train)."""
         s = self.data.scans[i]
         if _coupled(st):
             return self._combine(i, st, [simulate_scan_2d(self.data, st, s, phis)], [np.zeros(len(s.force))],
@@ -2188,7 +2377,11 @@ class FrictionProblem:
         vs: list = []
         regions: list | None = [] if len(trains) == 1 else None  # an aligned scan: one train, its slips' landing wells
         for tr in trains:
-            parts.append(simulate_scan(self.data, st, s, phis, train=tr, var_out=vs, skip_out=regions))
+            own: list | None = [] if atoms is not None else None
+            parts.append(simulate_scan(self.data, st, s, phis, train=tr, var_out=vs, skip_out=regions, atoms=own))
+            if own:
+                wt = st.gain * (math.cos(st.theta) if tr == 0 else math.sin(st.theta))
+                atoms.extend(SlipMixture(P.sample, P.group * len(trains) + tr, wt * P.offsets, P.weights) for P in own)
         F, var = self._combine(i, st, parts, vs)
         if regions:
             F = self._skips(i, st, F, var, regions)
@@ -2435,6 +2628,7 @@ class FrictionProblem:
         # fit reached it: the nested-fit guarantee at a cause's null values)
         mkey = self._model_key(st)
         mk = self._mask_key()
+        self._last_phis = list(nu)
         for i, s in enumerate(self.data.scans):
             F, var = self._scan_model(i, st, nu[i])
             if mkey is not None:
@@ -2442,6 +2636,7 @@ class FrictionProblem:
                 known = self._registry.get((mkey, i, mk))
                 if known is not None and known[1] < c2:
                     F, var = self._scan_model(i, st, known[0])
+                    self._last_phis[i] = known[0]
                 else:
                     self._remember((mkey, i, mk), nu[i], c2)
             th = self._last_thermal if self.thermal_noise_T else 0.0
@@ -2488,6 +2683,38 @@ class FrictionProblem:
         if not self._last_ok:
             return np.zeros(int(self.use.sum()))
         return np.sqrt(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2))
+
+    def mixture(self, values, causes=()) -> tuple[np.ndarray, np.ndarray, list[SlipMixture]] | None:
+        """The model's law per sample beyond its mean and variance: ``(mean, total variance, parts)`` with ``parts``
+        the slip points' mixture (:class:`.mixture.SlipMixture`, record sample numbers, a group per slip). None where
+        the model has no slip scatter or cannot be evaluated."""
+        try:
+            m = self.predict(values, causes)
+        except ProbedynError:
+            return None
+        if not np.any(self.model_var[self.use] > 0):
+            return None
+        st = self.state(values, causes)
+        parts: list[SlipMixture] = []
+        for i in range(len(self.data.scans)):
+            own: list = []
+            self._scan_model_once(i, st, self._last_phis[i], atoms=own)
+            # the record's sample numbers, and each scan's slips their own groups
+            parts.extend(SlipMixture(P.sample + self.slices[i].start, np.asarray(P.group, np.int64) + (i << 32),
+                                     P.offsets, P.weights) for P in own)
+        return m, self.sigma**2 + self.thermal_var + self.model_var, parts
+
+    def pit(self, values, causes=()) -> PitTest | None:
+        """The fitted samples' probability integral transform through the model's own law (:func:`.mixture.pit_test`):
+        where the model is a mixture over the slip points (a declared temperature's activated slips), each sample read
+        against the slip law's own distribution, not its mean and variance (the engine's ``slip_law_check``,
+        docs/diagnose.md 9.58). None where the model has no slip scatter (the residuals are the scores) or cannot be
+        evaluated."""
+        mix = self.mixture(values, causes)
+        if mix is None:
+            return None
+        m, total, parts = mix
+        return pit_test(self.force - m, total, parts, self.use)
 
     def residuals(self, values, causes=()) -> np.ndarray:
         self._last_ok = False
