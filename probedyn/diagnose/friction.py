@@ -803,15 +803,25 @@ def _carry_virtual(mean, var, lo, hi, seg_of, sg: int, X_v: float, d: float, dq,
     idx = np.nonzero((seg_of == sg + 1) & (d * np.maximum(lo, hi) > d * X_rb) & (d * np.minimum(lo, hi) < d * Xt))[0]
     if not len(idx):
         return
-    s_lo, s_hi = min(X_rb, Xt), max(X_rb, Xt)
-    if point:
-        x = 0.5 * (lo[idx] + hi[idx])
-        share = ((x >= s_lo) & (x <= s_hi)).astype(float)
-    else:
-        l_, h_ = np.minimum(lo[idx], hi[idx]), np.maximum(lo[idx], hi[idx])
-        share = np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / np.maximum(h_ - l_, 1e-300), 0.0, 1.0)
+    share = _covered(lo[idx], hi[idx], np.array([[min(X_rb, Xt)]]), np.array([[max(X_rb, Xt)]]), point)
     dF = np.zeros((len(dq), len(idx)))
-    dF[early] = -d * drop * share[None, :]
+    dF[early] = -d * drop * share
+    _add_nodes(mean, var, idx, dF, nodes, atoms, group)
+
+
+def _covered(lo, hi, s_lo, s_hi, point: bool) -> np.ndarray:
+    """The share of each sample's interval ``(lo, hi)`` (either order; a point where equal) inside the spans
+    ``(s_lo, s_hi)`` (columns: one span per row), for the samples a carried realization moves to the other branch."""
+    if point:
+        x = 0.5 * (lo + hi)[None, :]
+        return ((x >= s_lo) & (x <= s_hi)).astype(float)
+    l_, h_ = np.minimum(lo, hi)[None, :], np.maximum(lo, hi)[None, :]
+    return np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / np.maximum(h_ - l_, 1e-300), 0.0, 1.0)
+
+
+def _add_nodes(mean, var, idx, dF, nodes, atoms, group: int) -> None:
+    """A slip's change ``dF`` (nodes x samples ``idx``) added to the samples' mean and variance over the nodes'
+    weights (``atoms``: the offsets themselves, the slip ``group``'s, :class:`.mixture.SlipMixture`)."""
     wq = np.asarray(nodes[1], float)[:, None]
     m = np.sum(wq * dF, axis=0)
     mean[idx] += m
@@ -970,23 +980,10 @@ def _carry_across_turn(mean, var, lo, hi, seg_of, sg: int, Xs: float, d: float, 
         return
     # each carried realization: the samples between its slip on the way back and the turn are the drop higher
     # (in the direction of the slip: d * drop), by the share of each sample's interval they cover
-    s_lo = np.minimum(X_back, Xt)[:, None]
-    s_hi = np.maximum(X_back, Xt)[:, None]
-    if point:
-        x = 0.5 * (lo[idx] + hi[idx])[None, :]
-        share = ((x >= s_lo) & (x <= s_hi)).astype(float)
-    else:
-        l_, h_ = np.minimum(lo[idx], hi[idx])[None, :], np.maximum(lo[idx], hi[idx])[None, :]
-        w = np.maximum(h_ - l_, 1e-300)
-        share = np.clip((np.minimum(h_, s_hi) - np.maximum(l_, s_lo)) / w, 0.0, 1.0)
+    share = _covered(lo[idx], hi[idx], np.minimum(X_back, Xt)[:, None], np.maximum(X_back, Xt)[:, None], point)
     dF = np.zeros((M, len(idx)))
     dF[beyond] = d * drop * share
-    wq = np.asarray(nodes[1], float)[:, None]
-    m = np.sum(wq * dF, axis=0)
-    mean[idx] += m
-    var[idx] += np.sum(wq * (dF - m) ** 2, axis=0)
-    if atoms is not None:
-        atoms.append(SlipMixture(idx, np.full(len(idx), group), dF - m, wq[:, 0]))
+    _add_nodes(mean, var, idx, dF, nodes, atoms, group)
 
 
 def _centre(scan: FrictionScan) -> float:
