@@ -645,8 +645,7 @@ def thermal_force_variance(F: np.ndarray, U0: float, a: float, k: float, c: floa
     return k * k * var_x
 
 
-def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None, nodes=None, atoms=None,
-                     ext=None):
+def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=None, nodes=None, atoms=None):
     """Mean shift and variance of every sample from the stochastic slip points, on the model's own path.
 
     A slip at ``Y = X* + d delta`` instead of the path's ``X*`` translates the slip and its transient
@@ -699,7 +698,7 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
     inner = ~tail
     reach_mid = float(np.max(np.abs(dq[inner]))) if np.any(inner) else 0.0
     after = max(reach_mid + 0.5 * a, reach)
-    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
+    lo, hi = _sample_bounds(Xl, seg_of, point)
     lo_, hi_ = np.minimum(lo, hi), np.maximum(lo, hi)
     seg_idx = {sg: np.nonzero(seg_of == sg)[0] for sg in np.unique(seg_of)}
     by_seg: dict[int, list[tuple[int, float, float]]] = {}
@@ -830,10 +829,12 @@ def _add_nodes(mean, var, idx, dF, nodes, atoms, group: int) -> None:
         atoms.append(SlipMixture(idx, np.full(len(idx), group), dF - m, wq[:, 0]))
 
 
-def _sample_bounds(Xl, seg_of, point: bool, ext=None) -> tuple[np.ndarray, np.ndarray]:
+def _sample_bounds(Xl, seg_of, point: bool) -> tuple[np.ndarray, np.ndarray]:
     """Each sample's interval along the support (interval means: midway to its neighbours in its segment, the ends
-    as :func:`_intervals` has them with the turns' overshoot ``ext``, :func:`_turn_overshoot`; without it, both ends
-    mirrored) or its point (``lo = hi``)."""
+    mirrored: a whole step, which is the sample's where the support turned half a step past it,
+    :func:`_turn_overshoot`, and the first sample's after any turn) or its point (``lo = hi``). A turning point
+    sampled once (the own generator) straddles the turn, half out and half back; it keeps the mirrored step, as the
+    scatter always had it (the path's mean takes its half step out, :func:`_sample_path`)."""
     n = len(Xl)
     lo = np.empty(n)
     hi = np.empty(n)
@@ -843,11 +844,7 @@ def _sample_bounds(Xl, seg_of, point: bool, ext=None) -> tuple[np.ndarray, np.nd
         if point or len(x) < 2:
             lo[idx] = hi[idx] = x
             continue
-        if ext is None:
-            full_start = full_end = True
-        else:
-            full_start, full_end = sg == 0 or ext[sg - 1] != 0, ext[sg] != 0
-        lo[idx], hi[idx] = _intervals(x, full_start, full_end)
+        lo[idx], hi[idx] = _intervals(x, True, True)
     return lo, hi
 
 
@@ -877,10 +874,10 @@ def _turn_overshoot(Xl, starts, ends) -> np.ndarray:
     return ext
 
 
-def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float, atoms=None, ext=None) -> None:
+def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float, atoms=None) -> None:
     """Every slip's part carried across the reversal that ends its segment (:func:`_carry_across_turn`), where the
     slips' own scatter is not :func:`_scatter_moments`' (an overdamped tip's noisy passage, :func:`_passage_moments`)."""
-    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
+    lo, hi = _sample_bounds(Xl, seg_of, point)
     segs = set(int(g) for g in np.unique(seg_of))
     for k, (sg, Xs, d) in enumerate(slips):
         if sg + 1 in segs and sg < len(paths):
@@ -1034,6 +1031,15 @@ def _intervals(xs: np.ndarray, full_start: bool = False, full_end: bool = False)
     return np.concatenate([[first], mid]), np.concatenate([mid, [last]])
 
 
+def _path_intervals(xs: np.ndarray, j: int, ext) -> tuple[np.ndarray, np.ndarray]:
+    """The intervals the path's mean is taken over in segment ``j`` (:func:`_intervals`): a whole step at an end where
+    the support turned half a step past it (``ext``, :func:`_turn_overshoot`) and at the start after such a turn (or
+    the pre-roll, in a record whose turns do so); else half a step at the ends, as before session 73 (``ext`` None)."""
+    if ext is None or not np.any(ext):
+        return _intervals(xs)
+    return _intervals(xs, j == 0 or ext[j - 1] != 0, ext[j] != 0)
+
+
 def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str, ext=None) -> np.ndarray:
     """The model's lateral force at a scan's samples from a path result along the support coordinate ``Xl``:
     the value at the sample's position (``sampling = "point"``) or its mean over the sample's interval, per
@@ -1050,8 +1056,7 @@ def _sample_path(res, Xl: np.ndarray, starts, ends, n_seg: int, sampling: str, e
             F[s0:e0] = np.interp(xs, b, fz)
         else:
             cum = np.concatenate([[0.0], np.cumsum(0.5 * (fz[1:] + fz[:-1]) * np.diff(b))])
-            lo, hi = (_intervals(xs) if ext is None else
-                      _intervals(xs, j == 0 or ext[j - 1] != 0, ext[j] != 0))
+            lo, hi = _path_intervals(xs, j, ext)
             width = hi - lo
             Ilo, Ihi = np.interp(lo, b, cum), np.interp(hi, b, cum)
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -1156,12 +1161,11 @@ def simulate_scan(data: FrictionData, st: FrictionState, scan: FrictionScan, phi
         paths = _segments(res, len(turns) - 2)
         if len(scat) > 3:  # an overdamped tip's noisy passage: each node's own trace (_passage_realizations)
             mean, var = np.zeros(len(Xl)), np.zeros(len(Xl))
-            _passage_moments(Xl, seg_of, slips, data.sampling == "point", scat[3], SLIP_NODES[1], mean, var, atoms,
-                             ext)
-            _carry_turns(mean, var, Xl, seg_of, slips, scat, data.sampling == "point", paths, st.a, atoms, ext)
+            _passage_moments(Xl, seg_of, slips, data.sampling == "point", scat[3], SLIP_NODES[1], mean, var, atoms)
+            _carry_turns(mean, var, Xl, seg_of, slips, scat, data.sampling == "point", paths, st.a, atoms)
         else:
             mean, var = _scatter_moments(Xl, seg_of, slips, scat[0], data.sampling == "point", paths, st.a,
-                                         carry=(scat[1], scat[2]), nodes=SLIP_NODES, atoms=atoms, ext=ext)
+                                         carry=(scat[1], scat[2]), nodes=SLIP_NODES, atoms=atoms)
         F = F + mean
     if var_out is not None:
         var_out.append(var)
@@ -1368,12 +1372,12 @@ def _passage_realizations(res, n_seg: int, slips, dq, a: float, k: float, U0: fl
     return out
 
 
-def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, var, atoms=None, ext=None) -> None:
+def _passage_moments(Xl, seg_of, slips, point: bool, real: dict, weights, mean, var, atoms=None) -> None:
     """Mean shift and variance of every sample near an overdamped tip's slips from the nodes' own traces
     (:func:`_passage_realizations`), interval means or points as the data's; added to ``mean`` and ``var`` in
     place (``atoms``: the nodes' offsets, :func:`_scatter_moments`)."""
     w = np.asarray(weights, float)[:, None]
-    lo, hi = _sample_bounds(Xl, seg_of, point, ext)
+    lo, hi = _sample_bounds(Xl, seg_of, point)
     # each node's running integral along the support (interval means: its differences over the sample's interval)
     cums = {d: np.concatenate([np.zeros((len(D), 1)), np.cumsum(0.5 * (D[:, 1:] + D[:, :-1]) * np.diff(u), axis=1)],
                               axis=1) for d, (u, D) in real.items()}
@@ -1436,7 +1440,7 @@ def _skip_regions(res, n_seg: int, Xl: np.ndarray, starts, ends, sampling: str, 
     seg_model = _segments(res, n_seg)
     bounds = np.cumsum([0] + [len(m[0]) - 1 for m in seg_model])  # path index of each segment's first point
     lo_hi = [(Xl[s0:e0], Xl[s0:e0]) if sampling == "point" or e0 - s0 < 2 else
-             (_intervals(Xl[s0:e0]) if ext is None else _intervals(Xl[s0:e0], j == 0 or ext[j - 1] != 0, ext[j] != 0))
+             _path_intervals(Xl[s0:e0], j, ext)
              for j, (s0, e0) in enumerate(zip(starts, ends))]
     # per path point after the first slip: the direction of the last slip, and the further well's root of
     # g(x') = k (b - x') - q U0 sin(q x'), which falls monotonically over the well's stable interval
