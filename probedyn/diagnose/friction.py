@@ -859,19 +859,15 @@ def _turn_overshoot(Xl, starts, ends) -> np.ndarray:
     that half step (blind g09: the last sample of a segment 26-44 sigma from every realization of the slip mixture,
     docs/diagnose.md 9.58)."""
     n_seg = len(starts)
-    ext = np.zeros(n_seg)
-    for j in range(n_seg):
-        s0, e0 = int(starts[j]), int(ends[j])
-        if e0 - s0 < 2:
-            continue
-        step = float(np.median(np.abs(np.diff(Xl[s0:e0]))))
-        if j + 1 < n_seg and step > 0 and abs(Xl[int(starts[j + 1])] - Xl[e0 - 1]) < 0.25 * step:
-            ext[j] = 0.5 * step * np.sign(Xl[e0 - 1] - Xl[s0])
-    if n_seg > 1 and np.any(ext[:-1] != 0):
-        s0, e0 = int(starts[-1]), int(ends[-1])
-        if e0 - s0 >= 2:
-            ext[-1] = 0.5 * float(np.median(np.abs(np.diff(Xl[s0:e0])))) * np.sign(Xl[e0 - 1] - Xl[s0])
-    return ext
+    seg = [(int(s0), int(e0)) for s0, e0 in zip(starts, ends)]
+    # half a step in each segment's direction (0 for a segment of one sample)
+    half = np.array([0.5 * float(np.median(np.abs(np.diff(Xl[s0:e0])))) * np.sign(Xl[e0 - 1] - Xl[s0])
+                     if e0 - s0 >= 2 else 0.0 for s0, e0 in seg])
+    repeated = np.array([j + 1 < n_seg and abs(Xl[seg[j + 1][0]] - Xl[seg[j][1] - 1]) < 0.5 * abs(half[j])
+                         for j in range(n_seg)])
+    if n_seg > 1 and np.any(repeated[:-1] & (half[:-1] != 0)):
+        repeated[-1] = True
+    return np.where(repeated, half, 0.0)
 
 
 def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: float, atoms=None) -> None:
@@ -886,7 +882,7 @@ def _carry_turns(mean, var, Xl, seg_of, slips, scat, point: bool, paths, a: floa
                                (scat[1], scat[2]), point, a, SLIP_NODES, atoms=atoms, group=k)
 
 
-def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool, a: float = 0.0) -> np.ndarray:
+def _translated(x, lo, hi, shift, b, f, cum, kb: float, point: bool, a: float) -> np.ndarray:
     """The path ``(b, f)`` (``cum``: its running integral) translated along the support by each ``shift`` (a column)
     and raised by ``kb shift``, at point samples ``x`` or interval means over ``(lo, hi)`` (:func:`_scatter_moments`).
 
