@@ -722,9 +722,9 @@ def _scatter_moments(Xl, seg_of, slips, dq, point: bool, paths, a: float, carry=
         virtual = _next_slip(these, b, a, float(np.min(dq)))
         if virtual is not None:
             k_v = len(slips) + sg  # a group of its own (SlipMixture)
-            if carry is not None and sg + 1 in seg_idx:
+            if carry is not None and sg + 1 in seg_idx:  # its return: nodes of its own, and so a group of its own
                 _carry_virtual(mean, var, lo, hi, seg_of, sg, virtual[0], virtual[1], dq, b, slips, carry[0], point,
-                               a, nodes, atoms=atoms, group=k_v)
+                               a, nodes, atoms=atoms, group=len(slips) + len(paths) + sg)
             these = these + [(k_v, virtual[0], virtual[1])]
         seg = seg_idx.get(sg)
         if seg is None:
@@ -785,27 +785,37 @@ def _carry_virtual(mean, var, lo, hi, seg_of, sg: int, X_v: float, d: float, dq,
     """The returning segment's samples for the realizations of the next slip (:func:`_next_slip`, the path's
     median beyond the turn) that came before it: the tip turns one well ahead of the path's, so until its own slip
     back it reads the slip's drop below the path (in the direction of the first segment's motion). That slip back
-    comes one period before the returning path's first slip (the same backward instability a well further on);
-    the slip back's own scatter is the returning path's, left to it. Adds to ``mean`` and ``var`` in place
-    (``atoms``: the nodes' offsets, as the slip ``group``'s)."""
+    is the same activated backward instability as the returning path's first slip, a well further on: its median a
+    period before that slip's, and its scatter that slip's quantiles (``dq``, in the returning direction), drawn
+    independently of the forward slip's (a new barrier, crossed afresh); a realization whose slip back would come
+    before the turn slips back at it. The law of each sample is then exact in ``1 + len(dq)`` nodes: the forward slip
+    after the turn (probability ``1 - P_early``, no change), or before it and the slip back at node ``l``
+    (``P_early w_l``). Before session 74 the slip back sat at its median: own seed 2002 at 300 K read a slip back
+    more than half a sample past it at -45 sigma in one fold's fit (docs/diagnose.md 9.59). Adds to ``mean`` and
+    ``var`` in place (``atoms``: the nodes' offsets, as the slip ``group``'s; these nodes are not the forward
+    slip's, so the group is the caller's own for the return)."""
     Xt = float(b[-1]) if d > 0 else float(b[0])
     u_t = d * (Xt - X_v)
-    early = np.nonzero(np.asarray(dq) < u_t)[0]
-    if not len(early):
+    dq = np.asarray(dq, float)
+    w = np.asarray(nodes[1], float)
+    early = dq < u_t
+    p_early = float(np.sum(w[early]))
+    if p_early <= 0.0:
         return
     back = [x for (g, x, dd) in slips if g == sg + 1]
     if not back:
         return
-    X_rb = back[0] + d * a  # the slip back of the tip a well ahead
-    if d * (X_rb - Xt) >= 0:
+    X_rb = back[0] + d * a - d * dq  # the slip back of the tip a well ahead, at each node (returning: -d)
+    X_rb = np.where(d * (X_rb - Xt) > 0, Xt, X_rb)
+    first = float(np.min(d * X_rb))  # the latest slip back, in the first segment's direction
+    if first >= d * Xt:
         return
-    idx = np.nonzero((seg_of == sg + 1) & (d * np.maximum(lo, hi) > d * X_rb) & (d * np.minimum(lo, hi) < d * Xt))[0]
+    idx = np.nonzero((seg_of == sg + 1) & (d * np.maximum(lo, hi) > first) & (d * np.minimum(lo, hi) < d * Xt))[0]
     if not len(idx):
         return
-    share = _covered(lo[idx], hi[idx], np.array([[min(X_rb, Xt)]]), np.array([[max(X_rb, Xt)]]), point)
-    dF = np.zeros((len(dq), len(idx)))
-    dF[early] = -d * drop * share
-    _add_nodes(mean, var, idx, dF, nodes, atoms, group)
+    share = _covered(lo[idx], hi[idx], np.minimum(X_rb, Xt)[:, None], np.maximum(X_rb, Xt)[:, None], point)
+    dF = np.vstack([np.zeros((1, len(idx))), -d * drop * share])
+    _add_nodes(mean, var, idx, dF, (None, np.concatenate([[1.0 - p_early], p_early * w])), atoms, group)
 
 
 def _covered(lo, hi, s_lo, s_hi, point: bool) -> np.ndarray:
@@ -2673,13 +2683,26 @@ class FrictionProblem:
         return float(np.sum(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2)))
 
     def variance_rows(self) -> np.ndarray:
-        """``sqrt(ln(1 + var / sigma^2))`` per fitted sample of the model :meth:`residuals` last evaluated (its slip
-        scatter and thermal force noise, :meth:`variance_logdet`'s terms; zeros after a model that could not be
-        evaluated): the rows a fit adds to its objective so that it minimises ``-2 ln L``, not chi^2 alone
-        (``variance_in_objective``, engine ``Fitter.var_rows``)."""
+        """``sqrt(ln(1 + var / sigma^2) + L0)`` per fitted sample of the model :meth:`residuals` last evaluated (its
+        slip scatter and thermal force noise, :meth:`variance_logdet`'s terms; ``sqrt(L0)`` after a model that could
+        not be evaluated): the rows a fit adds to its objective so that it minimises ``-2 ln L``, not chi^2 alone
+        (``variance_in_objective``, engine ``Fitter.var_rows``). ``L0`` (:attr:`variance_floor`) is a constant of the
+        record: where the stated noise is the samples' total, the thermal part's own pattern is taken out of it
+        (:meth:`predict`), so ``var`` is negative on the samples that carry less than its mean, down to
+        ``-(1 - DETECTOR_MIN_SHARE) sigma^2``; ``L0 = -ln DETECTOR_MIN_SHARE`` keeps every row real (before session
+        74 such a row was the square root of a negative number: blind f04, 1 K, a total noise stated, no fit could
+        start). A constant per row shifts every fit of the record alike, so no comparison of fits moves."""
+        L0 = self.variance_floor
         if not self._last_ok:
-            return np.zeros(int(self.use.sum()))
-        return np.sqrt(np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2))
+            return np.full(int(self.use.sum()), math.sqrt(L0))
+        e = np.log1p((self.model_var + self.thermal_var)[self.use] / self.sigma**2) + L0
+        return np.sqrt(np.maximum(e, 0.0))
+
+    @property
+    def variance_floor(self) -> float:
+        """``L0`` of :meth:`variance_rows`: ``-ln DETECTOR_MIN_SHARE`` where the thermal force noise is shared out of
+        a stated total (its rows can then be negative), else 0."""
+        return -math.log(DETECTOR_MIN_SHARE) if (self.thermal_noise_T and self.data.noise_part == "total") else 0.0
 
     def mixture(self, values, causes=()) -> tuple[np.ndarray, np.ndarray, list[SlipMixture]] | None:
         """The model's law per sample beyond its mean and variance: ``(mean, total variance, parts)`` with ``parts``
