@@ -830,3 +830,34 @@ def test_an_unclaimed_cause_as_well_supported_as_the_winner_is_named_confounded(
     (group,) = res["confounded"]
     assert set(group["not_claimed"]) == near and set(group["causes"]) == {lead} | near
     assert res["verdict"] == "confounded"
+
+
+def test_the_heldout_score_of_a_model_with_its_own_variance_pays_its_log_determinant():
+    """-2 ln of a held-out group's predictive density under a model that carries a variance of its own
+    (``Fit.var_rows``: rows whose squares are ``ln(1 + var / sigma^2)``) is ``sum e^2 + sum ln(1 + var / sigma^2)``
+    over the group, the same terms its fits minimise. Two models predicting the same held-out samples: the one that
+    widened its variance there to halve its whitened residuals (``var = 3 sigma^2``) pays ``ln 4`` per sample, and
+    loses where the residuals do not need it (``e = 0.5``: 0.25 + ln 4 against 1 per sample). Before session 74
+    the score was ``sum e^2`` alone and the wide model won by 0.75 a sample."""
+    from types import SimpleNamespace
+
+    from probedyn.diagnose.engine import CrossValidation, Fit
+
+    n = 12
+    folds = [np.arange(0, 6), np.arange(6, 12)]
+    F = SimpleNamespace(problem=SimpleNamespace())
+
+    def fits(e, var):
+        rows = np.sqrt(np.log1p(np.full(n, var)))
+        return [Fit((), [], np.array([]), {}, np.full(n, e), 0.0, n, var_rows=rows) for _ in folds]
+
+    cv = CrossValidation(F, folds, n)
+    narrow = Fit((), [], np.array([]), {}, np.zeros(n), 0.0, n)
+    cv._ref[()] = fits(1.0, 0.0)
+    cv.heldout(narrow)
+    wide = Fit((), [], np.array([]), {}, np.zeros(n), 0.0, n)
+    cv._ref[()] = fits(0.5, 3.0)
+    cv.heldout(wide)
+    assert np.allclose(narrow.cv_fold, [6.0, 6.0])
+    assert np.allclose(wide.cv_fold, 6 * (0.25 + np.log(4.0)))
+    assert wide.cv > narrow.cv

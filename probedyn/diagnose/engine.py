@@ -211,6 +211,9 @@ class Fit:
     #: the log-determinant of the variance the model carries of its own, relative to the noise's (``-2 ln L`` beyond
     #: chi^2 where it depends on the parameters: a friction record's activated slip scatter, Fitter.var_rows)
     logdet: float = 0.0
+    #: that variance's rows (``Fitter.var_rows``) on all data at the optimum, their squares ``ln(1 + var / sigma^2)``
+    #: (plus the record's constant): a held-out group's share of ``-2 ln`` its predictive density (CrossValidation)
+    var_rows: np.ndarray | None = None
 
     @property
     def k(self) -> int:
@@ -466,10 +469,11 @@ class Fitter:
             if not free:
                 r = self.residuals(vals0, causes, mask)
                 ld = self.logdet(mask)
+                vr = self.var_rows()
                 m = np.ones(len(r), bool) if mask is None else mask
                 f = Fit(causes, plist, np.array([]), dict(vals0), r, float(np.sum(r[m] ** 2)),
                         int(m.sum()) - _inactive_rows(prob, vals0, causes), np.zeros((int(m.sum()), 0)), 1, m,
-                        logdet=ld)
+                        logdet=ld, var_rows=vr)
                 f.nuisance = prob.fixed_nuisance if has_nu else None
                 if has_nu:
                     prob.fixed_nuisance = None
@@ -526,6 +530,7 @@ class Fitter:
         try:
             best.r = self.residuals(best.values, causes, mask)
             ld = self.logdet(mask)
+            best.var_rows = self.var_rows()
         finally:
             if has_nu:
                 prob.fixed_nuisance = None
@@ -703,6 +708,7 @@ class Fitter:
             try:
                 r = self.residuals(start0, causes, mask)
                 ld = self.logdet(mask)
+                vr = self.var_rows()
             finally:
                 if hasattr(self.problem, "nuisance"):
                     self.problem.fixed_nuisance = None
@@ -710,7 +716,7 @@ class Fitter:
             J = np.zeros((int(m.sum()), len(f.plist)))
             f = Fit(causes, f.plist, np.array([_to_u(p, start0[p.name]) for p in f.plist]), dict(start0), r,
                     float(np.sum(r[m] ** 2)), int(m.sum()) - _inactive_rows(self.problem, start0, causes), J, f.nfev,
-                    m, start="null", logdet=ld)
+                    m, start="null", logdet=ld, var_rows=vr)
             f.nuisance = ref.nuisance
         return f
 
@@ -985,7 +991,10 @@ class CrossValidation:
         density spreads that prediction over the prior instead and charges the Occam factor
         ``ln det(I + S) / 2`` (Laplace; Vehtari, Gelman & Gabry 2017 for LOO as a predictive
         density). Where the training groups determine the parameters, ``S`` is small and the score
-        is ``e^T e``."""
+        is ``e^T e``. A model that carries a variance of its own (:attr:`Fit.var_rows`: a friction record's slip
+        scatter at a declared temperature) adds the held-out group's ``sum ln(1 + var / sigma^2)``, as its fits' objective
+        does: without it (before session 74) a model widening its variance on the held-out group lowered ``e^T e``
+        there free of charge."""
         out = np.full(self.n, np.nan)
         pred = bool(getattr(self.F.problem, "heldout_predictive", False))
         scores = []
@@ -994,8 +1003,11 @@ class CrossValidation:
             e = out[fold]
             ok = np.isfinite(e)
             e = e[ok]
+            # a model that carries a variance of its own: the held-out group's log-determinant of it is part of -2 ln
+            # its predictive density, as it is of the fit's objective (not shared by every model)
+            ld = float(np.sum(f.var_rows[fold][ok] ** 2)) if f.var_rows is not None else 0.0
             if not (pred and f.k):
-                scores.append(float(e @ e))
+                scores.append(float(e @ e) + ld)
                 continue
             J = self.F.jacobian(f)
             Jt, Jg = J[f.mask], J[fold][ok]
@@ -1003,7 +1015,7 @@ class CrossValidation:
             C = np.linalg.pinv(Jt.T @ Jt + P, hermitian=True)
             A = np.eye(len(e)) + Jg @ C @ Jg.T
             _, logdet = np.linalg.slogdet(A)
-            scores.append(float(e @ np.linalg.solve(A, e) + logdet))
+            scores.append(float(e @ np.linalg.solve(A, e) + logdet) + ld)
         fit.cv_r, fit.cv_fold = out, np.array(scores)
         fit.cv = float(np.sum(fit.cv_fold))
 
@@ -1723,7 +1735,7 @@ def _declared_terms(F: Fitter, base: Fit, alpha: float) -> tuple[Fit, list[dict[
                 problem.base_params = list(problem.base_params) + list(t.params)
                 problem.base_terms = tuple(problem.base_terms) + (t,)
                 base = Fit((), g.plist, g.u, dict(g.values), g.r, g.chi2, g.n, J=g.J, nfev=g.nfev, mask=g.mask, logdet=g.logdet,
-                           start=f"{base.start}+{t.key}", nuisance=g.nuisance)
+                           start=f"{base.start}+{t.key}", nuisance=g.nuisance, var_rows=g.var_rows)
                 F.close_pool()  # the workers were forked with the baseline without the term
                 F.open_pool()
             out.append(row)
@@ -2212,7 +2224,8 @@ def _final(problem, F: Fitter, current: Fit, base: Fit, cv, folds, use_cv) -> di
             r_full2 = full(fit2.values, fit2.causes)
             if np.sum(r_full2**2) < np.sum(r_full**2):
                 fit = Fit(fit2.causes, fit2.plist, fit2.u, fit2.values, fit2.r - 0.0, fit2.chi2, fit2.n, fit2.J,
-                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start, cv_fold=fit.cv_fold, logdet=fit2.logdet)
+                          fit2.nfev, fit2.mask, fit.cv, fit.cv_r, fit.start, cv_fold=fit.cv_fold, logdet=fit2.logdet,
+                          var_rows=fit2.var_rows)
                 r_full = r_full2
             else:
                 break
