@@ -593,6 +593,58 @@ def test_a_declared_term_s_sweep_stops_within_a_large_model_error():
     assert near.chi2 / near.dof < 1 and near.values["s"] == pytest.approx(s_deep, abs=2e-3)
 
 
+def test_a_relative_sweep_walks_a_coefficient_across_decades():
+    """``CauseParam.sweep_relative`` (a viscous coefficient, linear with null 0, its values spanning decades): the
+    sweep's step is a fraction of the value, so the walk is geometric. The tilted wells of the test above laid out in
+    ``x = ln(s / s1) / ln 4`` (floors at s1 4^k, k = 0..3): from a fit in the first well a relative sweep of
+    sqrt(2) - 1 (a quarter of a well a step, three misses before the next one) reaches the deepest well at 64 s1,
+    where an additive sweep of the same first step (0.41 s1) walks four steps up the first well's side and gives
+    up. At the null there is nothing to scale by, and no sweep; a relative sweep of a log-scale parameter is a
+    registry error."""
+    from dataclasses import replace
+
+    from probedyn.diagnose.causes import CauseParam, RegistryError
+    from probedyn.diagnose.engine import SWEEP_GAIN
+
+    s1 = 1e-5
+
+    class Drag(Cause):
+        key = "log-wells"
+        kind = "friction"
+
+    class LogWells:
+        base_params = (CauseParam("b", "1", -1.0, 1.0, 0.0),)
+
+        def __init__(self, **sweep):
+            self.causes = (Drag((CauseParam("s", "N s/m", 0.0, s1 * 4**3.5, 0.0, **sweep),)),)
+
+        def residuals(self, v, causes):
+            s = v.get("s", 0.0)
+            x = max(np.log(s / s1) / np.log(4.0), -0.5) if s > 0 else -0.5
+            return np.array([np.sqrt(20.0 * (2.0 - np.cos(2 * np.pi * x) - 0.2 * x)), v["b"] - 0.3])
+
+    x_first = np.arcsin(0.2 / (2 * np.pi)) / (2 * np.pi)
+    floor = 20.0 * (2.0 - np.cos(2 * np.pi * x_first) - 0.2 * x_first)
+
+    def fit(**sweep):  # the local fit at the first well's floor, and the sweep from it
+        prob = LogWells(**sweep)
+        F = Fitter(prob)
+        f = F.fit(prob.causes, [{"b": 0.3, "s": s1 * 4**x_first}])
+        assert f.values["s"] == pytest.approx(s1 * 4**x_first, rel=1e-4) and f.chi2 == pytest.approx(floor, abs=1e-6)
+        return F, f, F.swept(f, prob.causes)
+
+    F, local, f = fit(sweep=2**0.5 - 1, sweep_relative=True)
+    assert f.values["s"] == pytest.approx(s1 * 4 ** (3 + x_first), rel=1e-3) and f.start.endswith("+sweep")
+    assert f.chi2 == pytest.approx(floor - 20.0 * 0.6, abs=1e-5) and f.chi2 < local.chi2 - SWEEP_GAIN
+    _, local_add, g = fit(sweep=(2**0.5 - 1) * s1)  # additive: the first step alike, then four in the well's rise
+    assert g is local_add
+    j = [p.name for p in local.plist].index("s")
+    at_null = replace(local, u=np.where(np.arange(len(local.u)) == j, 0.0, local.u), values={**local.values, "s": 0.0})
+    assert F._sweep_points(at_null, "s", np.log(2**0.5), 0.0, at_null.score) == []
+    with pytest.raises(RegistryError):
+        CauseParam("s", "1", 1e-9, 1.0, 1e-9, scale="log", sweep=0.1, sweep_relative=True)
+
+
 def _sweep_as_it_was(F, f, p, step, tol):
     """``Fitter.swept``'s walk before session 65, both directions in turn, sharing the lowest (the reference)."""
     from probedyn.diagnose.engine import SWEEP_MAX, SWEEP_PATIENCE, _u_bounds, _from_u

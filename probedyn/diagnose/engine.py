@@ -628,7 +628,8 @@ class Fitter:
         phi = f.chi2 / max(f.dof, 1)  # the misfit's excess over the noise (the chi-square's own)
         tol = SWEEP_GAIN * max(phi - 1.0, 0.0) if any(getattr(c, "declared", False) for c in new) else 0.0
         for p in [p for c in new for p in c.params if p.sweep > 0 and p.sweep_claimed == claimed]:
-            du = p.sweep if p.scale == "log" else p.sweep / _span(p)
+            # a relative sweep's step is the log of its factor (_sweep_points walks it geometrically)
+            du = math.log1p(p.sweep) if p.sweep_relative else p.sweep if p.scale == "log" else p.sweep / _span(p)
             if self._pool is not None:
                 # both directions at once: the second is walked with its own lowest, which walks at least as far as
                 # the lowest of both would (a point that is a new lowest of both is one of its own), and the walk in
@@ -650,7 +651,8 @@ class Fitter:
 
     def _sweep_points(self, f: Fit, name: str, step: float, tol: float, best_c: float) -> list[tuple[float, dict]]:
         """One direction of :meth:`swept`: the fits with parameter ``name`` held at ``step`` after ``step`` (in its
-        fitting coordinate) from ``f``'s optimum, each started from the previous one's, until :data:`SWEEP_PATIENCE`
+        fitting coordinate; for a ``sweep_relative`` parameter the log of the factor each step multiplies it by) from
+        ``f``'s optimum, each started from the previous one's, until :data:`SWEEP_PATIENCE`
         points in a row are no new lowest below ``best_c`` (by more than ``tol``), :data:`SWEEP_MAX` steps or the
         bound. Returns ``(chi^2, start at the point)`` per point."""
         j = next(i for i, q in enumerate(f.plist) if q.name == name)
@@ -658,8 +660,10 @@ class Fitter:
         lo, hi = _u_bounds(p)
         out: list[tuple[float, dict]] = []
         g, u, misses, k = f, f.u[j], 0, 0
+        if p.sweep_relative and not u > 0:  # at the null: no scale to walk by
+            return out
         while misses < SWEEP_PATIENCE and k < SWEEP_MAX:
-            u, k = u + step, k + 1
+            u, k = (u * math.exp(step) if p.sweep_relative else u + step), k + 1
             if not lo <= u <= hi:
                 break
             held = {p.name: _from_u(p, u)}

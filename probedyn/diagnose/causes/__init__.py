@@ -50,6 +50,9 @@ class CauseParam:
     ``sweep_claimed``: the sweep runs only once the cause is claimed (the lead, or an extension taken),
     not on every candidate's fit: for a parameter whose held fits are costly (a misaligned scan's angle, each
     point a 2D scan) and whose first basin is already good enough for the ranking.
+    ``sweep_relative``: the step is a fraction of the value (a geometric walk, ``v (1 + sweep)^k`` and
+    ``v / (1 + sweep)^k``) for a linear parameter whose null is 0 and whose values span decades (a viscous
+    coefficient); a fit ending at the null is not swept.
     """
 
     name: str
@@ -62,6 +65,7 @@ class CauseParam:
     starts: tuple[float, ...] = ()
     sweep: float = 0.0
     sweep_claimed: bool = False
+    sweep_relative: bool = False
 
     def __post_init__(self) -> None:
         if not (self.lo <= self.null <= self.hi):
@@ -72,6 +76,8 @@ class CauseParam:
             raise RegistryError(f"parameter {self.name}: a log-scale parameter needs lo > 0")
         if not self.sweep >= 0:
             raise RegistryError(f"parameter {self.name}: sweep must be >= 0")
+        if self.sweep_relative and (self.scale != "lin" or self.lo < 0):
+            raise RegistryError(f"parameter {self.name}: a relative sweep needs a linear scale and lo >= 0")
         for s in self.starts:
             if not (self.lo <= s <= self.hi):
                 raise RegistryError(f"parameter {self.name}: start {s} outside [{self.lo}, {self.hi}]")
@@ -89,7 +95,8 @@ class CauseParam:
     def with_bounds(self, lo: float, hi: float, null: float | None = None) -> "CauseParam":
         n = self.null if null is None else null
         return CauseParam(self.name, self.unit, lo, hi, min(max(n, lo), hi), self.doc, self.scale,
-                          tuple(s for s in self.starts if lo <= s <= hi), self.sweep, self.sweep_claimed)
+                          tuple(s for s in self.starts if lo <= s <= hi), self.sweep, self.sweep_claimed,
+                          self.sweep_relative)
 
     def describe(self) -> dict[str, Any]:
         return {"name": self.name, "unit": self.unit, "bounds": [self.lo, self.hi], "null": self.null,

@@ -6,6 +6,13 @@ import numpy as np
 
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
 
+#: the claimed coefficient's profile sweep (``CauseParam.sweep_relative``: steps of this fraction of its value). With a
+#: declared temperature's activation in the baseline the misfit is rugged along gamma: more viscous drag trades against
+#: fewer activated slips (a lower attempt frequency), and the local fit stops in the first basin (blind g02, 10 K:
+#: gamma 2.0e-5 with -2 ln L 3490, where the profile falls step by step to 2782 at the generator's 3.0e-5;
+#: docs/diagnose.md 9.60)
+SWEEP_FRACTION = 0.1
+
 
 @CAUSES.register
 class ViscousFriction(Cause):
@@ -16,12 +23,14 @@ class ViscousFriction(Cause):
     description = "A friction force proportional to the sliding speed: the friction loop widens linearly with speed."
     needs = "scans at two or more speeds"
     changes = ()
-    params = (CauseParam("gamma", "N s/m", 0.0, 1.0, 0.0, "viscous coefficient (bounds: 10 x the lever force at the fastest speed)"),)
+    params = (CauseParam("gamma", "N s/m", 0.0, 1.0, 0.0, "viscous coefficient (bounds: 10 x the lever force at the fastest speed)",
+                         sweep=SWEEP_FRACTION, sweep_claimed=True, sweep_relative=True),)
 
     def constrain(self, problem):
         g_hi = 10.0 * problem.data.k_x * problem.a_est / problem.v_max
         return ViscousFriction((CauseParam("gamma", "N s/m", 0.0, g_hi, 0.0, "viscous coefficient",
-                                           starts=(1e-3 * g_hi, 1e-2 * g_hi)),))
+                                           starts=(1e-3 * g_hi, 1e-2 * g_hi), sweep=SWEEP_FRACTION,
+                                           sweep_claimed=True, sweep_relative=True),))
 
     def data_starts(self, problem, ref: dict) -> list[dict]:
         """From the recorded loop: the peak force of scans at one load and different speeds grows by
