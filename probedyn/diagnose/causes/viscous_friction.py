@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from probedyn.diagnose.causes import CAUSES, Cause, CauseParam
@@ -28,9 +30,9 @@ class ViscousFriction(Cause):
 
     def constrain(self, problem):
         g_hi = 10.0 * problem.data.k_x * problem.a_est / problem.v_max
-        return ViscousFriction((CauseParam("gamma", "N s/m", 0.0, g_hi, 0.0, "viscous coefficient",
-                                           starts=(1e-3 * g_hi, 1e-2 * g_hi), sweep=SWEEP_FRACTION,
-                                           sweep_claimed=True, sweep_relative=True),))
+        # the catalog's parameter (its unit, null and sweep) with the record's bound and starts
+        return ViscousFriction((replace(self.params[0], hi=g_hi, doc="viscous coefficient",
+                                        starts=(1e-3 * g_hi, 1e-2 * g_hi)),))
 
     def data_starts(self, problem, ref: dict) -> list[dict]:
         """From the recorded loop: the peak force of scans at one load and different speeds grows by
