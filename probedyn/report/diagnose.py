@@ -48,9 +48,10 @@ def _fmt_param(name: str, p: dict[str, Any]) -> str:
         return f"{name} = {p['value']:.4g} (not identifiable)"
     s = p.get("sigma")
     txt = f"{name} = {p['value']:.4g}" + (f" ± {s:.2g}" if s is not None and math.isfinite(s) else "")
-    if p.get("one_sided"):
+    if p.get("one_sided") or p.get("sweep_points_within"):
         lo, hi = p["interval"]
-        txt += f" (68 % interval [{lo:.3g}, {hi:.3g}], one-sided)"
+        txt += f" (68 % interval [{lo:.3g}, {hi:.3g}], " + (
+            "one-sided)" if p.get("one_sided") else f"{p['sweep_points_within']} points of its swept profile within it)")
     if p.get("at_bound"):
         txt += f" [at {p['bound']} bound" + ("" if p.get("bound_binding", True) else ", not binding") + "]"
     return txt
@@ -79,10 +80,23 @@ def summary(res: dict[str, Any]) -> str:
     law = b.get("load_law")
     if law:
         other = {k: v for k, v in law["chi2"].items() if k != law["law"]}
-        lines.append(f"baseline corrugation {LOAD_LAW_WORDS.get(law['law'], law['law'])}: the better of the laws the "
-                     f"simulation runs (chi2 {law['chi2'][law['law']]:.1f}, against "
-                     + ", ".join(f"{v:.1f} {LOAD_LAW_WORDS.get(k, k)}" for k, v in other.items())
-                     + ", before the terms and the noise model below); the record does not say which its instrument follows")
+        wc = law.get("with_cause")
+        if law.get("chosen_with") and wc:
+            sc = wc["score"]
+            lines.append(f"baseline corrugation {LOAD_LAW_WORDS.get(law['law'], law['law'])}: chosen with the lead cause "
+                         f"{wc['cause']} (-2 ln L {sc[law['law']]:.1f} nested in it, against "
+                         + ", ".join(f"{v:.1f} {LOAD_LAW_WORDS.get(k, k)}" for k, v in sc.items() if k != law["law"])
+                         + f"; taken where lower by more than {wc['threshold']:.2f}); the baseline alone fit better "
+                         "under the other law (chi2 " + ", ".join(f"{v:.1f} {k}" for k, v in law["chi2"].items())
+                         + "); the record does not say which law its instrument follows")
+        else:
+            lines.append(f"baseline corrugation {LOAD_LAW_WORDS.get(law['law'], law['law'])}: the better of the laws the "
+                         f"simulation runs (chi2 {law['chi2'][law['law']]:.1f}, against "
+                         + ", ".join(f"{v:.1f} {LOAD_LAW_WORDS.get(k, k)}" for k, v in other.items())
+                         + ", before the terms and the noise model below"
+                         + (f"; kept with the lead cause {wc['cause']}, -2 ln L "
+                            + ", ".join(f"{v:.1f} {k}" for k, v in wc["score"].items()) if wc else "")
+                         + "); the record does not say which its instrument follows")
     for t in b.get("declared_terms") or ():
         why = f"{t['implied_by']} implies" if t.get("implied_by") else "the declared conditions imply"
         if t["taken"]:
