@@ -11,7 +11,6 @@ Written for session 76 (docs/diagnose.md 9.61) on the multi-load records of both
 from __future__ import annotations
 
 import json
-import os
 import sys
 from pathlib import Path
 
@@ -19,14 +18,12 @@ import probedyn.diagnose.engine as E
 from probedyn.core.io import write_json
 from probedyn.diagnose.problems import make_problem
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from blind_run import _cpu  # noqa: E402  (CPU of this process and its worker processes)
+
 
 class _Stop(Exception):
     pass
-
-
-def _cpu() -> float:
-    t = os.times()
-    return t.user + t.system + t.children_user + t.children_system
 
 
 def main(out: Path, cases: list[str]) -> None:
