@@ -259,6 +259,13 @@ def _inactive_rows(problem, values, causes) -> int:
     return int(f(values, causes)) if f is not None else 0
 
 
+#: processes for a problem's independent fits (candidate causes, cross-validation folds, screened starts, a sweep's
+#: two directions), forked from the diagnosis (``problem.workers``; :class:`Fitter`). Each job's result is the one the
+#: parent computes in turn (the modal example: every number of the report equal, docs/diagnose.md 9.62); a machine with
+#: fewer cores gets fewer.
+WORKERS = 2
+
+
 class Fitter:
     """Least-squares fits of a problem's baseline and its nested extensions.
 

@@ -621,6 +621,9 @@ class ForceCurveProblem:
     def __init__(self, data: ForceData) -> None:
         self.data = data
         self.path = data.path
+        from probedyn.diagnose.engine import WORKERS
+
+        self.workers = WORKERS  # the candidates' and the folds' fits through the engine's pool (docs/diagnose.md 9.62)
         self.known = set(data.known) | set(data.free)
         self.declared_medium = data.medium
         self.medium_name = data.medium_name

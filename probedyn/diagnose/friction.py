@@ -105,8 +105,6 @@ THERMAL_NOISE_MIN_SHARE = 0.01
 #: the least share of a stated total force noise left to the detector where the tip's thermal force noise is
 #: shared out of it (FrictionProblem.predict)
 DETECTOR_MIN_SHARE = 0.05
-#: processes for the independent fits (candidate causes, cross-validation folds)
-WORKERS = 2
 #: registries of the y train of a misaligned scan tried over one lattice period (FrictionProblem._profile_two_trains)
 Y_GRID = 8
 #: registries remembered per problem (model, scan, training mask): ~ the evaluations of a diagnosis
@@ -2023,6 +2021,8 @@ class FrictionProblem:
         self.screen_nfev = SCREEN_NFEV
         self.screen_margin = SCREEN_MARGIN
         self.screen_keep = SCREEN_KEEP
+        from probedyn.diagnose.engine import WORKERS
+
         self.workers = WORKERS
         # the chi^2 surface of stick-slip traces is rugged (the slip pattern jumps with the parameters):
         # a fold fitted from the declared starts alone can end in another basin (seed 11 viscous, scan 2

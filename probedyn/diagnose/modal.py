@@ -221,6 +221,11 @@ class ModalProblem:
         self.mf_dirs = scale * self.beam_gap[:, None]
         self.mf_names = ("1D-3D model form" if self.mf_floor == "beam" else "uniform stiffness",)
         self.train_mask = None  # set by the engine during fits: the profile sees the fitted data only
+        # the candidates' and the folds' fits through the engine's pool of forked processes (engine.WORKERS): each
+        # job's numbers are those of the fit in turn (docs/diagnose.md 9.62)
+        from probedyn.diagnose.engine import WORKERS
+
+        self.workers = WORKERS
         b0 = self.reference_baseline
         self.hydro_q = HYDRO_Q_ASPECT * b0.w / b0.L if b0.L > 0 else 0.0
         self.gap_col = None  # the column of the fluid's 3D-mode vs uniform-beam direction, if any

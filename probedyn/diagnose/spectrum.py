@@ -1498,6 +1498,7 @@ def _labelling_score(prob: ModalProblem, hint: dict | None = None,
         hint = hint or {}
         jobs = [(b, (c,), None, dict(hint["values"])) if c.key == hint.get("cause") and hint.get("values")
                 else (b, (c,), None) for c in prob.causes]
+        F.open_pool()  # the causes' fits through the problem's workers (forked with the baseline kept on prob)
         for c, f in zip(prob.causes, F.map_nested(jobs)):
             sc = float(f.chi2) + _threshold(c, n_c)
             if sc < best[0]:
