@@ -29,7 +29,7 @@ variance (:func:`thermal_slip_scatter`).
 
 Cost (one evaluation = one FFM integration per scan): every start of a multi-start fit is
 screened with ``SCREEN_NFEV`` evaluations and the best continued, with a runner-up within
-``SCREEN_MARGIN`` of it; candidate causes and cross-validation folds are fitted in ``WORKERS``
+``SCREEN_MARGIN`` of it; candidate causes and cross-validation folds are fitted in ``engine.WORKERS``
 forked processes; the folds start from the null and from the full-data optimum (the chi^2 surface
 of stick-slip traces is rugged).
 """

@@ -239,9 +239,6 @@ class FrictionLoopProblem:
 
     def __init__(self, data: FrictionData) -> None:
         bind_scans(self, data)
-        from probedyn.diagnose.engine import WORKERS
-
-        self.workers = WORKERS  # the candidates' and the folds' fits through the engine's pool (docs/diagnose.md 9.62)
         sc = data.scans
         for s in sc:  # the friction is half the trace-retrace difference: one direction cannot tell it from the zero
             if not ((s.direction > 0).any() and (s.direction < 0).any()):

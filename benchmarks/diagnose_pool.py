@@ -1,8 +1,9 @@
-"""The modal diagnosis in turn and through the engine's pool of forked workers, in one process (session 77).
+"""A diagnosis in turn and through the engine's pool of forked workers, in one process (session 77).
 
-Usage: ``python benchmarks/modal_pool.py [OUT.json] [NAME ...]`` (default
-``benchmarks/results/modal_pool_s77.json``; names: shipped modal examples by file stem, default the 6-mode example,
-the one-mode example and the aluminium length sweep).
+Usage: ``python benchmarks/diagnose_pool.py [OUT.json] [NAME ...]`` (default
+``benchmarks/results/diagnose_pool_s77.json``; names: shipped examples by file stem, default the 6-mode and one-mode
+modal examples, the aluminium length sweep, the thermal spectrum in air, and the JPK force curve; the
+three-scan friction example has run through the pool since session 8, friction loops stay in turn).
 
 Each example's problem is built and diagnosed with one process (``engine.WORKERS`` set to 1 while its problem is
 built) and with the pool (``engine.WORKERS``), alternating, two rounds, in this one process; the build (the FEM
@@ -29,7 +30,8 @@ from probedyn.diagnose.engine import diagnose
 from probedyn.diagnose.problems import make_problem
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT = ("afm_cantilever_modes", "afm_cantilever_one_mode", "al_cantilever_length_sweep", "thermal_psd_air")
+DEFAULT = ("afm_cantilever_modes", "afm_cantilever_one_mode", "al_cantilever_length_sweep", "thermal_psd_air",
+           "afm_force_curve_jpk_qi")
 POOL = E.WORKERS
 
 
@@ -75,10 +77,10 @@ def main(out: Path, names: list[str]) -> None:
                "model_evaluations": reports[1].get("model_evaluations"), "verdict": reports[1].get("verdict")}
         print(row, flush=True)
         rows.append(row)
-    write_json(out, {"benchmark": "modal_pool", "rows": rows})
+    write_json(out, {"benchmark": "diagnose_pool", "rows": rows})
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    out = Path(args.pop(0)) if args and args[0].endswith(".json") else ROOT / "benchmarks" / "results" / "modal_pool_s77.json"
+    out = Path(args.pop(0)) if args and args[0].endswith(".json") else ROOT / "benchmarks" / "results" / "diagnose_pool_s77.json"
     main(out, args or list(DEFAULT))
