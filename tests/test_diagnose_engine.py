@@ -67,6 +67,31 @@ def test_nested_never_worse_force_curve(tmp_path):
     assert f < 0.2 * b
 
 
+def test_a_force_curve_diagnosis_through_the_pool_is_the_diagnosis_in_turn(tmp_path):
+    """A force curve's candidates and folds go through the engine's pool (``engine.WORKERS``, session 77: the JPK
+    example 1.24x faster on two cores, docs/diagnose.md 9.62); every job computes what the fit in turn does, so the
+    report is the same to the last bit (clocks left out; a 100-point curve with a tip-radius error, which the
+    diagnosis finds confounded: candidates, folds and the group all run)."""
+    from probedyn.diagnose.engine import WORKERS
+
+    path, _ = make_force_case(tmp_path, 7, "tip-radius-error", n=100)
+    serial, pooled = make_problem(path), make_problem(path)
+    assert pooled.workers == WORKERS == 2
+    serial.workers = 1
+    a, b = diagnose(serial), diagnose(pooled)
+    assert a["findings"] and a["model_evaluations"] == b["model_evaluations"] > 0
+    assert _untimed(a) == _untimed(b)
+
+
+def _untimed(r):
+    """A report with its clocks (keys ending in ``_s``) left out and its arrays as lists, for comparing two runs."""
+    if isinstance(r, dict):
+        return {k: _untimed(v) for k, v in r.items() if not str(k).endswith("_s")}
+    if isinstance(r, (list, tuple)):
+        return [_untimed(v) for v in r]
+    return r.tolist() if isinstance(r, np.ndarray) else r
+
+
 def test_nested_never_worse_friction_loop_catalog(tmp_path):
     """Every cause of the friction-loop regime (tests/diagnose_truth_loops.py) nests its baseline."""
     from diagnose_truth_loops import make_loop_case
