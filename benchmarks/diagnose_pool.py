@@ -10,9 +10,9 @@ built) and with the pool (``engine.WORKERS``), alternating, two rounds, in this 
 baseline and its reduction, which the pool does not touch, and a spectrum's peak labelling, whose causes' fits it
 runs) and the diagnosis are timed apart, and the two reports are compared with their clocks left out (they must be equal to the
 last bit: every job of the pool computes what the fit in turn computes). Recorded: the wall times, their ratio (in
-turn over pooled, best of the rounds each) and the equality. probedyn is imported before numpy, as the CLI does: it
-holds OpenBLAS to one thread (``probedyn/__init__.py``); with numpy first the reduced eigenproblems run on two threads,
-slower, and with other rounding (the 6-mode example then takes 1756 evaluations instead of 1852).
+turn over pooled, best of the rounds each) and the equality. probedyn is imported first, as the CLI does (the first
+version of this script imported numpy first and found OpenBLAS on two threads: slower, and rounding differently, 1756
+evaluations of the 6-mode example instead of 1852; ``probedyn/__init__.py`` now holds it to one thread either way).
 """
 
 from __future__ import annotations
@@ -21,27 +21,18 @@ import sys
 import time
 from pathlib import Path
 
-import probedyn  # noqa: F401  (first: it holds OpenBLAS to one thread, which must be set before numpy loads)
-import numpy as np
-
+import probedyn  # noqa: F401  (first, as the CLI: it sets OpenBLAS's threads before numpy loads it)
 from probedyn.core.io import write_json
 import probedyn.diagnose.engine as E
 from probedyn.diagnose.engine import diagnose
 from probedyn.diagnose.problems import make_problem
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from diagnose_cases import untimed  # noqa: E402  (the report without its clocks)
 DEFAULT = ("afm_cantilever_modes", "afm_cantilever_one_mode", "al_cantilever_length_sweep", "thermal_psd_air",
            "afm_force_curve_jpk_qi")
 POOL = E.WORKERS
-
-
-def _untimed(r):
-    """The report without its clocks (keys ending in ``_s``), arrays as lists."""
-    if isinstance(r, dict):
-        return {k: _untimed(v) for k, v in r.items() if not str(k).endswith("_s")}
-    if isinstance(r, (list, tuple)):
-        return [_untimed(v) for v in r]
-    return r.tolist() if isinstance(r, np.ndarray) else r
 
 
 def one(name: str, workers: int) -> tuple[float, float, dict]:
@@ -69,7 +60,7 @@ def main(out: Path, names: list[str]) -> None:
                 tb, t, res = one(name, w)
                 builds[w].append(round(tb, 2))
                 times[w].append(round(t, 2))
-                reports[w] = _untimed(res)
+                reports[w] = untimed(res)
         row = {"example": name, "in_turn_s": times[1], "pooled_s": times[POOL], "workers": POOL,
                "ratio": round(min(times[1]) / min(times[POOL]), 3), "equal": reports[1] == reports[POOL],
                "build_in_turn_s": builds[1], "build_pooled_s": builds[POOL],

@@ -3,7 +3,19 @@ effects, levers, truth models. Seeds are fixed so that the FEM truths can be cac
 
 from __future__ import annotations
 
+import numpy as np
+
 from diagnose_truth import LEVERS, MODAL_EFFECTS
+
+
+def untimed(report):
+    """A diagnosis report with its clocks (keys ending in ``_s``) left out and its arrays as lists: two runs of one
+    diagnosis compare equal where they computed the same numbers (the engine's pool against the fits in turn)."""
+    if isinstance(report, dict):
+        return {k: untimed(v) for k, v in report.items() if not str(k).endswith("_s")}
+    if isinstance(report, (list, tuple)):
+        return [untimed(v) for v in report]
+    return report.tolist() if isinstance(report, np.ndarray) else report
 
 
 def modal_cases(n_effect: int = 56, n_null: int = 56) -> list[dict]:

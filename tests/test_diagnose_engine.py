@@ -21,6 +21,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from diagnose_cases import untimed  # noqa: E402
 from diagnose_truth import make_force_case, make_friction_case, make_modal_case  # noqa: E402
 
 from probedyn.diagnose.causes import Cause  # noqa: E402
@@ -80,16 +81,7 @@ def test_a_force_curve_diagnosis_through_the_pool_is_the_diagnosis_in_turn(tmp_p
     serial.workers = 1
     a, b = diagnose(serial), diagnose(pooled)
     assert a["findings"] and a["model_evaluations"] == b["model_evaluations"] > 0
-    assert _untimed(a) == _untimed(b)
-
-
-def _untimed(r):
-    """A report with its clocks (keys ending in ``_s``) left out and its arrays as lists, for comparing two runs."""
-    if isinstance(r, dict):
-        return {k: _untimed(v) for k, v in r.items() if not str(k).endswith("_s")}
-    if isinstance(r, (list, tuple)):
-        return [_untimed(v) for v in r]
-    return r.tolist() if isinstance(r, np.ndarray) else r
+    assert untimed(a) == untimed(b)
 
 
 def test_nested_never_worse_friction_loop_catalog(tmp_path):

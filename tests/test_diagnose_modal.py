@@ -24,6 +24,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from diagnose_cases import untimed  # noqa: E402
 from diagnose_truth import E_SI, LEVERS, NU_SI, RHO_SI, make_modal_case  # noqa: E402
 
 from probedyn.diagnose.engine import diagnose, folds_of  # noqa: E402
@@ -299,13 +300,4 @@ def test_the_modal_diagnosis_through_the_pool_is_the_diagnosis_in_turn():
     serial.workers = 1
     a, b = diagnose(serial), diagnose(pooled)
     assert a["model_evaluations"] == b["model_evaluations"] > 0
-    assert _untimed(a) == _untimed(b)
-
-
-def _untimed(r):
-    """A report with its clocks (keys ending in ``_s``) left out and its arrays as lists, for comparing two runs."""
-    if isinstance(r, dict):
-        return {k: _untimed(v) for k, v in r.items() if not str(k).endswith("_s")}
-    if isinstance(r, (list, tuple)):
-        return [_untimed(v) for v in r]
-    return r.tolist() if isinstance(r, np.ndarray) else r
+    assert untimed(a) == untimed(b)
