@@ -287,9 +287,9 @@ def test_a_declared_liquid_carries_the_sections_thickness(tmp_path):
 def test_the_modal_diagnosis_through_the_pool_is_the_diagnosis_in_turn():
     """A modal problem's independent fits (the candidates, the cross-validation folds, a fit's screened starts) go
     through the engine's pool of forked workers (``engine.WORKERS``; session 77: the 6-mode example's diagnosis 1.22x
-    faster on two cores, the aluminium sweep's 1.52x, docs/diagnose.md 9.62). Each job's numbers are those of the fit in turn, so the
-    report is the same to the last bit: the shipped one-mode example (the smallest) diagnosed in one process and
-    through two, on one FEM baseline (its reduction built once)."""
+    faster on two cores, the aluminium sweep's 1.52x, docs/diagnose.md 9.62). Each job's numbers are those of the fit
+    in turn, so the report is the same to the last bit: the shipped one-mode example (the smallest) diagnosed in one
+    process and through two, on one FEM baseline (its reduction built once)."""
     from probedyn.diagnose.engine import WORKERS
 
     meas = read_measurement(Path(__file__).resolve().parents[1] / "examples" / "measurements"
