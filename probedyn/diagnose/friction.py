@@ -78,6 +78,13 @@ MULTISLIP_ETA = 4.6
 MULTISLIP_DROP = 1.5
 #: and only where the other well's pattern leaves less than this share of the scan's chi^2 (_start_well)
 MULTISLIP_GAIN = 0.5
+#: a scan whose aligned samples (:meth:`FrictionProblem._aligned_periods`) span fewer lattice periods than this has its
+#: registry from the fundamental's phase checked against ALIGN_GRID registries over one period where the aligned one
+#: leaves the scan beyond its noise (session 78: a 4-period record's double-load scan, eta 11.7, its double slips and a
+#: stick of 3.5 periods after the turn: the phase read 0.19 a off, chi^2 2.1e5 against 1.2e4 on the grid; the own and
+#: blind records hold 8.9 - 77 periods)
+ALIGN_PERIODS = 8.0
+ALIGN_GRID = 16
 #: wells tried besides the one under the support: the tip starts at rest up to this many periods
 #: behind or ahead of it (a slip pattern of period up to 2 MULTISLIP_WELLS + 1 lattice periods)
 MULTISLIP_WELLS = 1
@@ -1767,8 +1774,11 @@ def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
     """The lattice period from the positions of the slips (jumps of the lateral force larger than
     10 noise levels against the direction of motion): within each segment the spacing of
     successive slips is an integer number of periods (multiple slips), ``a = sum dX / sum n`` with
-    ``n = round(dX / a_est)``. Falls back to ``a_est`` with fewer than three slips."""
-    num = den = 0.0
+    ``n = round(dX / a)``, iterated from ``a = a_est`` to its fixed point (the integers from the
+    estimate they give). On a record of a few periods the periodogram's ``a_est`` is coarse (4
+    periods: 0.80 nm read for 0.50 nm), and a double slip of 1.0 nm then counts as one period;
+    the iteration recounts it as two. Falls back to ``a_est`` with fewer than three slips."""
+    spacings = []
     for s in data.scans:
         cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
         for seg in np.split(np.arange(len(s.force)), cuts):
@@ -1789,12 +1799,24 @@ def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
                     keep.append(j)
             x = s.position[seg]
             xs = np.array([0.5 * (x[j] + x[j + 1]) for j in keep])
-            dx = np.abs(np.diff(xs))
-            n = np.round(dx / a_est)
+            spacings.append(np.abs(np.diff(xs)))
+    a, seen = a_est, []
+    for _ in range(8):
+        num = den = 0.0
+        counts = []
+        for dx in spacings:  # summed segment by segment (the estimate of one pass to the last bit)
+            n = np.round(dx / a)
             ok = n >= 1
             num += float(dx[ok].sum())
             den += float(n[ok].sum())
-    return num / den if den >= 3 else a_est
+            counts.append(n)
+        if den < 3:
+            return a_est
+        if any(len(c) == len(counts) and all(np.array_equal(x, y) for x, y in zip(c, counts)) for c in seen):
+            return a  # the integers repeat: the estimate they give is the fixed point
+        seen.append(counts)
+        a = num / den
+    return a
 
 
 def bind_scans(problem, data: FrictionData) -> None:
@@ -1945,7 +1967,8 @@ class FrictionProblem:
         self.a_slip = _slip_period(data, self.a_est, self.sigma)
         # corrugation start from the stick-slip loop: the largest lateral force of a PT stick branch is
         # F_max = F0 sqrt(1 - 1/eta^2) with eta = 2 pi F0 / (k a), so F0 = sqrt(F_max^2 + (k a / 2 pi)^2)
-        q = 2 * math.pi / self.a_est
+        # ... at the slips' period where the periodogram does not resolve the period (a record of a few periods)
+        q = 2 * math.pi / (self.a_slip if self._period_unresolved() else self.a_est)
         self._U0_peaks = []  # the corrugation each scan's peak force reads
         for s_ in sc:
             fmax = 0.5 * float(np.percentile(s_.force, 99.5) - np.percentile(s_.force, 0.5))
@@ -2075,6 +2098,12 @@ class FrictionProblem:
                            load_share=self.load_share + float(ref.get("load_share", 0.0)), n_ref=self.N_mean)
         return np.array([effective_load(st, float(N)) for N in self.loads])
 
+    def _period_unresolved(self) -> bool:
+        """Whether the two estimates of the period (the periodogram's ``a_est``, the slips' ``a_slip``) differ by
+        more than the periodogram resolves over the longest scan (half a period over its ``n`` periods)."""
+        n_per = max(float(max(np.ptp(s_.position) for s_ in self.data.scans)) / self.a_est, 1.0)
+        return abs(self.a_est - self.a_slip) > 0.5 * self.a_est / n_per
+
     def _base_params(self) -> list:
         """The baseline's parameters under its load law: the corrugation per unit (effective) load started from the
         scans' peak forces and from the recorded loop, and the lattice period."""
@@ -2086,13 +2115,15 @@ class FrictionProblem:
         # the period sets the slip pattern: a period off by da misplaces the n-th slip by n da, another
         # basin once n da exceeds half a period over the scan; where the two independent estimates (the
         # slip positions, the periodogram) differ by that much, the baseline also starts from the other
-        sc = self.data.scans
-        n_per = max(float(max(np.ptp(s_.position) for s_ in sc)) / self.a_est, 1.0)
-        a_starts = ((self.a_est,) if abs(self.a_est - self.a_slip) > 0.5 * self.a_est / n_per else ())
+        a_starts = (self.a_est,) if self._period_unresolved() else ()
+        # the period's bounds, 25 % about the periodogram's reading, widened to hold 10 % about the slips' estimate
+        # (the null): on a record of a few periods the periodogram resolves the period only to ~1/n_per of itself
+        # (4 periods: 0.8 nm read for 0.5 nm), the slips' spacing far better
+        a_lo, a_hi = min(0.75 * self.a_est, 0.9 * self.a_slip), max(1.25 * self.a_est, 1.1 * self.a_slip)
         return [
             CauseParam("u0", "J/N", u0_start * 1e-2, u0_start * 1e2, u0_start, "corrugation U0 per unit load",
                        scale="log", starts=u0_starts),
-            CauseParam("a", "m", 0.75 * self.a_est, 1.25 * self.a_est, self.a_slip, "lattice period", starts=a_starts),
+            CauseParam("a", "m", a_lo, a_hi, self.a_slip, "lattice period", starts=a_starts),
         ]
 
     def _thermal_share(self) -> float:
@@ -2532,8 +2563,35 @@ class FrictionProblem:
         def chi2(ph: float) -> float:
             return self._scan_chi2(i, *self._scan_model(i, st, [ph, 0.0, *tail]))
 
-        phi, _ = _polish(chi2, phi, chi2(phi), [h * st.a for h in REGISTRY_STEPS], repeat=REGISTRY_REPEAT)
+        phi, c = _polish(chi2, phi, chi2(phi), [h * st.a for h in REGISTRY_STEPS], repeat=REGISTRY_REPEAT)
+        if self._aligned_periods(i, st) < ALIGN_PERIODS:
+            n_fit = int(np.sum(self._fit_mask(i)))
+            if c > n_fit + 4.0 * math.sqrt(2.0 * n_fit):
+                # a short scan: the fundamental's phase may be another registry's; the best of ALIGN_GRID over a
+                # period, polished, where it fits the scan better
+                grid = phi + st.a * np.arange(1, ALIGN_GRID) / ALIGN_GRID
+                cg = [chi2(float(g)) for g in grid]
+                j = int(np.argmin(cg))
+                if cg[j] < c:
+                    steps = [st.a / (2 * ALIGN_GRID), st.a / (8 * ALIGN_GRID)] + [h * st.a for h in REGISTRY_STEPS]
+                    pg, c2 = _polish(chi2, float(grid[j]), cg[j], steps, repeat=REGISTRY_REPEAT)
+                    if c2 < c:
+                        phi = pg
         return [phi, 0.0, *tail]
+
+    def _aligned_periods(self, i: int, st: FrictionState) -> float:
+        """The lattice periods of scan i whose samples :meth:`_align` reads the phase of the fundamental from (the
+        steady, fitted samples of every segment, both directions together)."""
+        s = self.data.scans[i]
+        mask = self._fit_mask(i)
+        cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
+        tot = 0.0
+        for seg in np.split(np.arange(len(s.force)), cuts):
+            x = s.position[seg]
+            sel = seg[(np.abs(x - x[0]) > 1.5 * st.a) & mask[seg]]
+            if len(sel) >= 8:
+                tot += float(np.ptp(s.position[sel])) / st.a
+        return tot
 
     def _start_well(self, i: int, st: FrictionState, phis, profile) -> list[float]:
         """Coexisting slip patterns (scan i's corrugation above MULTISLIP_ETA): the registry ``phis`` of the tip
