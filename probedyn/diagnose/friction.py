@@ -2581,9 +2581,10 @@ class FrictionProblem:
 
     def _aligned_periods(self, i: int, st: FrictionState) -> float:
         """The lattice periods of scan i whose samples :meth:`_align` reads the phase of the fundamental from (the
-        steady, fitted samples of every segment, both directions together)."""
+        steady used samples of every segment, both directions together), on the whole record: a property of the
+        record, so a cross-validation fold (one segment held out) is profiled as the record is."""
         s = self.data.scans[i]
-        mask = self._fit_mask(i)
+        mask = self.use[self.slices[i]]
         cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
         tot = 0.0
         for seg in np.split(np.arange(len(s.force)), cuts):
