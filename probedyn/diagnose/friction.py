@@ -2564,7 +2564,7 @@ class FrictionProblem:
             return self._scan_chi2(i, *self._scan_model(i, st, [ph, 0.0, *tail]))
 
         phi, c = _polish(chi2, phi, chi2(phi), [h * st.a for h in REGISTRY_STEPS], repeat=REGISTRY_REPEAT)
-        if self._aligned_periods(i, st) < ALIGN_PERIODS:
+        if self._aligned_periods(i) < ALIGN_PERIODS:
             n_fit = int(np.sum(self._fit_mask(i)))
             if c > n_fit + 4.0 * math.sqrt(2.0 * n_fit):
                 # a short scan: the fundamental's phase may be another registry's; the best of ALIGN_GRID over a
@@ -2579,19 +2579,20 @@ class FrictionProblem:
                         phi = pg
         return [phi, 0.0, *tail]
 
-    def _aligned_periods(self, i: int, st: FrictionState) -> float:
+    def _aligned_periods(self, i: int) -> float:
         """The lattice periods of scan i whose samples :meth:`_align` reads the phase of the fundamental from (the
-        steady used samples of every segment, both directions together), on the whole record: a property of the
-        record, so a cross-validation fold (one segment held out) is profiled as the record is."""
-        s = self.data.scans[i]
+        steady used samples of every segment, both directions together), in the slips' period: a property of the
+        record, not of a model's period or of a cross-validation fold (one segment held out), so that the registry's
+        profile is one procedure across a fit and its folds."""
+        s, a = self.data.scans[i], self.a_slip
         mask = self.use[self.slices[i]]
         cuts = np.nonzero(np.diff(s.direction) != 0)[0] + 1
         tot = 0.0
         for seg in np.split(np.arange(len(s.force)), cuts):
             x = s.position[seg]
-            sel = seg[(np.abs(x - x[0]) > 1.5 * st.a) & mask[seg]]
+            sel = seg[(np.abs(x - x[0]) > 1.5 * a) & mask[seg]]
             if len(sel) >= 8:
-                tot += float(np.ptp(s.position[sel])) / st.a
+                tot += float(np.ptp(s.position[sel])) / a
         return tot
 
     def _start_well(self, i: int, st: FrictionState, phis, profile) -> list[float]:
