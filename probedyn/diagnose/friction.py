@@ -1812,7 +1812,8 @@ def _slip_period(data: FrictionData, a_est: float, sigma: float) -> float:
             counts.append(n)
         if den < 3:
             return a_est
-        if any(len(c) == len(counts) and all(np.array_equal(x, y) for x, y in zip(c, counts)) for c in seen):
+        counts = np.concatenate(counts)
+        if any(np.array_equal(counts, c) for c in seen):
             return a  # the integers repeat: the estimate they give is the fixed point
         seen.append(counts)
         a = num / den
@@ -1965,6 +1966,8 @@ class FrictionProblem:
         self.group_labels = labels
         N = float(np.mean(self.loads))
         self.a_slip = _slip_period(data, self.a_est, self.sigma)
+        #: the scans too short for the fundamental's phase alone (:data:`ALIGN_PERIODS`, :meth:`_profile_one_train`)
+        self.short_scans = [self._aligned_periods(i) < ALIGN_PERIODS for i in range(len(sc))]
         # corrugation start from the stick-slip loop: the largest lateral force of a PT stick branch is
         # F_max = F0 sqrt(1 - 1/eta^2) with eta = 2 pi F0 / (k a), so F0 = sqrt(F_max^2 + (k a / 2 pi)^2)
         # ... at the slips' period where the periodogram does not resolve the period (a record of a few periods)
@@ -2564,7 +2567,7 @@ class FrictionProblem:
             return self._scan_chi2(i, *self._scan_model(i, st, [ph, 0.0, *tail]))
 
         phi, c = _polish(chi2, phi, chi2(phi), [h * st.a for h in REGISTRY_STEPS], repeat=REGISTRY_REPEAT)
-        if self._aligned_periods(i) < ALIGN_PERIODS:
+        if self.short_scans[i]:
             n_fit = int(np.sum(self._fit_mask(i)))
             if c > n_fit + 4.0 * math.sqrt(2.0 * n_fit):
                 # a short scan: the fundamental's phase may be another registry's; the best of ALIGN_GRID over a
